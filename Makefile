@@ -1,0 +1,32 @@
+# HC Smooth: set-up, tests, demo and build. Every target installs what it needs (see scripts/setup_envs.sh).
+ENVS := bpy45 bpy52
+PY45 := .envs/bpy45/bin/python
+# Extra pytest arguments, e.g. `make test PYTEST_ARGS="-k hc -x"`.
+PYTEST_ARGS ?=
+
+.PHONY: envs test test-core demo build clean
+
+envs:
+	bash scripts/setup_envs.sh
+
+# The whole suite (core + headless Blender) on Blender 4.5 LTS and Blender 5.2 LTS; fails if either fails.
+test: envs
+	@status=0; for env in $(ENVS); do \
+	  echo "=== tests on $$env ==="; \
+	  .envs/$$env/bin/python -m pytest -p no:cacheprovider $(PYTEST_ARGS) tests || status=1; \
+	done; exit $$status
+
+# Core only, with whatever python3 has NumPy, SciPy, pytest and hypothesis.
+test-core:
+	python3 -m pytest -q tests/core
+
+# The main job: a headless demo on a built-in default (noisy subdivided Suzanne).
+demo: envs
+	$(PY45) demo/demo.py
+
+# The extension zip, built by Blender's own extension tool.
+build: envs
+	$(PY45) scripts/build_extension.py
+
+clean:
+	rm -rf build dist demo_output

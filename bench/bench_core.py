@@ -1,0 +1,369 @@
+"""Speed, exactness and memory of core.hc_smooth against its peers (issue 2, item 7).
+
+    python bench/bench_core.py [--sizes 100k,1M] [--repeats N] [--quick] [--shuffle]
+
+On a noisy closed torus (sigma = 1 % of the bounding-box diagonal, fixed seed) it times 10 HC
+iterations with the operator built inside every run (both modes, float32 and float64), trimesh's
+filter_humphrey, PyMeshLab's HC (10 calls) and Open3D's Laplacian and Taubin filters, in the same
+run; prints medians, speed-ups against filter_humphrey and the volume change of each result. Then it
+checks the float64 result against an independent sparse-matrix form of Algorithm 1, the
+sequential/simultaneous time ratio and the peak extra memory per vertex. Peers that are not installed
+are reported as such. The markdown report goes to stdout and to bench/results/.
+"""
+
+import argparse
+import ctypes
+import gc
+import os
+import platform
+import statistics
+import sys
+import time
+import tracemalloc
+import warnings
+from importlib import metadata
+from datetime import datetime
+from pathlib import Path
+
+import numpy as np
+import scipy
+import scipy.sparse as sp
+from scipy.sparse.linalg import spsolve_triangular
+
+HERE = Path(__file__).resolve().parent
+sys.path[:0] = [str(HERE.parent), str(HERE)]  # the repository root holds `core`; meshes.py is beside us
+
+import core  # noqa: E402
+import meshes  # noqa: E402
+
+RATIO, MINOR = 2.5, 0.4  # torus shape (R = RATIO * MINOR)
+TARGET_SPEEDUP = 3.0  # HC simultaneous vs filter_humphrey at 1M vertices
+TARGET_SEQUENTIAL = 1.5  # sequential time / simultaneous time
+TARGET_BYTES = 250.0  # peak extra memory per vertex
+TARGET_AGREEMENT = 1e-9  # max deviation / bbox diagonal, float64
+
+
+def parse_size(text):
+    text = text.strip().lower()
+    scale = {"k": 10**3, "m": 10**6}.get(text[-1:], 1)
+    return int(float(text.rstrip("km")) * scale)
+
+
+# --- Reference: Algorithm 1 in matrix form (paper section 5), written independently of core/ --------
+
+
+def reference_operator(edges, n):
+    """T with t_ij = 1/|adj(i)| from scipy.sparse's own COO -> CSR (duplicates summed, then set to 1)."""
+    i, j = np.concatenate([edges[:, 0], edges[:, 1]]), np.concatenate([edges[:, 1], edges[:, 0]])
+    adjacency = sp.coo_matrix((np.ones(i.size), (i, j)), shape=(n, n)).tocsr()
+    adjacency.setdiag(0)
+    adjacency.eliminate_zeros()
+    adjacency.data[:] = 1.0
+    degree = np.asarray(adjacency.sum(axis=1)).ravel()
+    return sp.diags(1.0 / degree) @ adjacency
+
+
+def reference_hc(original, edges, alpha, beta, iterations, mode):
+    """x <- Tx - (βE + (1-β)T)(Tx - (αo + (1-α)x)); sequential: (E - L) p = U q for the Laplacian pass.
+
+    Every vertex of the benchmark meshes has neighbours and none is fixed, so V_var is everything.
+    """
+    o = original.astype(np.float64)
+    t = reference_operator(edges, o.shape[0])
+    if mode == "sequential":
+        lower = (sp.identity(o.shape[0], format="csr") - sp.tril(t, k=-1)).tocsr()
+        upper = sp.triu(t, k=1).tocsr()
+    x = o.copy()
+    for _ in range(iterations):
+        p = t @ x if mode == "simultaneous" else spsolve_triangular(lower, upper @ x, lower=True)
+        b = p - (alpha * o + (1.0 - alpha) * x)
+        x = p - (beta * b + (1.0 - beta) * (t @ b))
+    return x
+
+
+# --- Peers: each takes (vertices, faces) and returns the smoothed vertices; build cost included ------
+
+
+def peer_methods(alpha, beta, iterations):
+    """{name: (description, run)} for every peer that imports, else {name: (reason, None)}."""
+    found = {}
+    try:
+        import trimesh
+        from trimesh.smoothing import filter_humphrey
+
+        def humphrey(vertices, faces):
+            mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+            return np.asarray(filter_humphrey(mesh, alpha=alpha, beta=beta, iterations=iterations).vertices)
+
+        found["trimesh filter_humphrey"] = (f"trimesh {trimesh.__version__}, α={alpha}, β={beta}", humphrey)
+    except ImportError as error:
+        found["trimesh filter_humphrey"] = (f"not installed ({error.name})", None)
+    try:
+        import pymeshlab
+
+        def meshlab_hc(vertices, faces):
+            meshset = pymeshlab.MeshSet()
+            meshset.add_mesh(pymeshlab.Mesh(vertex_matrix=vertices, face_matrix=faces.astype(np.int32)))
+            for _ in range(iterations):  # one HC step per call; no α, β fixed at 0.5
+                meshset.apply_coord_hc_laplacian_smoothing()
+            return meshset.current_mesh().vertex_matrix()
+
+        found["PyMeshLab HC"] = (f"pymeshlab {metadata.version('pymeshlab')}, {iterations} calls", meshlab_hc)
+    except ImportError as error:
+        found["PyMeshLab HC"] = (f"not installed ({error.name})", None)
+    try:
+        import open3d as o3d
+
+        def o3d_mesh(vertices, faces):
+            return o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(vertices),
+                                             o3d.utility.Vector3iVector(faces.astype(np.int32)))
+
+        def laplacian(vertices, faces):
+            smoothed = o3d_mesh(vertices, faces).filter_smooth_laplacian(number_of_iterations=iterations)
+            return np.asarray(smoothed.vertices)
+
+        def taubin(vertices, faces):
+            smoothed = o3d_mesh(vertices, faces).filter_smooth_taubin(number_of_iterations=iterations)
+            return np.asarray(smoothed.vertices)
+
+        found["Open3D Laplacian"] = (f"open3d {o3d.__version__}, λ=0.5", laplacian)
+        found["Open3D Taubin"] = (f"open3d {o3d.__version__}, λ=0.5, μ=-0.53", taubin)
+    except ImportError as error:
+        for name in ("Open3D Laplacian", "Open3D Taubin"):
+            found[name] = (f"not installed ({error.name})", None)
+    return found
+
+
+# --- Measuring -----------------------------------------------------------------------------------------
+
+
+def timed(run, repeats):
+    """Median wall time of ``repeats`` calls, CPU time / wall time of the whole lot (> 1: threads), and
+    the last result."""
+    times = []
+    cpu = 0.0
+    for _ in range(repeats):
+        gc.collect()
+        start, start_cpu = time.perf_counter(), time.process_time()
+        result = run()
+        times.append(time.perf_counter() - start)
+        cpu += time.process_time() - start_cpu
+    return statistics.median(times), cpu / sum(times), result
+
+
+def torus_rms(points, diagonal):
+    """RMS distance to the smooth torus the mesh samples, in % of the bounding-box diagonal."""
+    p = np.asarray(points, dtype=np.float64)
+    ring = np.hypot(p[:, 0], p[:, 1]) - RATIO * MINOR
+    distance = np.hypot(ring, p[:, 2]) - MINOR
+    return 100.0 * float(np.sqrt(np.mean(distance**2))) / diagonal
+
+
+def traced_extra_bytes(run, n_vertices):
+    """Peak memory allocated during ``run`` beyond its output, per vertex (tracemalloc sees NumPy)."""
+    gc.collect()
+    tracemalloc.start()
+    try:
+        base = tracemalloc.get_traced_memory()[0]
+        result = run()
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    return (peak - base - result.nbytes) / n_vertices
+
+
+def _status_kib(field):
+    with open("/proc/self/status") as status:
+        for line in status:
+            if line.startswith(field + ":"):
+                return int(line.split()[1]) * 1024
+    raise OSError(field)
+
+
+def rss_extra_bytes(run, n_vertices):
+    """Peak resident growth during ``run`` beyond its output, per vertex (Linux: resets VmHWM first).
+
+    Unlike tracemalloc this also sees C-level allocations (SuperLU); None where /proc cannot do it.
+    glibc's malloc would reuse freed, still resident heap blocks unseen, so they are handed back first
+    and its mmap threshold is pinned (large arrays then come from and go back to the system)."""
+    try:
+        libc = ctypes.CDLL("libc.so.6")
+        libc.mallopt(-3, 128 * 1024)  # M_MMAP_THRESHOLD; fixed from now on
+    except (OSError, AttributeError):
+        return None
+    try:
+        gc.collect()
+        libc.malloc_trim(0)
+        with open("/proc/self/clear_refs", "w") as refs:
+            refs.write("5")  # reset the peak-RSS watermark
+        base = _status_kib("VmRSS")
+        result = run()
+        peak = _status_kib("VmHWM")
+    except OSError:
+        return None
+    return (peak - base - result.nbytes) / n_vertices
+
+
+def machine_line():
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as info:
+            cpu = next(line.split(":", 1)[1].strip() for line in info if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    load = ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
+    return (f"{cpu}, {os.cpu_count()} cores, load average at start {load}; Python {platform.python_version()}, "
+            f"NumPy {np.__version__}, SciPy {scipy.__version__}")
+
+
+# --- One mesh size -------------------------------------------------------------------------------------
+
+
+def bench_size(n_target, args, peers, out):
+    vertices, faces = meshes.torus(n_target, ratio=RATIO, minor_radius=MINOR)
+    noisy = meshes.add_noise(vertices, fraction=0.01, seed=args.seed)
+    if args.shuffle:
+        noisy, faces = meshes.shuffled(noisy, faces, seed=args.seed)
+    edges = meshes.edges_from_faces(faces).astype(np.int32)  # Blender hands out int32 edge pairs
+    n = noisy.shape[0]
+    diagonal = meshes.bbox_diagonal(noisy)
+    true_volume = meshes.torus_volume(RATIO, MINOR)
+    repeats = args.repeats or (5 if n < 500_000 else 3)
+    hc = dict(alpha=args.alpha, beta=args.beta, iterations=args.iterations)
+    order = "random" if args.shuffle else "grid"
+    out(f"\n## {n_target:,} vertices requested ({n:,} vertices, {edges.shape[0]:,} edges, {faces.shape[0]:,} triangles)\n")
+    out(f"Noisy torus (σ = 1 % of bbox diagonal, seed {args.seed}, vertex order: {order}); "
+        f"{args.iterations} iterations; median of {repeats} runs. Input RMS distance to the true torus: "
+        f"{torus_rms(noisy, diagonal):.3f} % of diagonal; its volume vs the true torus: "
+        f"{core.measure_change(noisy, noisy, faces).volume_before / true_volume - 1:+.3%}.\n")
+
+    rows = []  # (method, variant, seconds, cpu/wall, result)
+    core_times = {}
+    for mode in ("simultaneous", "sequential"):
+        for dtype in (np.float32, np.float64):
+            start = noisy.astype(dtype)
+            seconds, cpu, result = timed(lambda: core.hc_smooth(start, edges, mode=mode, **hc), repeats)
+            core_times[mode, dtype] = seconds
+            rows.append(("core.hc_smooth", f"{mode}, {np.dtype(dtype).name}", seconds, cpu, result))
+    for name, (description, run) in peers.items():
+        if run is None:
+            rows.append((name, description, None, None, None))
+            continue
+        seconds, cpu, result = timed(lambda: run(noisy, faces), repeats)
+        rows.append((name, description, seconds, cpu, result))
+
+    humphrey = next((row[2] for row in rows if row[0] == "trimesh filter_humphrey"), None)
+    out("| method | variant | median time (s) | CPU / wall | speed-up vs filter_humphrey | volume change | "
+        "volume vs true torus | RMS to true torus (% diag) |")
+    out("|---|---|---:|---:|---:|---:|---:|---:|")
+    for method, variant, seconds, cpu, result in rows:
+        if seconds is None:
+            out(f"| {method} | {variant} | – | – | – | – | – | – |")
+            continue
+        change = core.measure_change(noisy, result, faces)
+        volume = f"{change.volume_change:+.3%}" if change.volume_change is not None else "n/a"
+        truth = f"{change.volume_after / true_volume - 1:+.3%}" if change.volume_after is not None else "n/a"
+        speedup = f"{humphrey / seconds:.2f}×" if humphrey else "–"
+        out(f"| {method} | {variant} | {seconds:.3f} | {cpu:.2f} | {speedup} | {volume} | {truth} | "
+            f"{torus_rms(result, diagonal):.3f} |")
+
+    # Exactness: float64 against the independent matrix form, both modes; trimesh's HC as a bonus.
+    out("\n| check | value | target | |")
+    out("|---|---:|---:|---|")
+    verdicts = []
+
+    def check(name, value, target, ok, unit=""):
+        verdicts.append(ok)
+        out(f"| {name} | {value}{unit} | {target}{unit} | {'ok' if ok else 'MISSED'} |")
+
+    for mode in ("simultaneous", "sequential"):
+        expected = reference_hc(noisy, edges, args.alpha, args.beta, args.iterations, mode)
+        got = core.hc_smooth(noisy, edges, mode=mode, **hc)
+        deviation = float(np.abs(got - expected).max()) / diagonal
+        check(f"float64 {mode} vs matrix form of Algorithm 1 (max dev / diag)", f"{deviation:.1e}",
+              f"≤ {TARGET_AGREEMENT:.0e}", deviation <= TARGET_AGREEMENT)
+        if mode == "simultaneous":
+            core_result = got
+    humphrey_result = next((row[4] for row in rows if row[0] == "trimesh filter_humphrey"), None)
+    if humphrey_result is not None:
+        deviation = float(np.abs(humphrey_result - core_result).max()) / diagonal
+        out(f"| trimesh filter_humphrey vs core, same α, β (max dev / diag) | {deviation:.1e} | (info) | |")
+    for dtype in (np.float32, np.float64):
+        ratio = core_times["sequential", dtype] / core_times["simultaneous", dtype]
+        check(f"sequential / simultaneous time, {np.dtype(dtype).name}", f"{ratio:.2f}", f"≤ {TARGET_SEQUENTIAL}",
+              ratio <= TARGET_SEQUENTIAL)
+    if humphrey:
+        for dtype in (np.float32, np.float64):
+            speedup = humphrey / core_times["simultaneous", dtype]
+            name = f"speed-up vs filter_humphrey, simultaneous {np.dtype(dtype).name}"
+            if n >= 900_000:
+                check(name, f"{speedup:.2f}", f"≥ {TARGET_SPEEDUP:g}", speedup >= TARGET_SPEEDUP, "×")
+            else:
+                out(f"| {name} | {speedup:.2f}× | (target at 1M) | |")
+    for mode in ("simultaneous", "sequential"):
+        for dtype in (np.float32, np.float64):
+            start = noisy.astype(dtype)
+
+            def run():
+                return core.hc_smooth(start, edges, mode=mode, **hc)
+
+            traced = traced_extra_bytes(run, n)
+            resident = rss_extra_bytes(run, n)
+            resident_text = f", peak RSS {resident:.0f}" if resident is not None else ""
+            check(f"peak extra memory per vertex, {mode} {np.dtype(dtype).name} (tracemalloc{resident_text})",
+                  f"{traced:.1f}", f"≤ {TARGET_BYTES:g}", traced <= TARGET_BYTES, " B")
+    return all(verdicts)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--sizes", default="100k,1M", help="comma-separated vertex counts, e.g. 100k,1M")
+    parser.add_argument("--repeats", type=int, default=0, help="runs per timing (default 5 below 500k, 3 above)")
+    parser.add_argument("--quick", action="store_true", help="tiny smoke run: 5k vertices, 1 repeat")
+    parser.add_argument("--shuffle", action="store_true", help="renumber vertices at random (scanner-like order)")
+    parser.add_argument("--alpha", type=float, default=0.1)
+    parser.add_argument("--beta", type=float, default=0.6)
+    parser.add_argument("--iterations", type=int, default=10)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--no-peers", action="store_true", help="time core only")
+    parser.add_argument("--strict", action="store_true", help="exit 1 when a target is missed")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.sizes, args.repeats = "5k", 1
+    sizes = [parse_size(s) for s in args.sizes.split(",") if s.strip()]
+    if not sizes or min(sizes) < 9 or args.repeats < 0 or args.iterations < 1:
+        parser.error("sizes must be >= 9 vertices, repeats >= 0, iterations >= 1")
+
+    lines = []
+
+    def out(line=""):
+        print(line, flush=True)
+        lines.append(line)
+
+    out(f"# core.hc_smooth benchmark, {datetime.now():%Y-%m-%d %H:%M}\n")
+    out(f"Machine: {machine_line()}.")
+    out(f"HC α = {args.alpha}, β = {args.beta}; core timings include input checks and building the "
+        "operator from the edge list; peer timings include building their mesh objects and operators.\n")
+    peers = {} if args.no_peers else peer_methods(args.alpha, args.beta, args.iterations)
+    # Warm up imports and code paths on a tiny mesh so the first timed run is not penalised.
+    tiny, tiny_faces = meshes.torus(100)
+    for mode in ("simultaneous", "sequential"):
+        core.hc_smooth(tiny, meshes.edges_from_faces(tiny_faces), mode=mode, alpha=0.1, beta=0.6, iterations=1)
+    for _, run in peers.values():
+        if run is not None:
+            run(tiny, tiny_faces)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", core.ConvergenceWarning)  # --beta ≤ 0.5 is allowed for comparisons
+        passed = [bench_size(n, args, peers, out) for n in sizes]
+
+    results = HERE / "results"
+    results.mkdir(exist_ok=True)
+    path = results / f"bench_core-{datetime.now():%Y%m%d-%H%M%S}.md"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    print(f"\nwritten to {path}", file=sys.stderr)
+    return 1 if args.strict and not all(passed) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,36 @@
+"""HC Smooth's mathematics: NumPy/SciPy only, never bpy (paper: Vollmer, Mencl, Müller 1999).
+
+The same package loads as ``core`` in tests and tools and as ``bl_ext.<repo>.hc_smooth.core`` in
+Blender, so everything inside uses relative imports.
+"""
+
+from .adjacency import Umbrella, umbrella_operator
+from .convergence import ConvergenceWarning, convergence_message, in_convergence_region
+from .metrics import Change, measure_change
+from .smoothing import METHODS, MODES, Cancelled, SmoothResult, hc_smooth, laplacian_smooth, smooth
+
+
+def smooth_point_cloud(points, **options):
+    """Smooth a bare point set through its RFS mesh (paper section 7); see core.pointcloud."""
+    from .pointcloud import smooth_point_cloud as run
+
+    return run(points, **options)
+
+
+__all__ = [
+    "Cancelled",
+    "Change",
+    "ConvergenceWarning",
+    "METHODS",
+    "MODES",
+    "SmoothResult",
+    "Umbrella",
+    "convergence_message",
+    "hc_smooth",
+    "in_convergence_region",
+    "laplacian_smooth",
+    "measure_change",
+    "smooth",
+    "smooth_point_cloud",
+    "umbrella_operator",
+]

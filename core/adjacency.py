@@ -1,0 +1,117 @@
+"""The uniform umbrella operator T of paper section 5: row i averages the positions of adj(i).
+
+Built once per mesh (one sort of the edge keys, then counting placement into CSR: no COO summation)
+and reused across iterations, runs and dtypes. Only the sparsity pattern is stored; the weights
+1/|adj(i)| are laid over it per dtype.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from .validation import check_edges
+
+
+def _exclusive_cumsum(counts, dtype):
+    out = np.zeros(counts.size + 1, dtype=dtype)
+    np.cumsum(counts, out=out[1:])
+    return out
+
+
+@dataclass(eq=False)
+class Umbrella:
+    """The pattern of adj() twice: in full (row i: all neighbours, increasing) and as the upper
+    triangle (row i: neighbours j > i), i.e. each edge once, which the sequential smoothers use."""
+
+    n_vertices: int
+    degree: np.ndarray  # |adj(i)|
+    indptr: np.ndarray
+    indices: np.ndarray
+    upper_indptr: np.ndarray
+    upper_indices: np.ndarray
+    _matrices: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def isolated(self):
+        """Vertices without neighbours: fixed by the paper's convention (section 2)."""
+        return self.degree == 0
+
+    @property
+    def n_edges(self):
+        return int(self.indices.size // 2)
+
+    def _row_weights(self, dtype):
+        inverse = np.zeros(self.n_vertices, dtype=dtype)
+        nonzero = self.degree > 0
+        inverse[nonzero] = 1.0 / self.degree[nonzero]
+        return inverse
+
+    def matrix(self, dtype=np.float64):
+        """T as CSR: t_ij = 1/|adj(i)| for every edge {i, j}; rows of isolated vertices are empty.
+
+        Cached per dtype (it is what every iteration multiplies by); shares the stored pattern.
+        """
+        dtype = np.dtype(dtype)
+        if dtype not in self._matrices:
+            data = np.repeat(self._row_weights(dtype), self.degree)
+            self._matrices[dtype] = _csr(data, self.indices, self.indptr, self.n_vertices)
+        return self._matrices[dtype]
+
+    def triangle(self, part, dtype=np.float64):
+        """Strictly lower (``part="lower"``: j < i) or upper part of T as a new CSR matrix."""
+        if part not in ("lower", "upper"):
+            raise ValueError(f"part must be 'lower' or 'upper', got {part!r}")
+        n = self.n_vertices
+        ones = np.ones(self.upper_indices.size, dtype=dtype)
+        pattern = _csr(ones, self.upper_indices, self.upper_indptr, n)
+        if part == "lower":
+            pattern = pattern.T.tocsr()  # the pattern is symmetric: lower rows are upper columns
+        pattern.data *= np.repeat(self._row_weights(np.dtype(dtype)), np.diff(pattern.indptr))
+        return pattern
+
+
+def _csr(data, indices, indptr, n):
+    matrix = sp.csr_matrix((data, indices, indptr), shape=(n, n), copy=False)
+    matrix.has_sorted_indices = True  # true by construction; spares SciPy a check
+    return matrix
+
+
+def umbrella_operator(edges, n_vertices):
+    """Build the umbrella structure of a mesh with ``n_vertices`` vertices from its undirected edges.
+
+    Order, direction and duplicates of ``edges`` do not matter; self-loops are ignored.
+    """
+    if isinstance(n_vertices, bool) or not isinstance(n_vertices, (int, np.integer)) or n_vertices < 0:
+        raise ValueError(f"n_vertices must be a whole number >= 0, got {n_vertices!r}")
+    n = int(n_vertices)
+    edges = check_edges(edges, n)
+    index = np.int32 if n < np.iinfo(np.int32).max // 2 else np.int64
+
+    # One key per undirected edge, low * n + high, sorted and deduplicated.
+    low = np.minimum(edges[:, 0], edges[:, 1]).astype(np.int64)
+    high = np.maximum(edges[:, 0], edges[:, 1]).astype(np.int64)
+    keys = (low * n + high)[low != high]
+    del low, high
+    keys.sort()  # sort + mask: np.unique hashes first in NumPy 2.x, many times slower here
+    keys = keys[np.concatenate(([True], keys[1:] != keys[:-1]))] if keys.size else keys
+    low = (keys // max(n, 1)).astype(index)
+    high = (keys - low.astype(np.int64) * n).astype(index)
+    del keys
+
+    # Row i holds its lower neighbours {low : high == i} then its upper ones {high : low == i}.
+    lower_counts = np.bincount(high, minlength=n).astype(index)
+    upper_counts = np.bincount(low, minlength=n).astype(index)
+    degree = lower_counts + upper_counts
+    indptr = _exclusive_cumsum(degree, index)
+    indices = np.empty(indptr[-1], dtype=index)
+    # Keys are sorted by (low, high), so the upper entries arrive row by row in increasing order ...
+    rank = np.arange(low.size, dtype=index) - _exclusive_cumsum(upper_counts, index)[low]
+    indices[indptr[low] + lower_counts[low] + rank] = high
+    # ... and a stable sort by high keeps the lower entries of each row increasing too.
+    order = np.argsort(high, kind="stable")
+    rows = high[order]
+    rank = np.arange(low.size, dtype=index) - _exclusive_cumsum(lower_counts, index)[rows]
+    indices[indptr[rows] + rank] = low[order]
+    return Umbrella(n_vertices=n, degree=degree, indptr=indptr, indices=indices,
+                    upper_indptr=_exclusive_cumsum(upper_counts, index), upper_indices=high)

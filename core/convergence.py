@@ -1,0 +1,48 @@
+"""Convergence of the smoothers (paper section 5)."""
+
+import numpy as np
+import scipy.sparse as sp
+
+
+class ConvergenceWarning(UserWarning):
+    """HC was asked to run with (alpha, beta) outside the region where Theorem 5.2 proves convergence."""
+
+
+def in_convergence_region(alpha, beta):
+    """Theorem 5.2: the HC algorithm converges for alpha > 0 and beta > 0.5."""
+    return alpha > 0.0 and beta > 0.5
+
+
+def convergence_message(alpha, beta):
+    """A sentence for users about where (alpha, beta) lies; None inside the proven region."""
+    if in_convergence_region(alpha, beta):
+        return None
+    reasons = []
+    if not alpha > 0.0:
+        reasons.append("alpha is 0 (no pull towards the original points)")
+    if not beta > 0.5:
+        reasons.append(f"beta {beta:g} is not above 0.5")
+    return (
+        "HC is proven to converge only for alpha > 0 and beta > 0.5 (paper, Theorem 5.2): "
+        + " and ".join(reasons)
+        + "; many iterations may drift or oscillate"
+    )
+
+
+def hc_iteration_matrix(operator, alpha, beta, movable=None):
+    """H = -(1-β)T² + (2-α)(1-β)T + (1-α)βE of Theorem 5.2, on the movable vertices (dense, small meshes).
+
+    The iteration x(k+1) = H x(k) + const converges for every start iff the spectral radius of H is < 1.
+    """
+    matrix = operator.matrix(np.float64)
+    if movable is None:
+        movable = ~operator.isolated
+    keep = np.flatnonzero(movable)
+    t = matrix[keep][:, keep].toarray()
+    identity = np.eye(keep.size)
+    return -(1 - beta) * t @ t + (2 - alpha) * (1 - beta) * t + (1 - alpha) * beta * identity
+
+
+def spectral_radius(matrix):
+    values = np.linalg.eigvals(matrix.toarray() if sp.issparse(matrix) else matrix)
+    return float(np.abs(values).max()) if values.size else 0.0

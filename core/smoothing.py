@@ -1,0 +1,269 @@
+"""The smoothers of the paper: Laplacian (3.1), with the central point (3.2), with the original point (3.3),
+and the HC algorithm (section 4, Algorithm 1), each simultaneous (Jacobi) or sequential (Gauss–Seidel).
+
+Notation as in the paper: o original points, q current points (start of an iteration), p new points.
+Every iteration is a few sparse products over all vertices at once; fixed vertices (and vertices
+without neighbours, section 2) are copied through unchanged, so they stay bit-identical.
+"""
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from .adjacency import Umbrella, umbrella_operator
+from .triangular import triangular_solver
+from .convergence import ConvergenceWarning, convergence_message
+from .validation import (
+    check_choice,
+    check_fixed,
+    check_iterations,
+    check_positions,
+    check_tolerance,
+    check_unit_interval,
+)
+
+METHODS = ("hc", "plain", "central", "original")
+MODES = ("simultaneous", "sequential")
+
+
+class Cancelled(Exception):
+    """Raised when the progress callback returns False; the input positions are untouched."""
+
+
+@dataclass(frozen=True)
+class SmoothResult:
+    positions: np.ndarray  # same shape and dtype as the input
+    iterations: int  # iterations actually run
+    stopped_early: bool  # the tolerance was reached before ``iterations``
+
+
+def smooth(
+    positions,
+    edges,
+    *,
+    method="hc",
+    alpha=0.0,
+    beta=0.5,
+    iterations,
+    mode="simultaneous",
+    fixed=None,
+    tolerance=0.0,
+    original=None,
+    operator=None,
+    progress=None,
+):
+    """Run one of the smoothers and report how many iterations ran. See ``hc_smooth`` for the arguments.
+
+    ``method`` is ``"hc"`` or a Laplacian variant (``"plain"``, ``"central"``, ``"original"``);
+    ``alpha`` weights q (central) or o (original, hc); ``beta`` is HC's weight of b_i in d_i.
+    """
+    method = check_choice(method, "method", METHODS)
+    mode = check_choice(mode, "mode", MODES)
+    alpha = check_unit_interval(alpha, "alpha")
+    beta = check_unit_interval(beta, "beta")
+    iterations = check_iterations(iterations)
+    tolerance = check_tolerance(tolerance)
+    start = check_positions(positions)
+    n = start.shape[0]
+    if original is None:
+        origin = start
+    else:
+        origin = check_positions(original, "original")
+        if origin.shape != start.shape:
+            raise ValueError(f"original must have the shape of positions {start.shape}, got {origin.shape}")
+        origin = origin.astype(start.dtype, copy=False)
+    if operator is None:
+        operator = umbrella_operator(edges, n)
+    elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
+        raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
+    fixed_mask = check_fixed(fixed, n) | operator.isolated
+    if method == "hc" and iterations > 0:
+        message = convergence_message(alpha, beta)
+        if message:
+            warnings.warn(message, ConvergenceWarning, stacklevel=3)
+
+    step = _Stepper(operator, fixed_mask, origin, method, mode, alpha, beta, start.dtype)
+    threshold = tolerance * _bbox_diagonal(start)
+    current = start.copy()
+    done = 0
+    stopped_early = False
+    if not step.movable.any():
+        iterations = 0  # nothing can move: every iteration would return its input
+    for done in range(1, iterations + 1):
+        new = step(current)
+        if tolerance > 0.0:
+            largest_move = np.sqrt(np.max(np.einsum("ij,ij->i", new - current, new - current)))
+            stopped_early = largest_move < threshold
+        current = new
+        if progress is not None and progress(done, iterations) is False:
+            raise Cancelled(f"cancelled after {done} of {iterations} iterations")
+        if stopped_early:
+            break
+    return SmoothResult(current, done, stopped_early)
+
+
+def hc_smooth(
+    positions,
+    edges,
+    *,
+    alpha,
+    beta,
+    iterations,
+    mode="simultaneous",
+    fixed=None,
+    tolerance=0.0,
+    original=None,
+    operator=None,
+    progress=None,
+):
+    """The HC algorithm (paper, Algorithm 1); returns the new positions, same shape and dtype.
+
+    positions: (n, 3) float32/float64, never modified. edges: (m, 2) vertex pairs, undirected.
+    fixed: boolean mask or vertex indices that never move. mode: "simultaneous" (Algorithm 1) or
+    "sequential" (Gauss–Seidel in increasing index order for the Laplacian pass). tolerance: stop once
+    the largest move of an iteration is below tolerance × bounding-box diagonal. original: the o of
+    the paper when it differs from ``positions``. operator: a prebuilt ``umbrella_operator`` (then
+    ``edges`` is not read). progress(done, total) is called after each iteration; False cancels.
+    Converges for alpha > 0 and beta > 0.5 (Theorem 5.2); elsewhere it runs and warns.
+    """
+    return smooth(
+        positions, edges, method="hc", alpha=alpha, beta=beta, iterations=iterations, mode=mode,
+        fixed=fixed, tolerance=tolerance, original=original, operator=operator, progress=progress,
+    ).positions
+
+
+def laplacian_smooth(
+    positions,
+    edges,
+    *,
+    variant="plain",
+    alpha=0.0,
+    iterations,
+    mode="simultaneous",
+    fixed=None,
+    tolerance=0.0,
+    original=None,
+    operator=None,
+    progress=None,
+):
+    """Laplacian smoothing: variant "plain" (3.1), "central" (3.2, alpha weights q_i) or "original"
+    (3.3, alpha weights o_i). Other arguments as for ``hc_smooth``."""
+    variant = check_choice(variant, "variant", METHODS[1:])
+    return smooth(
+        positions, edges, method=variant, alpha=alpha, iterations=iterations, mode=mode, fixed=fixed,
+        tolerance=tolerance, original=original, operator=operator, progress=progress,
+    ).positions
+
+
+def _bbox_diagonal(points):
+    if points.shape[0] == 0:
+        return 0.0
+    return float(np.linalg.norm(points.max(axis=0).astype(np.float64) - points.min(axis=0)))
+
+
+class _Stepper:
+    """One iteration q -> p of the chosen smoother, with everything reusable prepared once."""
+
+    def __init__(self, operator, fixed_mask, origin, method, mode, alpha, beta, dtype):
+        self.movable = ~fixed_mask
+        self.fixed_index = np.flatnonzero(fixed_mask)
+        self.method, self.alpha, self.beta = method, alpha, beta
+        # Weight of the neighbour average in the Laplacian pass (HC's pass is the plain one).
+        self.neighbour_weight = 1.0 - alpha if method in ("central", "original") else 1.0
+        if mode == "sequential":
+            self.sequential = _GaussSeidel(operator, self.movable, self.neighbour_weight, dtype)
+            self.neighbour_mean = self.sequential.neighbour_mean  # spares memory: T itself is not built
+        else:
+            self.sequential = None
+            self.neighbour_mean = operator.matrix(dtype).__matmul__
+        if method in ("hc", "original") and alpha > 0.0:
+            self.alpha_origin = alpha * origin  # α o, constant over the run
+
+    def laplacian(self, q):
+        """The Laplacian pass: p_i = a s_i + (1-a)/|adj(i)| Σ_j (p_j if sequential and j < i else q_j)."""
+        w = self.neighbour_weight
+        anchor = None  # a s_i: α q_i (central) or α o_i (original)
+        if self.method == "central" and self.alpha > 0.0:
+            anchor = self.alpha * q
+        elif self.method == "original" and self.alpha > 0.0:
+            anchor = self.alpha_origin
+        if self.sequential is not None:
+            p = self.sequential.solve(q, anchor)
+        else:
+            p = self.neighbour_mean(q)
+            if w != 1.0:
+                p *= w
+            if anchor is not None:
+                p += anchor
+        p[self.fixed_index] = q[self.fixed_index]
+        return p
+
+    def __call__(self, q):
+        p = self.laplacian(q)
+        if self.method != "hc":
+            return p
+        # b_i = p_i - (α o_i + (1-α) q_i); zero on fixed vertices, which are not in V_var.
+        # In-place steps: on a million vertices each pass over the arrays costs as much as a sparse product.
+        b = np.multiply(q, 1.0 - self.alpha)
+        np.subtract(p, b, out=b)
+        if self.alpha > 0.0:
+            b -= self.alpha_origin
+        b[self.fixed_index] = 0.0
+        # p_i -= β b_i + (1-β)/|adj(i)| Σ_j b_j
+        neighbour_mean = self.neighbour_mean(b)
+        neighbour_mean *= 1.0 - self.beta
+        p -= neighbour_mean
+        b *= self.beta
+        p -= b
+        p[self.fixed_index] = q[self.fixed_index]
+        return p
+
+
+class _GaussSeidel:
+    """The sequential Laplacian pass as one sparse triangular solve.
+
+    For movable i: p_i - w Σ_{j<i} t_ij p_j = w Σ_{j>i} t_ij q_j + a s_i, i.e. (I - w L) p = w U q + a s,
+    with L, U the strictly lower/upper parts of T restricted to movable rows; fixed rows read p_i = q_i.
+    (A fixed neighbour j < i has p_j = q_j, so it may sit on either side.)
+    """
+
+    def __init__(self, operator, movable, weight, dtype):
+        n = operator.n_vertices
+        counts = np.diff(operator.upper_indptr)
+        # w t_ij on movable rows, 0 on fixed ones: row i of U and, by symmetry, column j of L.
+        row_weight = np.zeros(n, dtype=dtype)
+        scale = movable & (operator.degree > 0)
+        row_weight[scale] = weight / operator.degree[scale]
+        self.upper = sp.csr_matrix(
+            (np.repeat(row_weight, counts), operator.upper_indices, operator.upper_indptr), shape=(n, n))
+        # I - w L in CSC: column j is the diagonal 1, then -w t_ij for the neighbours i > j (the upper
+        # pattern of row j, since adj is symmetric), already in increasing row order.
+        indptr = np.zeros(n + 1, dtype=operator.upper_indptr.dtype)
+        np.cumsum(counts + 1, out=indptr[1:])
+        off_diagonal = np.ones(indptr[-1], dtype=bool)
+        off_diagonal[indptr[:-1]] = False
+        indices = np.empty(indptr[-1], dtype=operator.upper_indices.dtype)
+        indices[indptr[:-1]] = np.arange(n)
+        indices[off_diagonal] = operator.upper_indices
+        data = np.ones(indptr[-1], dtype=dtype)
+        data[off_diagonal] = -row_weight[operator.upper_indices]
+        self.system = sp.csc_matrix((data, indices, indptr), shape=(n, n))
+        self.solve_lower = triangular_solver(self.system)
+        self.fixed_index = np.flatnonzero(~movable)
+
+    def neighbour_mean(self, x):
+        """T x on movable rows (fixed rows: anything; callers overwrite them), from the two triangles.
+        Valid for the weight 1 of the HC Laplacian pass: then L x = x - (I - L) x."""
+        result = self.upper @ x
+        result += x
+        result -= self.system @ x
+        return result
+
+    def solve(self, q, anchor):
+        rhs = self.upper @ q
+        if anchor is not None:
+            rhs += anchor
+        rhs[self.fixed_index] = q[self.fixed_index]
+        return self.solve_lower(rhs)

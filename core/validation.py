@@ -1,0 +1,91 @@
+"""Input checks shared by every entry point: each raises ValueError with a message a user can act on."""
+
+import numbers
+
+import numpy as np
+
+FLOAT_DTYPES = (np.float32, np.float64)
+
+
+def check_positions(positions, name="positions"):
+    """Return ``positions`` as an (n, 3) float32/float64 array (no copy), or raise ValueError."""
+    array = np.asarray(positions)
+    if array.ndim != 2 or array.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (n, 3), got {array.shape}")
+    if array.dtype.type not in FLOAT_DTYPES:
+        raise ValueError(f"{name} must be float32 or float64, got {array.dtype}")
+    bad = ~np.isfinite(array).all(axis=1)
+    if bad.any():
+        first = np.flatnonzero(bad)
+        raise ValueError(
+            f"{name} contain NaN or infinite coordinates at {first.size} vertices "
+            f"(first: vertex {first[0]}); fix or delete those vertices first"
+        )
+    return array
+
+
+def check_edges(edges, n_vertices):
+    """Return ``edges`` as an (m, 2) integer array, or raise ValueError."""
+    array = np.asarray(edges)
+    if array.size == 0:
+        return np.empty((0, 2), dtype=np.int64)
+    if array.ndim != 2 or array.shape[1] != 2:
+        raise ValueError(f"edges must have shape (m, 2), got {array.shape}")
+    if not np.issubdtype(array.dtype, np.integer):
+        raise ValueError(f"edges must hold integer vertex indices, got {array.dtype}")
+    low, high = array.min(), array.max()
+    if low < 0 or high >= n_vertices:
+        bad = low if low < 0 else high
+        raise ValueError(
+            f"edges refer to vertex {bad}, but there are only {n_vertices} vertices (0..{n_vertices - 1})"
+        )
+    return array
+
+
+def check_fixed(fixed, n_vertices):
+    """Return a boolean mask of length n from a mask or an index array (None: nothing fixed)."""
+    if fixed is None:
+        return np.zeros(n_vertices, dtype=bool)
+    array = np.asarray(fixed)
+    if array.dtype == bool:
+        if array.shape != (n_vertices,):
+            raise ValueError(f"a boolean fixed mask must have length {n_vertices}, got shape {array.shape}")
+        return array.copy()
+    if array.size == 0:
+        return np.zeros(n_vertices, dtype=bool)
+    if array.ndim != 1 or not np.issubdtype(array.dtype, np.integer):
+        raise ValueError("fixed must be a boolean mask or a 1-D array of vertex indices")
+    if array.min() < 0 or array.max() >= n_vertices:
+        raise ValueError(f"fixed vertex indices must lie in 0..{n_vertices - 1}")
+    mask = np.zeros(n_vertices, dtype=bool)
+    mask[array] = True
+    return mask
+
+
+def check_unit_interval(value, name):
+    """Return ``value`` as a float in [0, 1], or raise ValueError."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value):
+        raise ValueError(f"{name} must be a number between 0 and 1, got {value!r}")
+    if not 0.0 <= value <= 1.0:
+        raise ValueError(f"{name} must lie between 0 and 1, got {value}")
+    return float(value)
+
+
+def check_iterations(value):
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ValueError(f"iterations must be a whole number, got {value!r}")
+    if value < 0:
+        raise ValueError(f"iterations must be 0 or more, got {value}")
+    return int(value)
+
+
+def check_tolerance(value):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value < 0:
+        raise ValueError(f"tolerance must be a number >= 0 (0 = always run every iteration), got {value!r}")
+    return float(value)
+
+
+def check_choice(value, name, choices):
+    if value not in choices:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")
+    return value

@@ -1,0 +1,156 @@
+"""One smoothing job per mesh: what to read, what stays fixed, where the result goes.
+
+Shared by the Object-mode and Edit-mode operators (and the command line): every job is read and
+validated before any mesh is written, so a failure leaves every mesh as it was.
+"""
+
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import core
+from . import mesh_io
+
+CORE_METHOD = {"HC": "hc", "LAPLACIAN": "plain", "LAPLACIAN_CENTRAL": "central", "LAPLACIAN_ORIGINAL": "original"}
+METHOD_LABEL = {"HC": "HC", "LAPLACIAN": "Laplacian", "LAPLACIAN_CENTRAL": "Laplacian (central)",
+                "LAPLACIAN_ORIGINAL": "Laplacian (original)"}
+
+
+class JobError(Exception):
+    """A message for the user; nothing has been written."""
+
+
+@dataclass
+class Job:
+    obj: object
+    mesh: object
+    positions: np.ndarray  # float32 (n, 3): the mesh's, or its active shape key's
+    edges: np.ndarray
+    faces: object
+    fixed: np.ndarray  # bool (n,)
+    key_block: object = None  # the active shape key that holds ``positions``, if any
+    operator: object = None
+    result: np.ndarray = None
+    iterations_run: int = 0
+    seconds: float = 0.0
+    extra: dict = field(default_factory=dict)
+
+
+def settings_of(props):
+    """The core arguments from operator (or scene) settings."""
+    return dict(method=CORE_METHOD[props.method], alpha=props.alpha, beta=props.beta,
+                mode=props.mode.lower(), tolerance=props.tolerance)
+
+
+def check_editable(obj):
+    for what, datablock in (("Object", obj), ("Mesh", obj.data)):
+        if datablock.library is not None:
+            raise JobError(f"{what} '{datablock.name}' is linked from library '{datablock.library.filepath}' "
+                           "and cannot be edited: make it local first (Object > Relations > Make Local)")
+        if not datablock.is_editable:
+            raise JobError(f"{what} '{datablock.name}' cannot be edited (a library override?): make it local first")
+
+
+def make_job(obj, props, extra_fixed=None):
+    """Read ``obj``'s mesh into a Job, or raise JobError saying what is wrong. Reads only."""
+    if obj.type != "MESH":
+        raise JobError(f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object, not a mesh")
+    check_editable(obj)
+    mesh = obj.data
+    n = len(mesh.vertices)
+    if n == 0:
+        raise JobError(f"Mesh '{mesh.name}' has no vertices: nothing to smooth")
+    if len(mesh.edges) == 0:
+        raise JobError(f"Mesh '{mesh.name}' has no edges: it is a point cloud. "
+                       "Use Object > HC Smooth Points (object.hc_smooth_points) instead")
+    key_block = None
+    if mesh.shape_keys is not None and obj.active_shape_key is not None:
+        key_block = obj.active_shape_key
+        positions = mesh_io.read_shape_key(key_block)
+    else:
+        positions = mesh_io.read_positions(mesh)
+    bad = ~np.isfinite(positions).all(axis=1)
+    if bad.any():
+        raise JobError(f"Mesh '{mesh.name}' has {int(bad.sum())} vertices with NaN or infinite coordinates "
+                       f"(first: vertex {int(np.flatnonzero(bad)[0])}): fix or delete them first")
+    faces = mesh_io.read_faces(mesh)
+    fixed = np.zeros(n, dtype=bool) if extra_fixed is None else extra_fixed.copy()
+    if props.vertex_group:
+        group = obj.vertex_groups.get(props.vertex_group)
+        if group is None:
+            raise JobError(f"Object '{obj.name}' has no vertex group '{props.vertex_group}'")
+        members = mesh_io.vertex_group_members(obj, group.index)
+        fixed |= ~members if props.invert_vertex_group else members
+    if props.pin_boundary:
+        fixed |= mesh_io.boundary_vertices(n, faces)
+    return Job(obj=obj, mesh=mesh, positions=positions, edges=mesh_io.read_edges(mesh), faces=faces,
+               fixed=fixed, key_block=key_block)
+
+
+def run(jobs, props, chunk=None, should_stop=None):
+    """Smooth every job; a generator yielding the fraction done after each chunk of iterations.
+
+    chunk=None runs each job in one call. Chunked runs restart the core from the intermediate
+    positions with the true originals, which continues the same iteration exactly.
+    """
+    settings = settings_of(props)
+    total = max(1, props.iterations * len(jobs))
+    done = 0
+    for job in jobs:
+        start = time.perf_counter()
+        job.operator = core.umbrella_operator(job.edges, len(job.positions))
+        current, remaining = job.positions, props.iterations
+        step = remaining if not chunk else chunk
+        while True:
+            with warnings.catch_warnings():  # the operators report the convergence region themselves
+                warnings.simplefilter("ignore", core.ConvergenceWarning)
+                result = core.smooth(current, None, operator=job.operator, iterations=min(step, remaining),
+                                     fixed=job.fixed, original=job.positions, **settings)
+            current = result.positions
+            remaining -= result.iterations
+            job.iterations_run += result.iterations
+            done += result.iterations
+            if result.stopped_early or remaining <= 0 or result.iterations == 0:
+                break
+            yield done / total
+        job.result = current
+        job.seconds = time.perf_counter() - start
+        done += remaining  # iterations skipped by an early stop count as done
+        yield done / total
+
+
+def write(job, props):
+    """Write a job's result: into the mesh (and the active shape key) or into a new shape key."""
+    if props.output == "SHAPE_KEY":
+        if job.mesh.shape_keys is None:
+            job.obj.shape_key_add(name="Basis", from_mix=False)
+        key = job.obj.shape_key_add(name=METHOD_LABEL[props.method] + " Smooth", from_mix=False)
+        mesh_io.write_shape_key(key, job.result)
+        return
+    if job.key_block is not None:
+        mesh_io.write_shape_key(job.key_block, job.result)
+        if job.key_block != job.mesh.shape_keys.reference_key:
+            job.mesh.update()
+            return  # the basis (and so the mesh positions) stay as they were
+    mesh_io.write_positions(job.mesh, job.result)
+
+
+def summary(jobs, props):
+    """One line for the status bar: method, iterations, vertices moved, time, volume or size change."""
+    moved = 0
+    changes = []
+    for job in jobs:
+        change = core.measure_change(job.positions, job.result, faces=job.faces)
+        moved += change.moved
+        if change.volume_change is not None:
+            changes.append(f"volume {change.volume_change:+.2%}")
+        else:
+            changes.append(f"size {change.bbox_change:+.2%}")
+    iterations = max((job.iterations_run for job in jobs), default=0)
+    seconds = sum(job.seconds for job in jobs)
+    where = " (new shape key)" if props.output == "SHAPE_KEY" else ""
+    names = f"{len(jobs)} meshes" if len(jobs) > 1 else f"'{jobs[0].mesh.name}'"
+    return (f"{METHOD_LABEL[props.method]} on {names}{where}: {iterations} iterations, {moved} vertices moved, "
+            f"{seconds:.2f} s, " + ", ".join(changes))

@@ -1,0 +1,96 @@
+"""Bulk transfer between Blender meshes and NumPy arrays (foreach_get/foreach_set, no per-vertex Python).
+
+Everything here reads or writes whole arrays; the operators validate first and write last, so a mesh
+is written back whole or not at all.
+"""
+
+import numpy as np
+
+
+def read_positions(mesh):
+    """Vertex positions (n, 3) float32 through the position attribute (the fast path)."""
+    buffer = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.attributes["position"].data.foreach_get("vector", buffer)
+    return buffer.reshape(-1, 3)
+
+
+def write_positions(mesh, positions):
+    mesh.attributes["position"].data.foreach_set("vector", np.ascontiguousarray(positions, np.float32).ravel())
+    mesh.update()
+
+
+def read_edges(mesh):
+    """Edge vertex pairs (m, 2) int32."""
+    buffer = np.empty(len(mesh.edges) * 2, dtype=np.int32)
+    attribute = mesh.attributes.get(".edge_verts")
+    if attribute is not None and attribute.data_type == "INT32_2D":
+        attribute.data.foreach_get("value", buffer)
+    else:
+        mesh.edges.foreach_get("vertices", buffer)
+    return buffer.reshape(-1, 2)
+
+
+def read_faces(mesh):
+    """Faces as (offsets, corner_verts), the layout core.measure_change accepts; None without faces."""
+    if not len(mesh.polygons):
+        return None
+    starts = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("loop_start", starts)
+    corners = np.empty(len(mesh.loops), dtype=np.int32)
+    attribute = mesh.attributes.get(".corner_vert")
+    if attribute is not None:
+        attribute.data.foreach_get("value", corners)
+    else:
+        mesh.loops.foreach_get("vertex_index", corners)
+    return np.append(starts, corners.size), corners
+
+
+def read_bool_attribute(mesh, name, default=False):
+    """A boolean point attribute such as ".select_vert" or ".hide_vert"; absent means all ``default``."""
+    attribute = mesh.attributes.get(name)
+    values = np.full(len(mesh.vertices), default, dtype=bool)
+    if attribute is not None and attribute.domain == "POINT" and attribute.data_type == "BOOLEAN":
+        attribute.data.foreach_get("value", values)
+    return values
+
+
+def read_shape_key(key_block):
+    buffer = np.empty(len(key_block.data) * 3, dtype=np.float32)
+    key_block.data.foreach_get("co", buffer)
+    return buffer.reshape(-1, 3)
+
+
+def write_shape_key(key_block, positions):
+    key_block.data.foreach_set("co", np.ascontiguousarray(positions, np.float32).ravel())
+
+
+def boundary_vertices(n_vertices, faces):
+    """Vertices on an open boundary: on an edge used by exactly one face (edges without faces don't count)."""
+    mask = np.zeros(n_vertices, dtype=bool)
+    if faces is None:
+        return mask
+    offsets, corners = faces
+    following = np.arange(1, corners.size + 1)
+    following[offsets[1:] - 1] = offsets[:-1]  # the last corner of a face closes it at its first
+    a, b = corners, corners[following]
+    keys = np.minimum(a, b).astype(np.int64) * n_vertices + np.maximum(a, b)
+    keys.sort()
+    # An edge key seen exactly once belongs to a single face.
+    first = np.concatenate(([True], keys[1:] != keys[:-1]))
+    last = np.concatenate((keys[1:] != keys[:-1], [True]))
+    single = keys[first & last]
+    mask[single // n_vertices] = True
+    mask[single % n_vertices] = True
+    return mask
+
+
+def vertex_group_members(obj, group_index):
+    """Boolean mask of the vertices with weight > 0 in the vertex group (a Python loop: Blender has no
+    bulk accessor for weights)."""
+    mask = np.zeros(len(obj.data.vertices), dtype=bool)
+    for vertex in obj.data.vertices:
+        for element in vertex.groups:
+            if element.group == group_index and element.weight > 0.0:
+                mask[vertex.index] = True
+                break
+    return mask

@@ -1,0 +1,256 @@
+"""The mesh operators: object.hc_smooth (Object mode) and mesh.hc_smooth (Edit mode).
+
+Thin: read every mesh into a Job (jobs.py), run the core, write back. execute() depends only on the
+operator's properties and the mesh, so the redo panel (F9) can re-run it; invoke() runs long work as
+a modal timer with progress in the status bar and Esc to cancel (nothing is written until the end).
+"""
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
+
+from .. import core
+from . import jobs as jobs_module
+from . import mesh_io
+from .jobs import JobError
+
+METHOD_ITEMS = [
+    ("HC", "HC", "Laplacian steps pushed back towards the previous and original points: removes noise "
+     "without shrinking (Vollmer, Mencl, Müller 1999, section 4)"),
+    ("LAPLACIAN", "Laplacian", "Every vertex moves to the average of its neighbours; shrinks (section 3.1)"),
+    ("LAPLACIAN_CENTRAL", "Laplacian, Central Point", "Keeps Alpha of the current position (section 3.2)"),
+    ("LAPLACIAN_ORIGINAL", "Laplacian, Original Point", "Keeps Alpha of the original position; always converges "
+     "(section 3.3)"),
+]
+MODE_ITEMS = [
+    ("SIMULTANEOUS", "Simultaneous", "Every vertex is averaged from the positions before the iteration "
+     "(the paper's Algorithm 1)"),
+    ("SEQUENTIAL", "Sequential", "Vertices in index order, each using its already-moved neighbours "
+     "(Gauss–Seidel)"),
+]
+OUTPUT_ITEMS = [
+    ("MESH", "Mesh", "Move the vertices (of the active shape key, if the mesh has shape keys)"),
+    ("SHAPE_KEY", "New Shape Key", "Store the result in a new shape key and leave the mesh as it was"),
+]
+
+# Above this many vertex-iterations, an interactive run becomes modal (progress, Esc cancels).
+MODAL_WORK = 5_000_000
+
+
+class SmoothProperties:
+    """The operator settings, shared by both operators (and mirrored by the scene settings in ui/)."""
+
+    method: EnumProperty(name="Method", items=METHOD_ITEMS, default="HC")
+    alpha: FloatProperty(
+        name="Alpha", default=0.1, min=0.0, max=1.0,
+        description="HC and Laplacian (original point): pull towards the original positions. "
+                    "Laplacian (central point): weight of the current position")
+    beta: FloatProperty(
+        name="Beta", default=0.6, min=0.0, max=1.0,
+        description="HC: weight of a vertex's own difference against its neighbours' (converges above 0.5)")
+    iterations: IntProperty(name="Iterations", default=10, min=0, soft_max=200,
+                            description="Number of smoothing iterations")
+    mode: EnumProperty(name="Mode", items=MODE_ITEMS, default="SIMULTANEOUS")
+    tolerance: FloatProperty(
+        name="Tolerance", default=0.0, min=0.0, soft_max=0.01, precision=6,
+        description="Stop early once no vertex moves more than this fraction of the bounding-box "
+                    "diagonal in an iteration (0: always run every iteration)")
+    vertex_group: StringProperty(name="Vertex Group",
+                                 description="Vertices in this group (weight above 0) stay fixed")
+    invert_vertex_group: BoolProperty(name="Invert", description="Fix every vertex outside the group instead: "
+                                      "smooth only the group")
+    pin_boundary: BoolProperty(name="Pin Boundary", description="Keep open-boundary vertices fixed")
+    output: EnumProperty(name="Output", items=OUTPUT_ITEMS, default="MESH")
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(self, "method")
+        column = layout.column()
+        column.active = self.method != "LAPLACIAN"
+        column.prop(self, "alpha")
+        row = layout.row()
+        row.active = self.method == "HC"
+        row.prop(self, "beta")
+        layout.prop(self, "iterations")
+        layout.prop(self, "mode")
+        layout.prop(self, "tolerance")
+        obj = context.active_object
+        row = layout.row(align=True)
+        if obj is not None and obj.type == "MESH":
+            row.prop_search(self, "vertex_group", obj, "vertex_groups", text="Fixed Group")
+        else:
+            row.prop(self, "vertex_group", text="Fixed Group")
+        row.prop(self, "invert_vertex_group", text="", icon="ARROW_LEFTRIGHT")
+        layout.prop(self, "pin_boundary")
+        layout.prop(self, "output")
+        if self.method == "HC" and not core.in_convergence_region(self.alpha, self.beta):
+            layout.label(text="Outside the convergence region (Alpha > 0, Beta > 0.5)", icon="ERROR")
+
+
+class _SmoothOperator(SmoothProperties):
+    """What the two operators share: prepare jobs, run (synchronously or modal), write, report."""
+
+    bl_options = {"REGISTER", "UNDO"}
+
+    def prepare(self, context):
+        raise NotImplementedError
+
+    def finish(self, context, jobs):
+        """Write every result (the subclasses wrap this with what their mode needs)."""
+        for job in jobs:
+            jobs_module.write(job, self)
+
+    def _report_done(self, jobs):
+        self.report({"INFO"}, jobs_module.summary(jobs, self))
+        if self.method == "HC":
+            message = core.convergence_message(self.alpha, self.beta)
+            if message:
+                self.report({"WARNING"}, message)
+
+    def execute(self, context):
+        try:
+            jobs = self.prepare(context)
+            for _ in jobs_module.run(jobs, self):
+                pass
+        except (JobError, ValueError) as error:
+            self.abandon(context)
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.finish(context, jobs)
+        self._report_done(jobs)
+        return {"FINISHED"}
+
+    def abandon(self, context):
+        """Undo whatever prepare() changed (mode switches); nothing was written."""
+
+    def invoke(self, context, event):
+        if bpy.app.background:
+            return self.execute(context)
+        try:
+            self._jobs = self.prepare(context)
+        except JobError as error:
+            self.abandon(context)
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        work = sum(len(job.positions) for job in self._jobs) * self.iterations
+        if work < MODAL_WORK:
+            return self._finish_now(context)
+        chunk = max(1, int(MODAL_WORK // max(1, work // max(1, self.iterations))))
+        self._runner = jobs_module.run(self._jobs, self, chunk=chunk)
+        window_manager = context.window_manager
+        self._timer = window_manager.event_timer_add(0.01, window=context.window)
+        window_manager.progress_begin(0, 100)
+        window_manager.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _finish_now(self, context):
+        try:
+            for _ in jobs_module.run(self._jobs, self):
+                pass
+        except ValueError as error:
+            self.abandon(context)
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.finish(context, self._jobs)
+        self._report_done(self._jobs)
+        return {"FINISHED"}
+
+    def _end_modal(self, context):
+        window_manager = context.window_manager
+        window_manager.event_timer_remove(self._timer)
+        window_manager.progress_end()
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+
+    def modal(self, context, event):
+        if event.type == "ESC":
+            self._end_modal(context)
+            self.abandon(context)
+            self.report({"WARNING"}, "HC Smooth cancelled: nothing was changed")
+            return {"CANCELLED"}
+        if event.type != "TIMER":
+            return {"RUNNING_MODAL"}
+        try:
+            fraction = next(self._runner)
+        except StopIteration:
+            self._end_modal(context)
+            self.finish(context, self._jobs)
+            self._report_done(self._jobs)
+            return {"FINISHED"}
+        except ValueError as error:
+            self._end_modal(context)
+            self.abandon(context)
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        context.window_manager.progress_update(int(fraction * 100))
+        if context.workspace is not None:
+            context.workspace.status_text_set(f"HC Smooth: {fraction:.0%} — Esc to cancel")
+        return {"RUNNING_MODAL"}
+
+
+class OBJECT_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
+    """Smooth the selected mesh objects without shrinking them (HC algorithm)"""
+
+    bl_idname = "object.hc_smooth"
+    bl_label = "HC Smooth"
+
+    @classmethod
+    def poll(cls, context):
+        return context.mode == "OBJECT"
+
+    def prepare(self, context):
+        objects = [obj for obj in context.selected_objects if obj.type == "MESH"]
+        if not objects:
+            others = ", ".join(sorted({obj.type.lower() for obj in context.selected_objects}))
+            raise JobError("Select at least one mesh object" + (f" (selected: {others})" if others else ""))
+        active = context.active_object
+        objects.sort(key=lambda obj: obj != active)  # a shared mesh is read through the active object
+        seen, jobs = set(), []
+        for obj in objects:
+            if obj.data.as_pointer() in seen:
+                continue
+            seen.add(obj.data.as_pointer())
+            jobs.append(jobs_module.make_job(obj, self))
+        return jobs
+
+
+class MESH_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
+    """Smooth the selected vertices without shrinking the mesh (HC algorithm); unselected and hidden vertices stay"""
+
+    bl_idname = "mesh.hc_smooth"
+    bl_label = "HC Smooth Vertices"
+
+    @classmethod
+    def poll(cls, context):
+        return context.mode == "EDIT_MESH"
+
+    def prepare(self, context):
+        # Edit-mode data lives in BMesh and the mesh arrays are stale until it is written back. Leaving
+        # Edit mode writes it once for all objects in the mode and opens the fast bulk paths; finish()
+        # and abandon() come back.
+        objects = list(context.objects_in_mode_unique_data)
+        bpy.ops.object.mode_set(mode="OBJECT")
+        jobs = []
+        for obj in objects:
+            mesh = obj.data
+            selected = mesh_io.read_bool_attribute(mesh, ".select_vert")
+            hidden = mesh_io.read_bool_attribute(mesh, ".hide_vert")
+            if not (selected & ~hidden).any():
+                continue
+            jobs.append(jobs_module.make_job(obj, self, extra_fixed=~selected | hidden))
+        if not jobs:
+            raise JobError("Select some visible vertices to smooth")
+        return jobs
+
+    def finish(self, context, jobs):
+        try:
+            super().finish(context, jobs)
+        finally:
+            bpy.ops.object.mode_set(mode="EDIT")
+
+    def abandon(self, context):
+        if context.mode != "EDIT_MESH":
+            bpy.ops.object.mode_set(mode="EDIT")
+
+
+classes = (OBJECT_OT_hc_smooth, MESH_OT_hc_smooth)

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Create the two test environments, each with Blender as a Python module (bpy) from PyPI:
+#   .envs/bpy45  Blender 4.5 LTS, Python 3.11, NumPy 1.26 (as Blender 4.x bundles), SciPy 1.15
+#   .envs/bpy52  Blender 5.2 LTS, Python 3.13, NumPy 2.x,  SciPy 1.17
+# Idempotent: an environment whose stamp matches its requirements is left alone.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+find_python() {  # find_python 3.11 -> a working python3.11 (pyenv's install first: its PATH shims may refuse)
+    local version=$1 candidate
+    for candidate in "$(pyenv root 2>/dev/null)/versions/$version"*/bin/"python$version" "python$version"; do
+        if "$candidate" --version >/dev/null 2>&1; then command -v "$candidate"; return; fi
+    done
+    echo "setup_envs: Python $version not found (install it, e.g. with pyenv)" >&2
+    return 1
+}
+
+make_env() {  # make_env NAME PYTHON_VERSION REQUIREMENTS...
+    local name=$1 version=$2; shift 2
+    local dir=.envs/$name stamp
+    stamp="$*"
+    if [ -f "$dir/.stamp" ] && [ "$(cat "$dir/.stamp")" = "$stamp" ]; then
+        echo "setup_envs: $dir is up to date"
+        return
+    fi
+    echo "setup_envs: creating $dir ($*)"
+    rm -rf "$dir"
+    "$(find_python "$version")" -m venv "$dir"
+    "$dir/bin/python" -m pip install --quiet --upgrade pip 2>&1 | grep -v "is ignored: it is neither" || true
+    "$dir/bin/python" -m pip install --quiet "$@" 2>&1 | grep -v "is ignored: it is neither" || true
+    "$dir/bin/python" -c "import bpy, numpy, scipy, pytest, hypothesis"  # fail here, not in the tests
+    echo "$stamp" > "$dir/.stamp"
+}
+
+TEST_TOOLS=(pytest==9.* hypothesis==6.*)
+make_env bpy45 3.11 "bpy==4.5.*" "numpy==1.26.*" "scipy==1.15.*" "${TEST_TOOLS[@]}"
+make_env bpy52 3.13 "bpy==5.2.*" "numpy>=2.2,<2.7" "scipy==1.17.*" "${TEST_TOOLS[@]}"

@@ -1,0 +1,46 @@
+"""Headless Blender (the bpy module) with HC Smooth installed the way Blender installs extensions:
+the zip built by Blender's own extension tool, then package_install_files into a clean user folder."""
+
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+
+# Blender reads its user folder once, when bpy is first imported: point it at an empty one.
+USER_RESOURCES = tempfile.mkdtemp(prefix="hc_smooth_user_")
+os.environ["BLENDER_USER_RESOURCES"] = USER_RESOURCES
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+ADDON = "bl_ext.user_default.hc_smooth"
+sys.path.insert(0, str(ROOT))  # `import core` (the same code, loaded outside Blender) for comparisons
+
+
+@pytest.fixture(scope="session")
+def extension_zip(tmp_path_factory):
+    out = tmp_path_factory.mktemp("build")
+    subprocess.run([sys.executable, str(ROOT / "scripts" / "build_extension.py"), "--output-dir", str(out)],
+                   check=True, capture_output=True)
+    (path,) = out.glob("hc_smooth-*.zip")
+    return path
+
+
+@pytest.fixture(scope="session")
+def addon(extension_zip):
+    result = bpy.ops.extensions.package_install_files(filepath=str(extension_zip), repo="user_default",
+                                                      enable_on_install=True)
+    assert result == {"FINISHED"}
+    yield sys.modules[ADDON]
+    # bpy 4.5 can hang at interpreter exit while operator classes are still registered.
+    bpy.ops.preferences.addon_disable(module=ADDON)
+
+
+@pytest.fixture
+def scene(addon):
+    """An empty scene with the add-on enabled."""
+    bpy.ops.wm.read_homefile(use_empty=True)
+    return bpy.context.scene

@@ -1,0 +1,184 @@
+"""object.hc_smooth and mesh.hc_smooth on generated meshes, asserting on geometry."""
+
+import bpy
+import numpy as np
+import pytest
+
+import core
+from blender_scene import (edges_of, faces_of, make_mesh_object, noisy_grid, noisy_sphere, positions_of,
+                      select_only)
+
+
+# Blender stores float properties in single precision: compare with the values the operator really got.
+ALPHA, BETA = float(np.float32(0.1)), float(np.float32(0.6))
+
+
+def bits(array):
+    return np.ascontiguousarray(array).view(np.uint8)
+
+
+def volume_change(before, after, mesh):
+    return core.measure_change(before, after, faces=np.array(faces_of(mesh))).volume_change
+
+
+def test_object_mode_equals_core_on_the_same_arrays(scene):
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    assert bpy.ops.object.hc_smooth(alpha=0.25, beta=0.75, iterations=7) == {"FINISHED"}
+    expected = core.hc_smooth(before, edges_of(obj.data), alpha=0.25, beta=0.75, iterations=7)
+    assert np.array_equal(positions_of(obj.data), expected)
+    for mode, method in (("SEQUENTIAL", "HC"), ("SIMULTANEOUS", "LAPLACIAN_ORIGINAL")):
+        start = positions_of(obj.data)
+        bpy.ops.object.hc_smooth(method=method, mode=mode, alpha=0.25, beta=0.625, iterations=3)
+        expected = core.smooth(start, edges_of(obj.data), method="hc" if method == "HC" else "original",
+                               mode=mode.lower(), alpha=0.25, beta=0.625, iterations=3).positions
+        assert np.array_equal(positions_of(obj.data), expected)
+
+
+def test_hc_keeps_volume_far_better_than_laplacian(scene, capfd):
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    bpy.ops.object.hc_smooth(method="HC", iterations=30)
+    hc = positions_of(obj.data)
+    report = capfd.readouterr().out
+    assert "HC on 'Sphere': 30 iterations" in report and "volume" in report
+    obj.data.vertices.foreach_set("co", before.ravel())
+    bpy.ops.object.hc_smooth(method="LAPLACIAN", iterations=30)
+    laplacian = positions_of(obj.data)
+    hc_change, lap_change = volume_change(before, hc, obj.data), volume_change(before, laplacian, obj.data)
+    assert lap_change < -0.3 and abs(hc_change) < 0.05 and abs(hc_change) < 0.1 * abs(lap_change)
+    # and it did smooth: the spread of the radii (the noise) dropped
+    assert np.std(np.linalg.norm(hc, axis=1)) < 0.5 * np.std(np.linalg.norm(before, axis=1))
+
+
+def test_vertex_group_is_fixed_and_inversion_smooths_only_the_group(scene):
+    obj = noisy_sphere()
+    group = obj.vertex_groups.new(name="Keep")
+    members = np.flatnonzero(positions_of(obj.data)[:, 2] > 0.3)
+    group.add(members.tolist(), 1.0, "REPLACE")
+    before = positions_of(obj.data)
+    bpy.ops.object.hc_smooth(vertex_group="Keep", iterations=5)
+    after = positions_of(obj.data)
+    assert np.array_equal(bits(after[members]), bits(before[members]))
+    outside = np.setdiff1d(np.arange(len(before)), members)
+    assert (np.linalg.norm(after[outside] - before[outside], axis=1) > 0).mean() > 0.9
+    expected = core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=5, fixed=members)
+    assert np.array_equal(after, expected)
+
+    obj.data.vertices.foreach_set("co", before.ravel())
+    bpy.ops.object.hc_smooth(vertex_group="Keep", invert_vertex_group=True, iterations=5)
+    after = positions_of(obj.data)
+    assert np.array_equal(bits(after[outside]), bits(before[outside]))
+    assert (np.linalg.norm(after[members] - before[members], axis=1) > 0).mean() > 0.9
+
+
+def test_pin_boundary_keeps_open_edges_in_place(scene):
+    obj = noisy_grid()
+    before = positions_of(obj.data)
+    xy = np.abs(before[:, :2])
+    boundary = np.isclose(xy, 1.0, atol=1e-5).any(axis=1)
+    assert 0 < boundary.sum() < len(before)
+    bpy.ops.object.hc_smooth(pin_boundary=True, iterations=5)
+    after = positions_of(obj.data)
+    assert np.array_equal(bits(after[boundary]), bits(before[boundary]))
+    assert np.all(np.linalg.norm(after[~boundary] - before[~boundary], axis=1) > 0)
+
+
+def test_shape_keys_smooth_the_active_key_without_desyncing_the_basis(scene):
+    obj = noisy_sphere()
+    basis = obj.shape_key_add(name="Basis", from_mix=False)
+    key = obj.shape_key_add(name="Scan", from_mix=False)
+    obj.active_shape_key_index = 1
+    mesh_before = positions_of(obj.data)
+    bpy.ops.object.hc_smooth(iterations=4)
+    key_after = np.array([v.co[:] for v in key.data], dtype=np.float32)
+    basis_after = np.array([v.co[:] for v in basis.data], dtype=np.float32)
+    expected = core.hc_smooth(mesh_before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=4)
+    assert np.array_equal(key_after, expected)
+    assert np.array_equal(basis_after, mesh_before) and np.array_equal(positions_of(obj.data), mesh_before)
+
+    obj.active_shape_key_index = 0  # smoothing the basis moves the mesh with it
+    bpy.ops.object.hc_smooth(iterations=4)
+    basis_after = np.array([v.co[:] for v in basis.data], dtype=np.float32)
+    assert np.array_equal(basis_after, expected) and np.array_equal(positions_of(obj.data), expected)
+
+
+def test_output_to_a_new_shape_key_leaves_the_mesh(scene):
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    bpy.ops.object.hc_smooth(output="SHAPE_KEY", iterations=4)
+    assert np.array_equal(bits(positions_of(obj.data)), bits(before))
+    keys = obj.data.shape_keys.key_blocks
+    assert [k.name for k in keys] == ["Basis", "HC Smooth"]
+    result = np.array([v.co[:] for v in keys["HC Smooth"].data], dtype=np.float32)
+    assert np.array_equal(result, core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=4))
+
+
+def test_a_mesh_shared_by_several_objects_is_smoothed_once(scene):
+    obj = noisy_sphere()
+    twin = bpy.data.objects.new("Twin", obj.data)
+    scene.collection.objects.link(twin)
+    select_only(obj, twin)
+    before = positions_of(obj.data)
+    bpy.ops.object.hc_smooth(iterations=3)
+    once = core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=3)
+    assert np.array_equal(positions_of(obj.data), once)
+
+
+def test_several_objects_each_smoothed(scene):
+    a, b = noisy_sphere("A", seed=1), noisy_sphere("B", seed=2)
+    select_only(a, b)
+    before = {o.name: positions_of(o.data) for o in (a, b)}
+    bpy.ops.object.hc_smooth(iterations=3)
+    for o in (a, b):
+        expected = core.hc_smooth(before[o.name], edges_of(o.data), alpha=ALPHA, beta=BETA, iterations=3)
+        assert np.array_equal(positions_of(o.data), expected)
+
+
+def test_edit_mode_moves_only_selected_visible_vertices(scene):
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    n = len(before)
+    selected = before[:, 0] > -0.2
+    hidden = np.zeros(n, dtype=bool)
+    hidden[np.flatnonzero(selected)[:10]] = True
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="DESELECT")
+    bpy.ops.object.mode_set(mode="OBJECT")
+    obj.data.vertices.foreach_set("select", selected)
+    obj.data.vertices.foreach_set("hide", hidden)
+    bpy.ops.object.mode_set(mode="EDIT")
+    assert bpy.ops.mesh.hc_smooth(iterations=5) == {"FINISHED"}
+    assert bpy.context.mode == "EDIT_MESH"
+    bpy.ops.object.mode_set(mode="OBJECT")
+    after = positions_of(obj.data)
+    fixed = ~selected | hidden
+    assert np.array_equal(bits(after[fixed]), bits(before[fixed]))
+    expected = core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=5, fixed=fixed)
+    assert np.array_equal(after, expected)
+
+
+def test_edit_mode_with_nothing_selected_says_so_and_stays_in_edit_mode(scene):
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="DESELECT")
+    with pytest.raises(RuntimeError, match="Select some visible vertices"):
+        bpy.ops.mesh.hc_smooth()
+    assert bpy.context.mode == "EDIT_MESH"
+    bpy.ops.object.mode_set(mode="OBJECT")
+    assert np.array_equal(bits(positions_of(obj.data)), bits(before))
+
+
+def test_invoke_in_background_runs_execute(scene):
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    assert bpy.ops.object.hc_smooth("INVOKE_DEFAULT", iterations=2) == {"FINISHED"}
+    assert np.array_equal(positions_of(obj.data),
+                          core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=2))
+
+
+def test_outside_the_convergence_region_warns(scene, capfd):
+    noisy_sphere()
+    assert bpy.ops.object.hc_smooth(alpha=0.1, beta=0.3, iterations=2) == {"FINISHED"}
+    assert "Theorem 5.2" in capfd.readouterr().out

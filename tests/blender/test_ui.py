@@ -1,0 +1,355 @@
+"""The ui/ package: scene settings, panel, menu entries, presets, fixed-vertex count (headless bpy).
+
+Panels cannot be drawn without a window, so draw() runs against a recording layout: it sees the
+same calls (prop, operator, label) Blender would make, and the test inspects them.
+"""
+
+import ast
+import importlib
+import os
+import sys
+import types
+
+import bpy
+import numpy as np
+import pytest
+
+import core
+from blender_scene import noisy_grid, noisy_sphere, positions_of, select_only
+from conftest import ADDON
+
+OPERATORS = ("object.hc_smooth", "mesh.hc_smooth")
+
+
+def ui_module(name=""):
+    return importlib.import_module(f"{ADDON}.ui{name}")
+
+
+class RecordingLayout:
+    """Stands in for bpy.types.UILayout: records every call; sub-layouts share the record."""
+
+    def __init__(self, record=None):
+        self.record = [] if record is None else record
+        self.active = True
+        self.enabled = True
+        self.alert = False
+        self.use_property_split = False
+        self.use_property_decorate = True
+        self.operator_context = "INVOKE_DEFAULT"
+
+    def _sub(self, *args, **kwargs):
+        return RecordingLayout(self.record)
+
+    row = column = box = split = _sub
+
+    def operator(self, idname, **kwargs):
+        properties = types.SimpleNamespace()
+        self.record.append(("operator", idname, kwargs, properties))
+        return properties
+
+    def __getattr__(self, name):  # prop, prop_search, label, menu, separator, ...
+        def call(*args, **kwargs):
+            self.record.append((name, args, kwargs))
+        return call
+
+    def calls(self, kind):
+        return [entry for entry in self.record if entry[0] == kind]
+
+    def labels(self):
+        return [kwargs.get("text", "") for _, _, kwargs in self.calls("label")]
+
+    def buttons(self):
+        return [(idname, properties) for _, idname, _, properties in self.calls("operator")]
+
+
+def draw(panel_class, context):
+    layout = RecordingLayout()
+    panel_class.draw(types.SimpleNamespace(layout=layout), context)
+    return layout
+
+
+def rna_summary(prop):
+    """What must agree between the scene settings and the operators' properties."""
+    summary = {"type": prop.type, "default": getattr(prop, "default", None)}
+    if prop.type in {"FLOAT", "INT"}:
+        summary.update(hard_min=prop.hard_min, hard_max=prop.hard_max)
+    if prop.type == "ENUM":
+        summary["items"] = [(item.identifier, item.name) for item in prop.enum_items]
+    return summary
+
+
+@pytest.fixture
+def settings(scene):
+    return scene.hc_smooth
+
+
+# --- registration ---------------------------------------------------------------------------------------
+
+def test_scene_settings_mirror_both_operators(settings):
+    names = ui_module(".settings").OPERATOR_SETTINGS
+    ours = {name: rna_summary(settings.bl_rna.properties[name]) for name in names}
+    for idname in OPERATORS:
+        category, name = idname.split(".")
+        theirs = getattr(getattr(bpy.ops, category), name).get_rna_type().properties
+        assert {name: rna_summary(theirs[name]) for name in names} == ours, idname
+
+
+def test_panel_menu_entries_and_preset_path_registered(addon):
+    assert bpy.types.VIEW3D_PT_hc_smooth.bl_category == "HC Smooth"
+    assert bpy.types.VIEW3D_PT_hc_smooth.bl_region_type == "UI"
+    assert bpy.types.VIEW3D_PT_hc_smooth_fixed.bl_parent_id == "VIEW3D_PT_hc_smooth"
+    panel = ui_module(".panel")
+    for menu, entry in panel.MENU_ENTRIES:
+        assert entry in menu._dyn_ui_initialize()
+    preset = ui_module(".preset")
+    assert os.path.join(preset.PRESET_ROOT, "presets", "hc_smooth") in bpy.utils.preset_paths("hc_smooth")
+
+
+def test_disable_removes_everything_enable_restores(addon):
+    panel, preset, fixed = ui_module(".panel"), ui_module(".preset"), ui_module(".fixed")
+    entries = [(menu, entry) for menu, entry in panel.MENU_ENTRIES]
+    preset_dir = os.path.join(preset.PRESET_ROOT, "presets", "hc_smooth")
+    bpy.ops.preferences.addon_disable(module=ADDON)
+    try:
+        for name in ("VIEW3D_PT_hc_smooth", "VIEW3D_PT_hc_smooth_fixed", "HC_SMOOTH_MT_presets",
+                     "HC_SMOOTH_OT_preset_add", "HC_SMOOTH_OT_count_fixed", "HCSmoothSettings"):
+            assert not hasattr(bpy.types, name), name
+        assert not hasattr(bpy.types.Scene, "hc_smooth")
+        for menu, entry in entries:
+            assert entry not in menu._dyn_ui_initialize()
+        assert preset_dir not in bpy.utils.preset_paths("hc_smooth")
+        assert fixed._on_depsgraph_update not in bpy.app.handlers.depsgraph_update_post
+    finally:
+        bpy.ops.preferences.addon_enable(module=ADDON)
+    assert hasattr(bpy.types.Scene, "hc_smooth")
+    assert preset_dir in bpy.utils.preset_paths("hc_smooth")
+
+
+# --- the panel ------------------------------------------------------------------------------------------
+
+def test_panel_polls_in_object_and_edit_mode_only(scene):
+    obj = noisy_sphere()
+    panel = bpy.types.VIEW3D_PT_hc_smooth
+    assert panel.poll(bpy.context)
+    bpy.ops.object.mode_set(mode="EDIT")
+    assert panel.poll(bpy.context)
+    bpy.ops.object.mode_set(mode="SCULPT")
+    assert not panel.poll(bpy.context)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    assert obj.mode == "OBJECT"
+
+
+@pytest.mark.parametrize("mode, idname", [("OBJECT", "object.hc_smooth"), ("EDIT", "mesh.hc_smooth")])
+def test_smooth_button_carries_the_scene_settings(settings, mode, idname):
+    noisy_sphere()
+    bpy.ops.object.mode_set(mode=mode)
+    settings.method, settings.alpha, settings.beta = "LAPLACIAN_ORIGINAL", 0.3, 0.8
+    settings.iterations, settings.mode, settings.tolerance = 17, "SEQUENTIAL", 0.002
+    settings.invert_vertex_group, settings.pin_boundary, settings.output = True, True, "SHAPE_KEY"
+    layout = draw(bpy.types.VIEW3D_PT_hc_smooth, bpy.context)
+    ((button, properties),) = [(name, props) for name, props in layout.buttons() if name in OPERATORS]
+    assert button == idname
+    for name in ui_module(".settings").OPERATOR_SETTINGS:
+        assert getattr(properties, name) == getattr(settings, name), name
+    bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def test_button_settings_run_the_operator_like_the_core(settings):
+    """What the button hands over is a complete, valid set of operator arguments."""
+    obj = noisy_sphere(subdivisions=2)
+    before = positions_of(obj.data)
+    settings.alpha, settings.beta, settings.iterations = 0.2, 0.7, 4
+    layout = draw(bpy.types.VIEW3D_PT_hc_smooth, bpy.context)
+    ((_, properties),) = [button for button in layout.buttons() if button[0] == "object.hc_smooth"]
+    assert bpy.ops.object.hc_smooth(**vars(properties)) == {"FINISHED"}
+    edges = np.array([tuple(e.vertices) for e in obj.data.edges])
+    expected = core.hc_smooth(before, edges, alpha=settings.alpha, beta=settings.beta, iterations=4)
+    assert np.array_equal(positions_of(obj.data), expected)
+
+
+@pytest.mark.parametrize("alpha, beta", [(0.1, 0.6), (0.0, 0.6), (0.1, 0.5), (0.3, 0.2), (0.0, 0.0)])
+def test_panel_shows_the_convergence_region(settings, alpha, beta):
+    settings.method, settings.alpha, settings.beta = "HC", alpha, beta
+    layout = draw(bpy.types.VIEW3D_PT_hc_smooth, bpy.context)
+    icons = [kwargs.get("icon") for _, _, kwargs in layout.calls("label")]
+    inside = core.in_convergence_region(settings.alpha, settings.beta)
+    assert ("CHECKMARK" in icons) == inside and ("ERROR" in icons) == (not inside)
+
+
+def test_convergence_status_follows_the_paper():
+    texts = ui_module(".texts")
+    for alpha in np.linspace(0, 1, 11):
+        for beta in np.linspace(0, 1, 11):
+            converges, lines = texts.convergence_status("HC", alpha, beta)
+            assert converges == (alpha > 0 and beta > 0.5) and lines
+            assert texts.convergence_status("LAPLACIAN_ORIGINAL", alpha, beta)[0] == (alpha > 0)
+            assert not texts.convergence_status("LAPLACIAN", alpha, beta)[0]
+            assert not texts.convergence_status("LAPLACIAN_CENTRAL", alpha, beta)[0]
+
+
+# --- fixed vertices -------------------------------------------------------------------------------------
+
+def fixed_count_label(context):
+    layout = draw(bpy.types.VIEW3D_PT_hc_smooth_fixed, context)
+    return [text for text in layout.labels() if text.startswith("Fixed:")], layout
+
+
+def grid_boundary_count(obj):
+    """Vertices on the rim of a noisy_grid (noise is in z only; the grid spans [-1, 1]²)."""
+    xy = positions_of(obj.data)[:, :2]
+    return int(np.count_nonzero(np.isclose(np.abs(xy), 1.0, atol=1e-5).any(axis=1)))
+
+
+def test_fixed_count_matches_group_and_boundary(settings):
+    obj = noisy_grid(size=10)
+    n = len(obj.data.vertices)
+    boundary = grid_boundary_count(obj)
+    members = [0, 11, 12, 33, 47, 55]  # some on the boundary (0), most inside
+    obj.vertex_groups.new(name="Keep").add(members, 1.0, "REPLACE")
+    texts = ui_module(".texts")
+
+    settings.pin_boundary = True
+    assert fixed_count_label(bpy.context)[0] == [texts.count_line(boundary, n)]
+    settings.pin_boundary, settings.vertex_group = False, "Keep"
+    assert fixed_count_label(bpy.context)[0] == [texts.count_line(len(members), n)]
+    settings.invert_vertex_group = True
+    assert fixed_count_label(bpy.context)[0] == [texts.count_line(n - len(members), n)]
+    settings.vertex_group = "Missing"
+    labels, layout = fixed_count_label(bpy.context)
+    assert not labels and any("Missing" in text for text in layout.labels())
+
+
+def test_fixed_count_follows_geometry_changes(settings):
+    obj = noisy_grid(size=6)
+    settings.pin_boundary = True
+    before, _ = fixed_count_label(bpy.context)
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.mesh.subdivide()  # more boundary vertices
+    bpy.ops.object.mode_set(mode="OBJECT")
+    after, _ = fixed_count_label(bpy.context)
+    n = len(obj.data.vertices)
+    assert after == [ui_module(".texts").count_line(grid_boundary_count(obj), n)] and after != before
+
+
+def test_large_meshes_are_counted_on_request(settings, monkeypatch):
+    fixed = ui_module(".fixed")
+    monkeypatch.setattr(fixed, "AUTO_COUNT_LIMIT", 10)
+    obj = noisy_grid(size=6)
+    settings.pin_boundary = True
+    labels, layout = fixed_count_label(bpy.context)
+    assert not labels and ("hc_smooth.count_fixed", ) == tuple(name for name, _ in layout.buttons())
+    assert bpy.ops.hc_smooth.count_fixed() == {"FINISHED"}
+    labels, _ = fixed_count_label(bpy.context)
+    assert labels == [ui_module(".texts").count_line(grid_boundary_count(obj), len(obj.data.vertices))]
+
+
+def test_edit_mode_counts_unselected_vertices(settings):
+    obj = noisy_sphere(subdivisions=2)
+    n = len(obj.data.vertices)
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="DESELECT")
+    bpy.ops.object.mode_set(mode="OBJECT")
+    for index in range(0, n, 3):
+        obj.data.vertices[index].select = True
+    selected = len(range(0, n, 3))
+    bpy.ops.object.mode_set(mode="EDIT")
+    texts = ui_module(".texts")
+    labels, _ = fixed_count_label(bpy.context)
+    assert labels == [texts.edit_count_line(selected, n, more_rules=False)]
+    assert labels == [f"Fixed: {n - selected:,} of {n:,} vertices"]
+    bpy.ops.object.mode_set(mode="OBJECT")
+
+
+# --- menus ----------------------------------------------------------------------------------------------
+
+def test_menu_entries_call_the_operator_of_the_mode(settings):
+    noisy_sphere()
+    panel = ui_module(".panel")
+    settings.iterations = 23
+    layout = RecordingLayout()
+    panel.draw_object_menu_entry(types.SimpleNamespace(layout=layout), bpy.context)
+    ((idname, properties),) = layout.buttons()
+    assert idname == "object.hc_smooth" and properties.iterations == 23
+    bpy.ops.object.mode_set(mode="EDIT")
+    layout = RecordingLayout()
+    panel.draw_edit_menu_entry(types.SimpleNamespace(layout=layout), bpy.context)
+    ((idname, properties),) = layout.buttons()
+    assert idname == "mesh.hc_smooth" and properties.iterations == 23
+    bpy.ops.object.mode_set(mode="OBJECT")
+
+
+# --- presets --------------------------------------------------------------------------------------------
+
+def preset_assignments(path):
+    """{name: value} of the `settings.name = value` lines of a preset file."""
+    values = {}
+    for node in ast.parse(open(path, encoding="utf-8").read()).body:
+        if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Attribute):
+            values[node.targets[0].attr] = ast.literal_eval(node.value)
+    return values
+
+
+def apply_preset(path):
+    return bpy.ops.script.execute_preset(filepath=path, menu_idname="HC_SMOOTH_MT_presets")
+
+
+def test_shipped_presets_apply_their_values(settings):
+    files = ui_module(".preset").shipped_preset_files()
+    names = {os.path.basename(path) for path in files}
+    assert {"Light_scan_noise.py", "Heavy_scan_noise.py"} <= names
+    preset_settings = set(ui_module(".settings").PRESET_SETTINGS)
+    for path in files:
+        values = preset_assignments(path)
+        assert set(values) == preset_settings, path
+        assert core.in_convergence_region(values["alpha"], values["beta"]), path
+        settings.vertex_group, settings.output = "Untouched", "SHAPE_KEY"
+        assert apply_preset(path) == {"FINISHED"}
+        for name, value in values.items():
+            expected = pytest.approx(value, rel=1e-6) if isinstance(value, float) else value
+            assert getattr(settings, name) == expected, (path, name)
+        assert (settings.vertex_group, settings.output) == ("Untouched", "SHAPE_KEY")
+        assert bpy.types.HC_SMOOTH_MT_presets.bl_label == bpy.path.display_name(
+            os.path.splitext(os.path.basename(path))[0], title_case=False)
+
+
+def test_presets_are_ordered_by_noise_strength():
+    """Heavier noise: more iterations and a weaker pull to the (noisy) original points."""
+    by_name = {os.path.basename(p): preset_assignments(p) for p in ui_module(".preset").shipped_preset_files()}
+    light, heavy = by_name["Light_scan_noise.py"], by_name["Heavy_scan_noise.py"]
+    assert heavy["iterations"] > light["iterations"] and heavy["alpha"] < light["alpha"]
+
+
+def test_add_apply_and_remove_a_user_preset(settings):
+    settings.alpha, settings.beta, settings.iterations, settings.mode = 0.25, 0.75, 33, "SEQUENTIAL"
+    assert bpy.ops.hc_smooth.preset_add(name="My Scanner") == {"FINISHED"}
+    path = bpy.utils.preset_find("My_Scanner", "hc_smooth")
+    assert path and os.path.exists(path)
+    assert os.path.dirname(path) == bpy.utils.user_resource("SCRIPTS", path=os.path.join("presets", "hc_smooth"))
+    settings.alpha, settings.beta, settings.iterations, settings.mode = 0.1, 0.6, 10, "SIMULTANEOUS"
+    assert apply_preset(path) == {"FINISHED"}
+    assert (settings.alpha, settings.beta, settings.iterations, settings.mode) == \
+        (pytest.approx(0.25), pytest.approx(0.75), 33, "SEQUENTIAL")
+    assert bpy.ops.hc_smooth.preset_add(name="My_Scanner", remove_name=True) == {"FINISHED"}
+    assert not os.path.exists(path)
+
+
+def test_shipped_presets_cannot_be_removed(settings):
+    path = ui_module(".preset").shipped_preset_files()[0]
+    name = os.path.splitext(os.path.basename(path))[0]
+    assert bpy.ops.hc_smooth.preset_add(name=name, remove_name=True) == {"CANCELLED"}
+    assert os.path.exists(path)
+
+
+def test_fixed_count_is_recounted_after_a_geometry_update(settings):
+    obj = noisy_grid(size=6)
+    group = obj.vertex_groups.new(name="Keep")
+    group.add([3, 4, 5], 1.0, "REPLACE")
+    settings.vertex_group = "Keep"
+    n = len(obj.data.vertices)
+    texts = ui_module(".texts")
+    assert fixed_count_label(bpy.context)[0] == [texts.count_line(3, n)]
+    group.remove([4])  # same mesh, same vertex count: only Blender's update notice tells the cache
+    obj.data.update()
+    bpy.context.view_layer.update()
+    assert fixed_count_label(bpy.context)[0] == [texts.count_line(2, n)]

@@ -1,0 +1,28 @@
+"""The umbrella operator T equals its definition in paper section 5."""
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+
+import core
+
+
+@given(st.integers(1, 25), st.integers(0, 80), st.integers(0, 2**32 - 1))
+def test_matches_dense_definition(n, m, seed):
+    edges = np.random.default_rng(seed).integers(0, n, size=(m, 2))
+    dense = np.zeros((n, n))
+    for a, b in edges:
+        if a != b:
+            dense[a, b] = dense[b, a] = 1.0
+    degree = dense.sum(axis=1)
+    expected = np.divide(dense, degree[:, None], out=np.zeros_like(dense), where=degree[:, None] > 0)
+    operator = core.umbrella_operator(edges, n)
+    t = operator.matrix()
+    assert t.has_canonical_format
+    np.testing.assert_allclose(t.toarray(), expected, rtol=1e-15)
+    np.testing.assert_array_equal(operator.degree, degree)
+    np.testing.assert_allclose(operator.triangle("lower").toarray(), np.tril(expected, -1))
+    np.testing.assert_allclose(operator.triangle("upper").toarray(), np.triu(expected, 1))
+    assert operator.matrix(np.float32).dtype == np.float32
+    assert np.array_equal(operator.isolated, degree == 0)
+    assert operator.n_edges == int(np.triu(dense).sum())

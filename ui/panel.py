@@ -1,0 +1,165 @@
+"""The N-panel (3D Viewport sidebar, tab "HC Smooth") and the menu entries beside Blender's smoothing.
+
+Every button passes the scene settings to the operator it calls, so a run from the panel, a menu or
+F3 does what the panel shows, and F9 (redo) starts from those values.
+"""
+
+import bpy
+
+from . import fixed, texts
+from .preset import HC_SMOOTH_MT_presets
+
+OBJECT_OPERATOR = "object.hc_smooth"
+EDIT_OPERATOR = "mesh.hc_smooth"
+POINTS_OPERATOR = "object.hc_smooth_points"
+
+
+def operator_available(idname):
+    """Whether an operator is registered (the point-cloud one ships separately)."""
+    category, name = idname.split(".")
+    return hasattr(bpy.types, f"{category.upper()}_OT_{name}")
+
+
+def smooth_button(layout, context, text=None, icon="MOD_SMOOTH"):
+    """The operator button for the current mode, carrying the scene settings; None outside Object/Edit mode."""
+    if context.mode == "EDIT_MESH":
+        idname, label = EDIT_OPERATOR, "Smooth Selected Vertices"
+    elif context.mode == "OBJECT":
+        idname, label = OBJECT_OPERATOR, "Smooth Selected Objects"
+    else:
+        return None
+    if not operator_available(idname):
+        layout.label(text=f"Operator {idname} is not registered", icon="ERROR")
+        return None
+    properties = layout.operator(idname, text=text or label, icon=icon)
+    context.scene.hc_smooth.copy_to(properties)
+    return properties
+
+
+class VIEW3D_PT_hc_smooth(bpy.types.Panel):
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "HC Smooth"
+    bl_label = "HC Smooth"
+
+    @classmethod
+    def poll(cls, context):
+        return context.mode in {"OBJECT", "EDIT_MESH"}
+
+    def draw(self, context):
+        layout = self.layout
+        settings = context.scene.hc_smooth
+
+        row = layout.row(align=True)
+        row.menu(HC_SMOOTH_MT_presets.__name__, text=HC_SMOOTH_MT_presets.bl_label, icon="PRESET")
+        row.operator("hc_smooth.preset_add", text="", icon="ADD")
+        row.operator("hc_smooth.preset_add", text="", icon="REMOVE").remove_active = True
+
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        column = layout.column()
+        column.prop(settings, "method")
+        sub = column.column()
+        sub.active = texts.uses_alpha(settings.method)
+        sub.prop(settings, "alpha", text=texts.alpha_label(settings.method))
+        sub = column.column()
+        sub.active = texts.uses_beta(settings.method)
+        sub.prop(settings, "beta")
+        column.prop(settings, "iterations")
+        column.prop(settings, "mode")
+        column.prop(settings, "tolerance")
+
+        converges, lines = texts.convergence_status(settings.method, settings.alpha, settings.beta)
+        box = layout.box().column(align=True)
+        for index, line in enumerate(lines):
+            icon = ("CHECKMARK" if converges else "ERROR") if index == 0 else "BLANK1"
+            box.label(text=line, icon=icon)
+
+        layout.prop(settings, "output")
+        layout.use_property_split = False
+        smooth_button(layout.column(), context)
+        if context.mode == "OBJECT" and operator_available(POINTS_OPERATOR):
+            layout.operator(POINTS_OPERATOR, text="Smooth Point Cloud", icon="OUTLINER_DATA_POINTCLOUD")
+
+
+class VIEW3D_PT_hc_smooth_fixed(bpy.types.Panel):
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "HC Smooth"
+    bl_label = "Fixed Vertices"
+    bl_parent_id = "VIEW3D_PT_hc_smooth"
+
+    def draw(self, context):
+        layout = self.layout
+        settings = context.scene.hc_smooth
+        obj = context.active_object
+        mesh_object = obj if obj is not None and obj.type == "MESH" else None
+
+        row = layout.row(align=True)
+        if mesh_object is not None:
+            row.prop_search(settings, "vertex_group", mesh_object, "vertex_groups", text="")
+        else:
+            row.prop(settings, "vertex_group", text="")
+        sub = row.row(align=True)
+        sub.active = bool(settings.vertex_group)
+        sub.prop(settings, "invert_vertex_group", text="", icon="ARROW_LEFTRIGHT")
+        layout.prop(settings, "pin_boundary")
+
+        column = layout.column(align=True)
+        edit_mode = context.mode == "EDIT_MESH"
+        for rule in texts.fixed_rules(edit_mode=edit_mode, vertex_group=settings.vertex_group,
+                                      invert_vertex_group=settings.invert_vertex_group,
+                                      pin_boundary=settings.pin_boundary):
+            column.label(text=rule, icon="PINNED")
+        if edit_mode:
+            more_rules = bool(settings.vertex_group) or settings.pin_boundary
+            draw_edit_count(layout, context, more_rules)
+        elif mesh_object is not None:
+            draw_object_count(layout, mesh_object, settings)
+
+
+def draw_edit_count(layout, context, more_rules):
+    objects = [obj for obj in context.objects_in_mode_unique_data if obj.type == "MESH"]
+    selected, total = fixed.edit_mode_selection(objects)
+    layout.label(text=texts.edit_count_line(selected, total, more_rules), icon="INFO")
+
+
+def draw_object_count(layout, obj, settings):
+    result = fixed.cached(obj, settings)
+    if result is None and fixed.should_count_now(obj):
+        result = fixed.count(obj, settings)
+    if result is None:
+        layout.operator("hc_smooth.count_fixed", icon="INFO")
+    elif isinstance(result, str):
+        layout.label(text=result, icon="ERROR")
+    else:
+        layout.label(text=texts.count_line(*result), icon="INFO")
+
+
+def draw_edit_menu_entry(self, context):
+    """Edit mode, Vertex menu: beside Smooth Vertices and Smooth Vertices (Laplacian)."""
+    self.layout.separator()
+    smooth_button(self.layout, context, text="HC Smooth Vertices")
+
+
+def draw_object_menu_entry(self, context):
+    self.layout.separator()
+    smooth_button(self.layout, context, text="HC Smooth")
+
+
+MENU_ENTRIES = (
+    (bpy.types.VIEW3D_MT_edit_mesh_vertices, draw_edit_menu_entry),
+    (bpy.types.VIEW3D_MT_object, draw_object_menu_entry),
+)
+
+classes = (VIEW3D_PT_hc_smooth, VIEW3D_PT_hc_smooth_fixed)
+
+
+def register():
+    for menu, entry in MENU_ENTRIES:
+        menu.append(entry)
+
+
+def unregister():
+    for menu, entry in MENU_ENTRIES:
+        menu.remove(entry)

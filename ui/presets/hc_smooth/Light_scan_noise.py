@@ -1,0 +1,9 @@
+import bpy
+settings = bpy.context.scene.hc_smooth
+
+settings.method = 'HC'
+settings.alpha = 0.05
+settings.beta = 0.6
+settings.iterations = 20
+settings.mode = 'SIMULTANEOUS'
+settings.tolerance = 0.0
