@@ -3,6 +3,8 @@ ENVS := bpy45 bpy52
 PY45 := .envs/bpy45/bin/python
 # Extra pytest arguments, e.g. `make test PYTEST_ARGS="-k hc -x"`.
 PYTEST_ARGS ?=
+# A hung interpreter must fail the run, not stall CI: each environment's suite gets this many seconds.
+TEST_TIMEOUT ?= 1200
 
 .PHONY: envs test test-core demo build clean
 
@@ -13,7 +15,7 @@ envs:
 test: envs
 	@status=0; for env in $(ENVS); do \
 	  echo "=== tests on $$env ==="; \
-	  .envs/$$env/bin/python -m pytest -p no:cacheprovider $(PYTEST_ARGS) tests || status=1; \
+	  timeout $(TEST_TIMEOUT) .envs/$$env/bin/python -m pytest -p no:cacheprovider $(PYTEST_ARGS) tests || status=1; \
 	done; exit $$status
 
 # Core only, with whatever python3 has NumPy, SciPy, pytest and hypothesis.

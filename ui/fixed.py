@@ -58,10 +58,13 @@ def edit_mode_selection(objects):
     return selected, total
 
 
+# persistent: Blender drops other handlers whenever a file is loaded, which would leave stale counts.
+@bpy.app.handlers.persistent
 def clear(*_args):
     _counts.clear()
 
 
+@bpy.app.handlers.persistent
 def _on_depsgraph_update(_scene, depsgraph):
     if any(update.is_updated_geometry for update in depsgraph.updates):
         _counts.clear()
