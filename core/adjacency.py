@@ -99,19 +99,16 @@ def umbrella_operator(edges, n_vertices):
     high = (keys - low.astype(np.int64) * n).astype(index)
     del keys
 
-    # Row i holds its lower neighbours {low : high == i} then its upper ones {high : low == i}.
-    lower_counts = np.bincount(high, minlength=n).astype(index)
+    # CSR by SciPy's counting placement (coo -> csr, O(nnz), no sort): lower neighbours (high == i)
+    # listed before upper ones (low == i), each group increasing because the keys are sorted, so every
+    # row comes out sorted and without duplicates.
+    rows = np.concatenate((high, low))
+    columns = np.concatenate((low, high))
+    pattern = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, columns)), shape=(n, n)).tocsr()
+    del rows, columns
+    indptr = pattern.indptr.astype(index, copy=False)
+    indices = pattern.indices.astype(index, copy=False)
+    degree = np.diff(indptr)
     upper_counts = np.bincount(low, minlength=n).astype(index)
-    degree = lower_counts + upper_counts
-    indptr = _exclusive_cumsum(degree, index)
-    indices = np.empty(indptr[-1], dtype=index)
-    # Keys are sorted by (low, high), so the upper entries arrive row by row in increasing order ...
-    rank = np.arange(low.size, dtype=index) - _exclusive_cumsum(upper_counts, index)[low]
-    indices[indptr[low] + lower_counts[low] + rank] = high
-    # ... and a stable sort by high keeps the lower entries of each row increasing too.
-    order = np.argsort(high, kind="stable")
-    rows = high[order]
-    rank = np.arange(low.size, dtype=index) - _exclusive_cumsum(lower_counts, index)[rows]
-    indices[indptr[rows] + rank] = low[order]
     return Umbrella(n_vertices=n, degree=degree, indptr=indptr, indices=indices,
                     upper_indptr=_exclusive_cumsum(upper_counts, index), upper_indices=high)
