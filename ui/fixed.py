@@ -2,7 +2,7 @@
 
 The count comes from the operator's own reader (operators.jobs.make_job), so the panel and the run
 agree by construction, including the reasons a run would refuse (missing group, no edges, NaN...).
-Reading a vertex group is a Python loop in Blender, so draw() never counts: counts are cached per
+Counting reads the whole mesh as a run would, which draw() must not repeat: counts are cached per
 mesh state, filled automatically for small meshes and by a button for large ones, and dropped
 whenever Blender reports a geometry change.
 """
@@ -13,7 +13,7 @@ import numpy as np
 
 from ..operators import jobs
 
-# Meshes up to this size are counted on first draw (the vertex-group loop costs ~0.1 s at this size).
+# Meshes up to this size are counted on first draw; larger ones when the user presses the button.
 AUTO_COUNT_LIMIT = 100_000
 
 _counts = {}  # key -> (n_fixed, n_vertices) or an error message
