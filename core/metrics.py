@@ -3,6 +3,7 @@
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from .validation import check_positions
 
@@ -50,6 +51,8 @@ def fan_triangles(faces):
         corners = array.ravel()
         offsets = np.arange(array.shape[0] + 1, dtype=np.int64) * array.shape[1]
     sizes = np.diff(offsets)
+    if corners.size == 3 * sizes.size:  # every face a triangle (no face has fewer than 3 corners)
+        return corners.reshape(-1, 3)
     face_of_triangle = np.repeat(np.arange(sizes.size), sizes - 2)
     # Triangle k of face f: corners (0, k+1, k+2) counted from the face's first corner.
     k = np.arange(face_of_triangle.size) - np.repeat(np.cumsum(sizes - 2) - (sizes - 2), sizes - 2)
@@ -66,43 +69,71 @@ def is_closed(triangles_or_faces):
     tails = np.roll(triangles, -1, axis=1).ravel()
     n = int(triangles.max()) + 1
     # Fan diagonals appear once in each direction inside their own face, so they cancel like real edges.
-    forward = np.sort(heads * n + tails)
-    backward = np.sort(tails * n + heads)
-    unique_forward = forward.size == np.unique(forward).size
-    return bool(unique_forward and np.array_equal(forward, backward))
+    # Directed-edge counts as a sparse matrix D (SciPy's O(nnz) placement, no global sort): closed and
+    # consistently oriented <=> every directed edge once (entries all 1) and D == D^T.
+    counts = sp.coo_matrix((np.ones(heads.size, dtype=np.int32), (heads, tails)), shape=(n, n)).tocsr()
+    if counts.nnz != heads.size:  # a directed edge used twice: duplicate faces or flipped neighbours
+        return False
+    return (counts != counts.T.tocsr()).nnz == 0
 
 
 def enclosed_volume(positions, triangles):
     """Signed volume by the divergence theorem (positive for outward-facing normals)."""
-    p = np.asarray(positions, dtype=np.float64)
-    a, b, c = p[triangles[:, 0]], p[triangles[:, 1]], p[triangles[:, 2]]
-    return float(np.einsum("ij,ij->", a, np.cross(b, c)) / 6.0)
+    return _signed_volume(_columns(positions), _columns(triangles))
 
 
-def _bbox_diagonal(points):
-    if points.shape[0] == 0:
+def _columns(array):
+    """The columns of an (n, 3) array as contiguous 1-D arrays (float64 for points): gathers and
+    element-wise products on them run several times faster than on the narrow rows."""
+    array = np.asarray(array)
+    dtype = np.float64 if array.dtype.kind == "f" else None
+    return [np.ascontiguousarray(array[:, k], dtype=dtype) for k in range(3)]
+
+
+def _diagonal(columns):
+    if columns[0].size == 0:
         return 0.0
-    return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    return float(np.linalg.norm([column.max() - column.min() for column in columns]))
 
 
-def measure_change(before, after, faces=None):
-    """Compare a smoothing result with its input (both (n, 3)); ``faces`` as for ``fan_triangles``."""
-    before = check_positions(before, "before").astype(np.float64, copy=False)
-    after = check_positions(after, "after").astype(np.float64, copy=False)
+def _signed_volume(xyz, corners):
+    """Σ a·(b×c) / 6 over the triangles (a, b, c), written out per coordinate."""
+    x, y, z = xyz
+    a, b, c = corners
+    ax, ay, az = x[a], y[a], z[a]
+    bx, by, bz = x[b], y[b], z[b]
+    cx, cy, cz = x[c], y[c], z[c]
+    total = np.dot(ax, by * cz - bz * cy) + np.dot(ay, bz * cx - bx * cz) + np.dot(az, bx * cy - by * cx)
+    return float(total / 6.0)
+
+
+def measure_change(before, after, faces=None, closed=None):
+    """Compare a smoothing result with its input (both (n, 3)); ``faces`` as for ``fan_triangles``.
+
+    ``closed``: whether the faces form a closed, consistently oriented surface, when the caller already
+    knows (Blender's edge data tells it cheaply); None checks it here.
+    """
+    before, after = check_positions(before, "before"), check_positions(after, "after")
     if before.shape != after.shape:
         raise ValueError(f"before and after must have the same shape, got {before.shape} and {after.shape}")
-    displacement = np.linalg.norm(after - before, axis=1)
-    diag_before, diag_after = _bbox_diagonal(before), _bbox_diagonal(after)
-    closed = False
+    columns_before, columns_after = _columns(before), _columns(after)
+    squared = np.zeros(before.shape[0])
+    for old, new in zip(columns_before, columns_after):
+        step = new - old
+        squared += step * step
+    displacement = np.sqrt(squared)
+    diag_before, diag_after = _diagonal(columns_before), _diagonal(columns_after)
+    closed = closed if faces is not None else False
     volume_before = volume_after = volume_change = None
     if faces is not None:
         triangles = fan_triangles(faces)
         if triangles.size and triangles.max() >= before.shape[0]:
             raise ValueError("faces refer to vertices that do not exist")
-        closed = is_closed(triangles)
+        closed = is_closed(triangles) if closed is None else bool(closed)
         if closed:
-            volume_before = enclosed_volume(before, triangles)
-            volume_after = enclosed_volume(after, triangles)
+            corners = _columns(triangles)
+            volume_before = _signed_volume(columns_before, corners)
+            volume_after = _signed_volume(columns_after, corners)
             if volume_before != 0.0:
                 volume_change = (volume_after - volume_before) / abs(volume_before)
     return Change(

@@ -16,6 +16,7 @@ from .adjacency import Umbrella, umbrella_operator
 from .triangular import triangular_solver
 from .convergence import ConvergenceWarning, convergence_message
 from .validation import (
+    bbox_diagonal,
     check_choice,
     check_fixed,
     check_iterations,
@@ -85,7 +86,7 @@ def smooth(
             warnings.warn(message, ConvergenceWarning, stacklevel=3)
 
     step = _Stepper(operator, fixed_mask, origin, method, mode, alpha, beta, start.dtype)
-    threshold = tolerance * _bbox_diagonal(start)
+    threshold = tolerance * bbox_diagonal(start)
     current = start.copy()
     done = 0
     stopped_early = False
@@ -155,12 +156,6 @@ def laplacian_smooth(
         positions, edges, method=variant, alpha=alpha, iterations=iterations, mode=mode, fixed=fixed,
         tolerance=tolerance, original=original, operator=operator, progress=progress,
     ).positions
-
-
-def _bbox_diagonal(points):
-    if points.shape[0] == 0:
-        return 0.0
-    return float(np.linalg.norm(points.max(axis=0).astype(np.float64) - points.min(axis=0)))
 
 
 class _Stepper:

@@ -11,40 +11,22 @@ the scene as a .blend and renders noisy / Laplacian / HC side by side with Cycle
 """
 
 import argparse
-import os
 import pathlib
-import subprocess
 import sys
-import tempfile
 import time
 
-# Blender reads its user folder once, at import: give it an empty one so nothing of the user's is touched.
-os.environ["BLENDER_USER_RESOURCES"] = tempfile.mkdtemp(prefix="hc_smooth_demo_")
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "scripts"), str(ROOT / "demo")]
+
+from extension_session import install_extension, run_and_exit  # noqa: E402  (before bpy: user folder)
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "demo"))
-
 import core  # noqa: E402  (the same code the extension carries; used here for the metrics only)
 import scene_setup  # noqa: E402
 
-ADDON = "bl_ext.user_default.hc_smooth"
 SEED = 7
-
-
-def install_extension(build_dir):
-    """Build the zip with Blender's extension tool and install it the way Blender does."""
-    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "build_extension.py"), "--output-dir",
-                          str(build_dir)], check=True, capture_output=True, text=True).stdout
-    zip_path = out.strip().splitlines()[-1]
-    result = bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default",
-                                                      enable_on_install=True)
-    if result != {"FINISHED"} or ADDON not in sys.modules:
-        raise SystemExit(f"could not install {zip_path}")
-    return zip_path
 
 
 def smooth_copy(source, name, location, **operator_args):
@@ -148,19 +130,4 @@ def main():
 
 
 if __name__ == "__main__":
-    status = 0
-    try:
-        main()
-    except SystemExit as exit_:
-        status = exit_.code if isinstance(exit_.code, int) else 1
-        if not isinstance(exit_.code, int):
-            print(exit_.code, file=sys.stderr)
-    except Exception:  # noqa: BLE001 - print the trace, then leave through the same door
-        import traceback
-
-        traceback.print_exc()
-        status = 1
-    sys.stdout.flush()
-    sys.stderr.flush()
-    # bpy 4.5 can deadlock in its C exit handlers (see tests/conftest.py): leave without running them.
-    os._exit(status)
+    run_and_exit(main)

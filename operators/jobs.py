@@ -30,6 +30,7 @@ class Job:
     edges: np.ndarray
     faces: object
     fixed: np.ndarray  # bool (n,)
+    closed: bool = False  # the faces enclose a volume (consistently oriented, no boundary)
     key_block: object = None  # the active shape key that holds ``positions``, if any
     operator: object = None
     result: np.ndarray = None
@@ -71,10 +72,10 @@ def make_job(obj, props, extra_fixed=None):
         positions = mesh_io.read_shape_key(key_block)
     else:
         positions = mesh_io.read_positions(mesh)
-    bad = ~np.isfinite(positions).all(axis=1)
-    if bad.any():
-        raise JobError(f"Mesh '{mesh.name}' has {int(bad.sum())} vertices with NaN or infinite coordinates "
-                       f"(first: vertex {int(np.flatnonzero(bad)[0])}): fix or delete them first")
+    bad = core.validation.nonfinite_rows(positions)
+    if bad.size:
+        raise JobError(f"Mesh '{mesh.name}' has {bad.size} vertices with NaN or infinite coordinates "
+                       f"(first: vertex {int(bad[0])}): fix or delete them first")
     faces = mesh_io.read_faces(mesh)
     fixed = np.zeros(n, dtype=bool) if extra_fixed is None else extra_fixed.copy()
     if props.vertex_group:
@@ -85,8 +86,9 @@ def make_job(obj, props, extra_fixed=None):
         fixed |= ~members if props.invert_vertex_group else members
     if props.pin_boundary:
         fixed |= mesh_io.boundary_vertices(n, faces)
-    return Job(obj=obj, mesh=mesh, positions=positions, edges=mesh_io.read_edges(mesh), faces=faces,
-               fixed=fixed, key_block=key_block)
+    edges = mesh_io.read_edges(mesh)
+    return Job(obj=obj, mesh=mesh, positions=positions, edges=edges, faces=faces, fixed=fixed,
+               closed=mesh_io.is_closed(mesh, edges, faces), key_block=key_block)
 
 
 def run(jobs, props, chunk=None, should_stop=None):
@@ -142,7 +144,7 @@ def summary(jobs, props):
     moved = 0
     changes = []
     for job in jobs:
-        change = core.measure_change(job.positions, job.result, faces=job.faces)
+        change = core.measure_change(job.positions, job.result, faces=job.faces, closed=job.closed)
         moved += change.moved
         if change.volume_change is not None:
             changes.append(f"volume {change.volume_change:+.2%}")

@@ -45,6 +45,27 @@ def read_faces(mesh):
     return np.append(starts, corners.size), corners
 
 
+def is_closed(mesh, edges, faces):
+    """Whether the faces form a closed, consistently oriented surface: every edge of a face is in exactly
+    two faces, which run along it in opposite directions (loose edges do not matter). From Blender's
+    corner -> edge map: O(corners), no sort."""
+    if faces is None or len(edges) == 0:
+        return False
+    _offsets, corner_verts = faces
+    corner_edges = np.empty(corner_verts.size, dtype=np.int32)
+    attribute = mesh.attributes.get(".corner_edge")
+    if attribute is not None:
+        attribute.data.foreach_get("value", corner_edges)
+    else:
+        mesh.loops.foreach_get("edge_index", corner_edges)
+    faces_per_edge = np.bincount(corner_edges, minlength=len(edges))
+    if np.any((faces_per_edge != 2) & (faces_per_edge != 0)):
+        return False
+    # +1 where a face runs along its edge from the edge's first vertex, -1 the other way: must cancel.
+    direction = np.where(corner_verts == edges[corner_edges, 0], 1.0, -1.0)
+    return not np.any(np.bincount(corner_edges, weights=direction, minlength=len(edges)))
+
+
 def read_bool_attribute(mesh, name, default=False):
     """A boolean point attribute such as ".select_vert" or ".hide_vert"; absent means all ``default``."""
     attribute = mesh.attributes.get(name)

@@ -3,6 +3,8 @@
 import bpy
 import numpy as np
 
+ADDON = "bl_ext.user_default.hc_smooth"  # the module name Blender gives the installed extension
+
 
 def make_mesh_object(name, positions, faces=(), edges=(), link=True):
     mesh = bpy.data.meshes.new(name)

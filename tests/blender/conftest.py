@@ -16,7 +16,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-ADDON = "bl_ext.user_default.hc_smooth"
+from blender_scene import ADDON  # noqa: E402
 sys.path.insert(0, str(ROOT))  # `import core` (the same code, loaded outside Blender) for comparisons
 
 

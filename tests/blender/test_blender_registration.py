@@ -3,7 +3,7 @@
 import addon_utils
 import bpy
 
-from conftest import ADDON
+from blender_scene import ADDON
 
 OPERATOR_TYPES = ("OBJECT_OT_hc_smooth", "MESH_OT_hc_smooth")
 

@@ -6,7 +6,7 @@ import bpy
 import numpy as np
 
 from blender_scene import noisy_grid, select_only
-from conftest import ADDON
+from blender_scene import ADDON
 
 
 def mesh_io():

@@ -16,7 +16,7 @@ import pytest
 
 import core
 from blender_scene import noisy_grid, noisy_sphere, positions_of, select_only
-from conftest import ADDON
+from blender_scene import ADDON
 
 OPERATORS = ("object.hc_smooth", "mesh.hc_smooth")
 
