@@ -6,7 +6,7 @@ PYTEST_ARGS ?=
 # A hung interpreter must fail the run, not stall CI: each environment's suite gets this many seconds.
 TEST_TIMEOUT ?= 1200
 
-.PHONY: envs test test-core demo build clean
+.PHONY: envs test test-core demo build dist clean
 
 envs:
 	bash scripts/setup_envs.sh
@@ -29,6 +29,11 @@ demo: envs
 # The extension zip, built by Blender's own extension tool.
 build: envs
 	$(PY45) scripts/build_extension.py
+
+# One zip per platform with SciPy wheels for Blender 4.2-5.0 (cp311) and 5.1+ (cp313), validated, in dist/.
+# Downloads the wheels from PyPI once into build/wheels.
+dist: envs
+	$(PY45) scripts/dist.py
 
 clean:
 	rm -rf build dist demo_output
