@@ -51,8 +51,11 @@ def fan_triangles(faces):
         corners = array.ravel()
         offsets = np.arange(array.shape[0] + 1, dtype=np.int64) * array.shape[1]
     sizes = np.diff(offsets)
-    if corners.size == 3 * sizes.size:  # every face a triangle (no face has fewer than 3 corners)
-        return corners.reshape(-1, 3)
+    if sizes.size and corners.size == sizes[0] * sizes.size and np.all(sizes == sizes[0]):
+        # All faces alike (all triangles, all quads...): the fans are column picks of an (f, k) view.
+        k = int(sizes[0])
+        grid = corners.reshape(-1, k)
+        return np.stack([grid[:, [0, j + 1, j + 2]] for j in range(k - 2)], axis=1).reshape(-1, 3)
     face_of_triangle = np.repeat(np.arange(sizes.size), sizes - 2)
     # Triangle k of face f: corners (0, k+1, k+2) counted from the face's first corner.
     k = np.arange(face_of_triangle.size) - np.repeat(np.cumsum(sizes - 2) - (sizes - 2), sizes - 2)
@@ -125,7 +128,7 @@ def measure_change(before, after, faces=None, closed=None):
     diag_before, diag_after = _diagonal(columns_before), _diagonal(columns_after)
     closed = closed if faces is not None else False
     volume_before = volume_after = volume_change = None
-    if faces is not None:
+    if faces is not None and closed is not False:  # an open surface has no volume to compare
         triangles = fan_triangles(faces)
         if triangles.size and triangles.max() >= before.shape[0]:
             raise ValueError("faces refer to vertices that do not exist")
