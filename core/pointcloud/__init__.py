@@ -1,3 +1,14 @@
-"""Point-cloud smoothing through the RFS mesh (paper section 7)."""
+"""Point-cloud smoothing through the RFS mesh (paper section 7).
 
+spanning_tree (exact EMST) -> sdg (surface description graph) -> rfs (RFS mesh) -> swap (edge
+swapping) -> smooth (HC alternating with swapping).
+"""
+
+from .rfs import RFSMesh, rfs_mesh
+from .sdg import surface_description_graph
+from .smooth import PointCloudReport, smooth_point_cloud
 from .spanning_tree import emst
+from .swap import swap_pass
+
+__all__ = ["PointCloudReport", "RFSMesh", "emst", "rfs_mesh", "smooth_point_cloud",
+           "surface_description_graph", "swap_pass"]

@@ -103,11 +103,53 @@ def _spanning_forest(u, v, n_components):
     return unique[forest.data.astype(np.int64) - 1]
 
 
-def _exact_nearest_foreign(tree_points, label_code, ask, bound):
+def _nearest_foreign_by_growing_k(tree, label_code, ask, bound, k, budget):
+    """The cheap path for few askers: query the full tree with growing k until each asker either
+    meets a point of another code (the first one met is its nearest foreign point) or has seen
+    every point closer than its bound. Returns (distance, index, resolved)."""
+    distance_out = np.full(ask.size, np.inf)
+    index_out = np.full(ask.size, -1, dtype=np.int64)
+    resolved = np.zeros(ask.size, dtype=bool)
+    m = tree.n
+    todo = np.arange(ask.size)
+    while todo.size and k * todo.size <= budget:
+        k = min(k, m)
+        upper = float(bound[todo].max())
+        distance, found = tree.query(tree.data[ask[todo]], k, workers=-1,
+                                     distance_upper_bound=upper if np.isfinite(upper) else np.inf)
+        valid = np.isfinite(distance)
+        foreign = valid & (label_code[np.where(valid, found, 0)] != label_code[ask[todo]][:, None])
+        foreign &= distance < bound[todo][:, None]
+        has = foreign.any(axis=1)
+        first = np.argmax(foreign, axis=1)
+        rows = todo[has]
+        distance_out[rows] = distance[has, first[has]]
+        index_out[rows] = found[has, first[has]]
+        # Done without a hit when the list ran past the bound (or past every point within reach).
+        done = has | ~valid[:, -1] | (distance[:, -1] >= bound[todo]) | (k >= m)
+        resolved[todo[done]] = True
+        todo = todo[~done]
+        k *= 2
+    return distance_out, index_out, resolved
+
+
+def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16):
     """For each point index in ``ask``: the nearest point whose code differs, if closer than
     ``bound`` (per asking point). Returns (distance, index), inf / -1 where none is closer."""
     best_distance = np.full(ask.size, np.inf)
     best_index = np.full(ask.size, -1, dtype=np.int64)
+    if tree is not None and ask.size:
+        # Few askers (the usual case on surfaces): growing-k queries on the one tree we have cost
+        # far less than building two trees per code bit over all points.
+        found_distance, found_index, resolved = _nearest_foreign_by_growing_k(
+            tree, label_code, ask, bound, k, budget=tree_points.shape[0])
+        best_distance[resolved], best_index[resolved] = found_distance[resolved], found_index[resolved]
+        if resolved.all():
+            return best_distance, best_index
+        rest = np.flatnonzero(~resolved)
+        rest_distance, rest_index = _exact_nearest_foreign(tree_points, label_code, ask[rest], bound[rest])
+        best_distance[rest], best_index[rest] = rest_distance, rest_index
+        return best_distance, best_index
     n_bits = int(label_code.max()).bit_length()
     for bit in range(n_bits):
         side = (label_code >> bit) & 1
@@ -180,7 +222,8 @@ def boruvka_emst(index, exact_fraction=0.5):
             ask = inside[uncertain[label[inside]] & (radius[inside] < best[label[inside]])]
             code = np.zeros(n_components, dtype=np.int64)
             code[uncertain] = np.arange(1, int(uncertain.sum()) + 1)
-            found_distance, found = _exact_nearest_foreign(points, code[label], ask, best[label[ask]])
+            found_distance, found = _exact_nearest_foreign(points, code[label], ask, best[label[ask]],
+                                                         tree=index.tree, k=2 * max(k, 1))
             hit = found >= 0
             exact_best, exact_u, exact_v = _per_component_pick(
                 n_components, label[ask[hit]], label[ask[hit]], found_distance[hit], ask[hit], found[hit])

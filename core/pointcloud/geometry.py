@@ -1,0 +1,106 @@
+"""Triangle geometry shared by the RFS mesh and edge swapping, all vectorized over arrays of faces."""
+
+import numpy as np
+
+from .sdg import unique_sorted
+
+SQRT3 = np.sqrt(3.0)
+
+
+def face_quality(points, faces):
+    """Bank & Smith quality q = 4*sqrt(3)*A / (l1^2 + l2^2 + l3^2): 1 for equilateral, 0 degenerate."""
+    a, b, c = points[faces[:, 0]], points[faces[:, 1]], points[faces[:, 2]]
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    squares = (np.einsum("ij,ij->i", b - a, b - a) + np.einsum("ij,ij->i", c - b, c - b)
+               + np.einsum("ij,ij->i", a - c, a - c))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        quality = 4.0 * SQRT3 * area / squares
+    return np.nan_to_num(quality, nan=0.0)
+
+
+def _dot(x, y):
+    # Component-wise: much faster than a reduction over a length-3 last axis.
+    return x[..., 0] * y[..., 0] + x[..., 1] * y[..., 1] + x[..., 2] * y[..., 2]
+
+
+def dihedral_cos(points, u, v, s, t):
+    """cos of the dihedral angle at edge (u, v) between triangles (u, v, s) and (u, v, t).
+
+    The angle is measured between the two half-planes: pi when the faces lie flat on opposite sides
+    of the edge, 0 when folded onto each other. NaN for a degenerate face.
+    """
+    origin = points[u]
+    e = points[v] - origin
+    a = points[s] - origin
+    b = points[t] - origin
+    # The angle between the components of a and b perpendicular to e, through
+    # (e x a).(e x b) = |e|^2 (a.b) - (e.a)(e.b) and |e x a|^2 = |e|^2 |a|^2 - (e.a)^2.
+    ee, ea, eb = _dot(e, e), _dot(e, a), _dot(e, b)
+    num = ee * _dot(a, b) - ea * eb
+    den = np.sqrt(np.maximum(ee * _dot(a, a) - ea * ea, 0.0) * np.maximum(ee * _dot(b, b) - eb * eb, 0.0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cos = num / den
+    cos[den == 0] = np.nan
+    return np.clip(cos, -1.0, 1.0)
+
+
+def dihedral(points, u, v, s, t):
+    """Dihedral angle in radians (see ``dihedral_cos``)."""
+    return np.arccos(dihedral_cos(points, u, v, s, t))
+
+
+def sorted_faces(faces):
+    return np.sort(faces, axis=1)
+
+
+def face_keys(faces, n):
+    """One int64 key per face, independent of vertex order (n^3 must fit in int64)."""
+    f = np.sort(faces, axis=1).astype(np.int64)
+    return (f[:, 0] * n + f[:, 1]) * n + f[:, 2]
+
+
+def unique_faces(faces, n):
+    """Distinct faces (as sorted vertex triples), dropping those with a repeated vertex."""
+    f = np.sort(faces, axis=1).astype(np.int64)
+    f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2])]
+    if n ** 3 < 2 ** 62:
+        keys = unique_sorted((f[:, 0] * n + f[:, 1]) * n + f[:, 2])
+        return np.stack([keys // (n * n), (keys // n) % n, keys % n], axis=1)
+    return np.unique(f, axis=0)
+
+
+class Incidence:
+    """Face-edge incidences of a triangle list, grouped by edge.
+
+    Incidence 3*f + j is the edge of face f opposite its vertex j. ``order`` sorts incidences by
+    edge; ``edge_start``/``edge_count`` delimit each distinct edge's run in that order;
+    ``edge_of[i]`` is the edge number of incidence i; ``edges`` are the distinct edges (low, high).
+    """
+
+    def __init__(self, faces, n):
+        f = faces.astype(np.int64)
+        self.n = n
+        self.faces = f
+        # Edge opposite vertex j: (f[(j+1)%3], f[(j+2)%3]).
+        first = f[:, [1, 2, 0]].ravel()
+        second = f[:, [2, 0, 1]].ravel()
+        low, high = np.minimum(first, second), np.maximum(first, second)
+        keys = low * n + high
+        self.order = np.argsort(keys, kind="stable")
+        sorted_keys = keys[self.order]
+        new = np.concatenate(([True], sorted_keys[1:] != sorted_keys[:-1])) if keys.size else np.zeros(0, bool)
+        self.edge_start = np.flatnonzero(new)
+        self.edge_count = np.diff(np.append(self.edge_start, keys.size))
+        edge_number = np.cumsum(new) - 1
+        self.edge_of = np.empty(keys.size, dtype=np.int64)
+        self.edge_of[self.order] = edge_number
+        self.keys = sorted_keys[self.edge_start]
+        self.edges = np.stack([self.keys // max(n, 1), self.keys % max(n, 1)], axis=1)
+        self.third = f.ravel()  # vertex opposite each incidence
+
+    def has_edge(self, u, v):
+        """Whether (u, v) is an edge of some face, vectorized."""
+        keys = np.minimum(u, v).astype(np.int64) * self.n + np.maximum(u, v)
+        at = np.searchsorted(self.keys, keys)
+        at = np.minimum(at, max(self.keys.size - 1, 0))
+        return (self.keys.size > 0) & (self.keys[at] == keys) if self.keys.size else np.zeros(keys.shape, bool)

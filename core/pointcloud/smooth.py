@@ -1,0 +1,140 @@
+"""smooth_point_cloud: HC smoothing of a bare point set through its RFS mesh (paper section 7).
+
+Pipeline: distinct points -> exact EMST -> SDG -> RFS mesh -> ``rounds`` times (HC steps, then one
+pass of edge swapping) -> moved points. HC's o (original points) stays the input throughout, so
+the rounds together behave like one HC run whose mesh adapts between steps.
+"""
+
+import numbers
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..adjacency import umbrella_operator
+from ..smoothing import Cancelled, smooth
+from ..validation import check_fixed, check_positions, check_unit_interval
+from .rfs import RFSMesh, rfs_mesh
+from .sdg import surface_description_graph
+from .spanning_tree import NeighbourIndex, boruvka_emst
+from .swap import swap_pass
+
+
+@dataclass
+class PointCloudReport:
+    """What the run built and did (returned with ``return_mesh=True``)."""
+
+    mesh: RFSMesh  # final RFS mesh, vertex indices of the input points (first copy of duplicates)
+    n_distinct: int
+    sdg_edges: int
+    emst_cut: int  # EMST edges cut as gaps (see core.pointcloud.sdg)
+    isolated: int  # distinct points without a face: they cannot move
+    swaps: list = field(default_factory=list)  # swaps per round
+    seconds: dict = field(default_factory=dict)
+
+
+def _whole(value, name, low):
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
+        raise ValueError(f"{name} must be a whole number >= {low}, got {value!r}")
+    return int(value)
+
+
+def _positive(value, name):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value <= 0:
+        raise ValueError(f"{name} must be a number > 0, got {value!r}")
+    return float(value)
+
+
+def smooth_point_cloud(
+    points,
+    *,
+    alpha=0.1,
+    beta=0.6,
+    rounds=10,
+    iterations_per_round=1,
+    fixed=None,
+    neighbours=16,
+    spacing_factor=2.0,
+    gap_factor=3.0,
+    min_quality=0.3,
+    swap=True,
+    progress=None,
+    return_mesh=False,
+):
+    """Smooth ``points`` (n, 3) float32/float64 and return the moved points (same shape and dtype).
+
+    alpha, beta: HC weights (converges for alpha > 0, beta > 0.5). rounds: how often to alternate
+    ``iterations_per_round`` HC steps with a pass of edge swapping (``swap=False`` keeps the first
+    RFS mesh). fixed: boolean mask or point indices that never move. neighbours: size of the
+    nearest-neighbour lists the SDG chooses from; spacing_factor, gap_factor: the SDG rule (see
+    core.pointcloud.sdg). min_quality: Bank & Smith threshold for RFS faces, in [0, 1].
+    progress(done, total) is called after each round; returning False raises ``Cancelled``.
+    return_mesh: also return a ``PointCloudReport`` holding the final RFS mesh.
+    The input is never modified. Exact duplicates move together; points the RFS mesh leaves without
+    a face (isolated or unusable neighbourhoods) stay where they are.
+    """
+    start = check_positions(points, "points")
+    n = start.shape[0]
+    alpha = check_unit_interval(alpha, "alpha")
+    beta = check_unit_interval(beta, "beta")
+    rounds = _whole(rounds, "rounds", 0)
+    iterations_per_round = _whole(iterations_per_round, "iterations_per_round", 1)
+    neighbours = _whole(neighbours, "neighbours", 2)
+    spacing_factor = _positive(spacing_factor, "spacing_factor")
+    gap_factor = _positive(gap_factor, "gap_factor")
+    if spacing_factor > gap_factor:
+        raise ValueError(f"spacing_factor ({spacing_factor}) must not exceed gap_factor ({gap_factor})")
+    min_quality = check_unit_interval(min_quality, "min_quality")
+    fixed_mask = check_fixed(fixed, n)
+    if progress is not None and not callable(progress):
+        raise ValueError("progress must be a callable progress(done, total) or None")
+
+    seconds = {}
+    clock = time.perf_counter()
+
+    def lap(name):
+        nonlocal clock
+        now = time.perf_counter()
+        seconds[name] = seconds.get(name, 0.0) + now - clock
+        clock = now
+
+    index = NeighbourIndex(start, neighbours)  # distinct points, in KD-tree order
+    m = index.n_points
+    rows_fixed = np.zeros(m, dtype=bool)
+    np.logical_or.at(rows_fixed, index.representative, fixed_mask)  # a fixed copy pins its duplicates
+    lap("neighbours")
+    tree, _ = boruvka_emst(index)
+    lap("emst")
+    graph = surface_description_graph(index, tree, spacing_factor=spacing_factor, gap_factor=gap_factor)
+    lap("sdg")
+    current = index.points  # float64 copy, ours to move
+    mesh = rfs_mesh(current, graph.edges, min_quality=min_quality)
+    lap("rfs")
+    faces = mesh.faces
+    swaps = []
+    for done in range(1, rounds + 1):
+        operator = umbrella_operator(mesh.edges, m)
+        current = smooth(current, None, method="hc", alpha=alpha, beta=beta, iterations=iterations_per_round,
+                         fixed=rows_fixed, original=index.points, operator=operator).positions
+        lap("hc")
+        if swap:
+            faces, count = swap_pass(current, faces)
+            swaps.append(count)
+            if count:
+                from .geometry import Incidence
+                mesh = RFSMesh(faces, Incidence(faces, max(m, 1)).edges)
+            lap("swap")
+        if progress is not None and progress(done, rounds) is False:
+            raise Cancelled(f"cancelled after {done} of {rounds} rounds")
+
+    result = current[index.representative].astype(start.dtype)
+    result[fixed_mask] = start[fixed_mask]  # bit-identical, whatever the float round trip did
+    if not return_mesh:
+        return result
+    has_face = np.zeros(m, dtype=bool)
+    has_face[mesh.faces.ravel()] = True
+    report = PointCloudReport(
+        mesh=RFSMesh(index.original[mesh.faces], index.original[mesh.edges]),
+        n_distinct=m, sdg_edges=int(graph.edges.shape[0]), emst_cut=graph.emst_cut,
+        isolated=int(m - has_face.sum()), swaps=swaps, seconds=seconds)
+    return result, report

@@ -1,0 +1,93 @@
+"""Edge swapping on the RFS mesh (paper section 7, after Freitag et al.), vectorized.
+
+Two faces (a, b, c) and (a, b, d) sharing edge ab become (c, d, a) and (c, d, b) when that increases
+the sum of the dihedral angles at the five edges of the pair: the shared edge and the four outer
+edges ac, bc, ad, bd (each against the face on its other side; an outer edge without one contributes
+the same before and after, so it is left out).
+
+A swap is allowed only when edge cd does not exist yet: then the new faces cannot duplicate a face
+and cd gets exactly two faces, while every outer edge keeps its face count, so no edge ever gets
+more than two faces.
+
+One pass swaps a set of pairs at once. Chosen pairs touch pairwise disjoint vertex sets: then they
+share no face, no two create the same edge, and the face beyond each outer edge (which contains
+two vertices of its pair) belongs to no other chosen pair, so every gain was computed on exactly the
+mesh the swap is applied to. The set is picked greedily by gain (a Luby-style independent set).
+"""
+
+import numpy as np
+
+from .geometry import Incidence, dihedral
+
+_MIN_GAIN = 1e-9  # radians; ignores swaps that only win by rounding
+
+
+def _swap_candidates(points, faces, inc):
+    """Interior edges as pairs (f1, f2, a, b, c, d) and the gain of swapping each."""
+    interior = np.flatnonzero(inc.edge_count == 2)
+    i1 = inc.order[inc.edge_start[interior]]
+    i2 = inc.order[inc.edge_start[interior] + 1]
+    f1, f2 = i1 // 3, i2 // 3
+    a, b = inc.edges[interior, 0], inc.edges[interior, 1]
+    c, d = inc.third[i1], inc.third[i2]
+    usable = ~inc.has_edge(c, d) & (c != d)
+    f1, f2, a, b, c, d = (x[usable] for x in (f1, f2, a, b, c, d))
+
+    # For each incidence the third vertex of the face on the other side of its edge (-1: none).
+    other = np.full(inc.third.size, -1, dtype=np.int64)
+    pair = np.flatnonzero(inc.edge_count == 2)
+    j1, j2 = inc.order[inc.edge_start[pair]], inc.order[inc.edge_start[pair] + 1]
+    other[j1], other[j2] = inc.third[j2], inc.third[j1]
+
+    def beyond(face, opposite):
+        # The incidence of edge "face minus vertex `opposite`" is 3*face + slot of that vertex.
+        slot = np.argmax(faces[face] == opposite[:, None], axis=1)
+        return other[3 * face + slot]
+
+    x_bc, x_ac = beyond(f1, a), beyond(f1, b)  # faces beyond bc and ac (both edges of abc)
+    x_bd, x_ad = beyond(f2, a), beyond(f2, b)
+    before = dihedral(points, a, b, c, d)
+    after = dihedral(points, c, d, a, b)
+    for u, v, x, old, new in ((a, c, x_ac, b, d), (b, c, x_bc, a, d), (a, d, x_ad, b, c), (b, d, x_bd, a, c)):
+        has = x >= 0
+        xs = np.where(has, x, 0)
+        before += np.where(has, dihedral(points, u, v, old, xs), 0.0)
+        after += np.where(has, dihedral(points, u, v, new, xs), 0.0)
+    gain = after - before
+    return f1, f2, a, b, c, d, gain
+
+
+def _independent(vertex_sets, priority, n):
+    """Candidates whose priority is the highest at each of their vertices (vertex-disjoint)."""
+    top = np.full(n, -1, dtype=np.int64)
+    for column in vertex_sets.T:
+        np.maximum.at(top, column, priority)
+    return np.all(top[vertex_sets] == priority[:, None], axis=1)
+
+
+def swap_pass(points, faces, *, rounds=3):
+    """One pass of edge swapping. Returns (new faces, number of swaps). ``faces`` is not modified."""
+    n = points.shape[0]
+    faces = faces.astype(np.int64, copy=True)
+    if faces.shape[0] < 2:
+        return faces, 0
+    inc = Incidence(faces, n)
+    f1, f2, a, b, c, d, gain = _swap_candidates(points, faces, inc)
+    good = np.flatnonzero(np.nan_to_num(gain, nan=-1.0) > _MIN_GAIN)
+    vertex_sets = np.stack([a, b, c, d], axis=1)[good]
+    priority = np.empty(good.size, dtype=np.int64)
+    priority[np.argsort(gain[good], kind="stable")] = np.arange(good.size)  # distinct, by gain
+    chosen = np.zeros(good.size, dtype=bool)
+    free = np.ones(good.size, dtype=bool)
+    used = np.zeros(n, dtype=bool)
+    for _ in range(rounds):  # a few greedy rounds over what the winners left free
+        if not free.any():
+            break
+        pick = np.flatnonzero(free)[_independent(vertex_sets[free], priority[free], n)]
+        chosen[pick] = True
+        used[vertex_sets[pick].ravel()] = True
+        free &= ~used[vertex_sets].any(axis=1)
+    s = good[chosen]
+    faces[f1[s]] = np.stack([c[s], d[s], a[s]], axis=1)
+    faces[f2[s]] = np.stack([c[s], d[s], b[s]], axis=1)
+    return faces, int(s.size)

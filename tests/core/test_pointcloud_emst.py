@@ -1,0 +1,110 @@
+"""The EMST is exact: its length equals that of the MST of all Delaunay edges, also where a plain
+kNN-graph MST is wrong (scan lines, separated clusters, duplicates, ties)."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.sparse.csgraph import connected_components
+
+from core.pointcloud import emst
+from core.pointcloud.spanning_tree import NeighbourIndex, _exact_nearest_foreign, merge_duplicates
+
+from pointcloud_sets import clusters, delaunay_mst_length, grid_ties, scan_lines, uniform, with_duplicates
+
+
+def assert_is_emst(points, edges):
+    n = len(points)
+    assert edges.shape == (n - 1, 2)
+    assert edges.min() >= 0 and edges.max() < n
+    graph = sp.coo_matrix((np.ones(n - 1), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    assert connected_components(graph, directed=False)[0] == 1  # n - 1 edges + connected = tree
+    length = np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1).sum()
+    assert length == pytest.approx(delaunay_mst_length(points), rel=1e-12, abs=1e-12)
+
+
+HARD_SETS = {
+    "uniform": uniform(1500),
+    "scan_lines": scan_lines(),
+    "clusters": clusters(),
+    "duplicates": with_duplicates(),
+    "grid_ties": grid_ties(),
+}
+
+
+@pytest.mark.parametrize("name", sorted(HARD_SETS))
+@pytest.mark.parametrize("k", [1, 3, 12])
+def test_emst_matches_delaunay_mst(name, k):
+    points = HARD_SETS[name]
+    assert_is_emst(points, emst(points, neighbours=k))
+
+
+def test_knn_mst_alone_would_fail_on_these_sets():
+    # The sets are hard for real: a k=3 neighbour graph of the scan lines and clusters is disconnected.
+    for name in ("scan_lines", "clusters"):
+        index = NeighbourIndex(HARD_SETS[name], 3)
+        src = np.repeat(np.arange(index.n_points), 3)
+        graph = sp.coo_matrix((np.ones(src.size), (src, index.neighbour.ravel())), shape=(index.n_points,) * 2)
+        assert connected_components(graph, directed=False)[0] > 1
+
+
+def test_float32_and_tiny_inputs():
+    points = uniform(300).astype(np.float32)
+    assert_is_emst(points.astype(np.float64), emst(points))
+    assert emst(np.zeros((0, 3))).shape == (0, 2)
+    assert emst(np.zeros((1, 3))).shape == (0, 2)
+    assert emst(np.zeros((5, 3))).shape == (4, 2)  # all duplicates: zero-length star
+    two = np.array([[0.0, 0, 0], [1, 0, 0]])
+    assert emst(two).tolist() in ([[0, 1]], [[1, 0]])
+
+
+def test_duplicates_are_tied_to_their_first_copy():
+    points = with_duplicates(50)
+    first, representative = merge_duplicates(points)
+    assert np.array_equal(points[first[representative]], points)
+    assert len(np.unique(points, axis=0)) == len(first)
+
+
+def test_growing_k_path_equals_bit_path():
+    # The two exact nearest-foreign searches must agree (the cheap one falls back to the other).
+    rng = np.random.default_rng(3)
+    index = NeighbourIndex(clusters(4, 100, seed=3), 4)
+    code = rng.integers(0, 5, index.n_points)
+    ask = np.flatnonzero(code > 0)
+    bound = np.full(ask.size, np.inf)
+    bound[::3] = 0.005
+    d1, i1 = _exact_nearest_foreign(index.points, code, ask, bound)
+    d2, i2 = _exact_nearest_foreign(index.points, code, ask, bound, tree=index.tree, k=2)
+    assert np.array_equal(d1, d2)
+    assert np.all(code[i1[i1 >= 0]] != code[ask[i1 >= 0]])
+    same = i1 == i2
+    assert np.all(same | (d1 == d2))  # equally near points may differ
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(2, 60), st.integers(1, 6), st.integers(0, 2 ** 31 - 1), st.booleans())
+def test_emst_exact_on_random_sets(n, k, seed, quantize):
+    rng = np.random.default_rng(seed)
+    points = rng.random((n, 3))
+    if quantize:  # ties and duplicates
+        points = np.round(points * 3) / 3
+    distinct = np.unique(points, axis=0)
+    if len(distinct) < 5 or np.linalg.matrix_rank(distinct[1:] - distinct[0]) < 3:
+        points = np.concatenate([points, rng.random((5, 3))])  # Delaunay needs a full-dimensional set
+    assert_is_emst(points, emst(points, neighbours=k))
+
+
+@pytest.mark.parametrize("bad, message", [
+    (np.zeros((4, 2)), "shape"),
+    (np.array([[0, 0, np.nan]]), "NaN"),
+    (np.zeros((3, 3), dtype=np.int32), "float"),
+])
+def test_emst_bad_input(bad, message):
+    with pytest.raises(ValueError, match=message):
+        emst(bad)
+
+
+def test_emst_bad_neighbours():
+    with pytest.raises(ValueError, match="neighbours"):
+        emst(uniform(10), neighbours=0)

@@ -1,0 +1,221 @@
+"""SDG guarantees, RFS-mesh invariants and edge-swap invariants."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.sparse.csgraph import connected_components
+
+from core.pointcloud.geometry import Incidence, dihedral, face_quality
+from core.pointcloud.rfs import keep_best_pairs, rfs_mesh
+from core.pointcloud.sdg import surface_description_graph
+from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
+from core.pointcloud.swap import swap_pass
+
+from pointcloud_sets import noisy_sphere
+
+
+def build_sdg(points, k=16, **options):
+    index = NeighbourIndex(points, k)
+    tree, _ = boruvka_emst(index)
+    return index, tree, surface_description_graph(index, tree, **options)
+
+
+def n_components(edges, n):
+    graph = sp.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    return connected_components(graph, directed=False)
+
+
+def plane(n, seed=0, scale=1.0):
+    rng = np.random.default_rng(seed)
+    p = rng.random((n, 3)) * scale
+    p[:, 2] = 0.002 * rng.normal(size=n)
+    return p
+
+
+def edge_lengths(points, edges):
+    return np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)
+
+
+# --- SDG -------------------------------------------------------------------------------------------
+
+def test_sdg_connected_on_a_noisy_sphere_and_no_edge_spans_a_gap():
+    index, tree, graph = build_sdg(noisy_sphere(3000, 0.005))
+    assert n_components(graph.edges, index.n_points)[0] == 1
+    u, v = graph.edges.T
+    assert np.all(edge_lengths(index.points, graph.edges) <= 3.0 * np.maximum(graph.spacing[u], graph.spacing[v]) + 1e-12)
+    degree = np.bincount(graph.edges.ravel(), minlength=index.n_points)
+    assert 5 <= np.median(degree) <= 12  # a surface-like neighbourhood, not a 1-D chain or a blob
+
+
+def test_sdg_separates_clusters_but_keeps_each_connected():
+    a = plane(800, seed=1)
+    b = plane(800, seed=2) + [5.0, 0.0, 0.0]  # gap 4: ~100x the spacing
+    points = np.concatenate([a, b])
+    index, tree, graph = build_sdg(points)
+    count, label = n_components(graph.edges, index.n_points)
+    assert count == 2
+    side = index.points[:, 0] > 2.5
+    assert len(np.unique(label[side])) == 1 and len(np.unique(label[~side])) == 1
+    assert graph.emst_cut == 1
+
+
+def test_sdg_joins_scan_lines_a_few_spacings_apart():
+    # Rows 3 along-row spacings apart: a surface scanned in lines must stay one piece.
+    x = np.arange(100) * 0.01
+    rows = np.concatenate([np.stack([x, np.full(100, y), np.zeros(100)], 1) for y in np.arange(20) * 0.03])
+    rows += np.random.default_rng(0).normal(scale=1e-4, size=rows.shape)
+    index, tree, graph = build_sdg(rows)
+    assert n_components(graph.edges, index.n_points)[0] == 1
+    u, v = graph.edges.T
+    crossing = np.abs(index.points[u, 1] - index.points[v, 1]) > 0.015
+    assert crossing.sum() > 1000  # not just the EMST's single bridges: rows are really linked
+
+
+def test_sdg_adapts_to_density():
+    # Left half 9x denser than the right: both get surface-like neighbourhoods and stay connected.
+    rng = np.random.default_rng(5)
+    dense = rng.random((4500, 3)) * [1, 1, 0]
+    sparse = rng.random((500, 3)) * [1, 1, 0] + [1, 0, 0]
+    points = np.concatenate([dense, sparse]) + rng.normal(scale=1e-4, size=(5000, 3))
+    index, tree, graph = build_sdg(points)
+    assert n_components(graph.edges, index.n_points)[0] == 1
+    degree = np.bincount(graph.edges.ravel(), minlength=index.n_points)
+    left = index.points[:, 0] < 0.9
+    right = index.points[:, 0] > 1.1
+    assert 0.6 < np.median(degree[left]) / np.median(degree[right]) < 1.6
+    length = edge_lengths(index.points, graph.edges)
+    on_left = left[graph.edges].all(axis=1)
+    assert np.median(length[on_left]) < 0.5 * np.median(length[right[graph.edges].all(axis=1)])
+
+
+def test_sdg_keeps_every_consistent_emst_edge():
+    index, tree, graph = build_sdg(noisy_sphere(1000, 0.01, seed=3))
+    n = index.n_points
+    have = set(map(tuple, np.sort(graph.edges, axis=1)))
+    u, v = tree.T
+    keep = edge_lengths(index.points, tree) <= 3.0 * np.maximum(graph.spacing[u], graph.spacing[v])
+    assert all(tuple(e) in have for e in np.sort(tree[keep], axis=1))
+    assert keep.sum() == graph.emst_kept and n - 1 - keep.sum() == graph.emst_cut
+
+
+def test_sdg_rejects_inconsistent_factors():
+    index = NeighbourIndex(plane(50), 8)
+    with pytest.raises(ValueError, match="spacing_factor"):
+        surface_description_graph(index, boruvka_emst(index)[0], spacing_factor=4.0, gap_factor=3.0)
+
+
+# --- RFS mesh --------------------------------------------------------------------------------------
+
+def assert_mesh_invariants(points, faces, edges=None, min_quality=None):
+    n = len(points)
+    assert faces.ndim == 2 and faces.shape[1] == 3
+    assert np.all((faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2]))
+    assert len(np.unique(np.sort(faces, axis=1), axis=0)) == len(faces)  # no duplicate faces
+    inc = Incidence(faces, n)
+    assert inc.edge_count.max(initial=0) <= 2  # at most two faces per edge
+    if edges is not None:  # exactly the edges of the faces: none without a face
+        assert np.array_equal(np.unique(np.sort(edges, axis=1), axis=0), inc.edges)
+    if min_quality is not None:
+        assert face_quality(points, faces).min(initial=1.0) >= min_quality
+
+
+@pytest.mark.parametrize("sigma", [0.002, 0.01])
+def test_rfs_invariants_on_a_noisy_sphere(sigma):
+    index, tree, graph = build_sdg(noisy_sphere(3000, sigma, seed=1))
+    mesh = rfs_mesh(index.points, graph.edges, min_quality=0.3)
+    assert_mesh_invariants(index.points, mesh.faces, mesh.edges, min_quality=0.3)
+    n = index.n_points
+    # Paper: about as many faces as a valid mesh (2n on a sphere), edges ~50 % more than 3n. We
+    # get ~1.6n faces and ~3n edges at low noise (deleting faces leaves holes), ~2n and ~4n at more.
+    assert 1.4 * n < len(mesh.faces) < 2.6 * n
+    assert 2.7 * n < len(mesh.edges) < 5.0 * n
+    used = np.zeros(n, bool)
+    used[mesh.faces.ravel()] = True
+    assert used.mean() > 0.98
+
+
+def test_rfs_quality_threshold_is_applied():
+    index, tree, graph = build_sdg(noisy_sphere(1500, 0.01, seed=2))
+    loose = rfs_mesh(index.points, graph.edges, min_quality=0.0)
+    strict = rfs_mesh(index.points, graph.edges, min_quality=0.7)
+    assert_mesh_invariants(index.points, strict.faces, strict.edges, min_quality=0.7)
+    assert face_quality(index.points, loose.faces).min() < 0.7
+    assert len(strict.faces) < len(loose.faces)
+
+
+def test_keep_best_pairs_keeps_the_flattest_pair():
+    # Edge (0, 1) on the x axis with four faces: two nearly flat on opposite sides, two folded up.
+    points = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0.05], [0.5, -1, 0.05], [0.5, 0.3, 1], [0.5, -0.3, 1.0]])
+    faces = np.array([[0, 1, 4], [0, 1, 2], [0, 1, 5], [0, 1, 3]])
+    keep = keep_best_pairs(points, faces)
+    assert keep.tolist() == [False, True, False, True]
+
+
+def test_quality_of_equilateral_is_one_and_degenerate_zero():
+    points = np.array([[0, 0, 0], [1, 0, 0], [0.5, np.sqrt(3) / 2, 0], [2, 0, 0]])
+    q = face_quality(points, np.array([[0, 1, 2], [0, 1, 3]]))
+    assert q[0] == pytest.approx(1.0) and q[1] == 0.0
+
+
+# --- edge swapping ---------------------------------------------------------------------------------
+
+def interior_dihedral_sum(points, faces):
+    inc = Incidence(faces, len(points))
+    two = np.flatnonzero(inc.edge_count == 2)
+    i1, i2 = inc.order[inc.edge_start[two]], inc.order[inc.edge_start[two] + 1]
+    return np.nansum(dihedral(points, inc.edges[two, 0], inc.edges[two, 1], inc.third[i1], inc.third[i2]))
+
+
+def test_swap_takes_the_flatter_diagonal():
+    a, b, c, d = [-2, 0, 0], [2, 0, 0], [0, 1, 1], [0, -1, 1]
+    points = np.array([a, b, c, d], dtype=float)
+    faces = np.array([[0, 1, 2], [1, 0, 3]])  # diagonal ab: dihedral 90 deg; cd would give ~127 deg
+    new, count = swap_pass(points, faces)
+    assert count == 1
+    assert sorted(map(sorted, new.tolist())) == [[0, 2, 3], [1, 2, 3]]
+    again, count = swap_pass(points, new)
+    assert count == 0  # and not back
+
+
+def test_swap_never_creates_an_existing_edge():
+    # Same quad, but cd already exists (in a third face): swapping would give cd three faces.
+    points = np.array([[-2, 0, 0], [2, 0, 0], [0, 1, 1], [0, -1, 1], [0, 0, 3]], dtype=float)
+    faces = np.array([[0, 1, 2], [1, 0, 3], [2, 3, 4]])
+    new, count = swap_pass(points, faces)
+    assert count == 0 and np.array_equal(new, faces)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_swap_invariants_and_monotone_dihedral_sum(seed):
+    index, tree, graph = build_sdg(noisy_sphere(2000, 0.01, seed=seed))
+    faces = rfs_mesh(index.points, graph.edges).faces
+    total = interior_dihedral_sum(index.points, faces)
+    counts = []
+    for _ in range(4):
+        before = faces.copy()
+        faces, count = swap_pass(index.points, faces)
+        assert np.array_equal(np.sort(before, axis=None), np.sort(before, axis=None))  # input untouched
+        counts.append(count)
+        assert len(faces) == len(before)
+        assert_mesh_invariants(index.points, faces)
+        now = interior_dihedral_sum(index.points, faces)
+        assert now >= total - 1e-9  # swaps are independent, so each one's gain adds up
+        total = now
+    assert counts[0] > 0
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.integers(30, 200), st.integers(0, 2 ** 31 - 1), st.floats(0.0, 0.2))
+def test_rfs_and_swap_invariants_on_random_clouds(n, seed, noise):
+    rng = np.random.default_rng(seed)
+    points = rng.random((n, 3))
+    points[:, 2] *= noise
+    index, tree, graph = build_sdg(points, k=8)
+    mesh = rfs_mesh(index.points, graph.edges, min_quality=0.2)
+    assert_mesh_invariants(index.points, mesh.faces, mesh.edges, min_quality=0.2)
+    faces = mesh.faces
+    for _ in range(3):
+        faces, _ = swap_pass(index.points, faces)
+        assert_mesh_invariants(index.points, faces)

@@ -1,0 +1,119 @@
+"""core.smooth_point_cloud: removes noise without shrinking, keeps fixed points, dtype, input; clear errors."""
+
+import numpy as np
+import pytest
+
+import core
+from core.pointcloud import PointCloudReport
+from core.smoothing import Cancelled
+
+from pointcloud_sets import noisy_sphere, sphere_rms, with_duplicates
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    return noisy_sphere(4000, 0.005, seed=11)
+
+
+@pytest.fixture(scope="module")
+def smoothed(sphere):
+    return core.smooth_point_cloud(sphere, rounds=10, return_mesh=True)
+
+
+def test_reduces_noise_without_shrinking(sphere, smoothed):
+    out, report = smoothed
+    assert sphere_rms(out) < 0.7 * sphere_rms(sphere)
+    before, after = np.linalg.norm(sphere, axis=1).mean(), np.linalg.norm(out, axis=1).mean()
+    assert abs(after - before) < 0.005 * before  # size change below 0.5 %
+    assert report.isolated < 0.02 * len(sphere)
+
+
+def test_swapping_helps(sphere, smoothed):
+    without = core.smooth_point_cloud(sphere, rounds=10, swap=False)
+    assert sphere_rms(smoothed[0]) < sphere_rms(without)
+
+
+def test_report_mesh_refers_to_input_points(sphere, smoothed):
+    _, report = smoothed
+    assert isinstance(report, PointCloudReport)
+    assert report.mesh.faces.max() < len(sphere) and report.mesh.edges.max() < len(sphere)
+    assert len(report.swaps) == 10 and report.swaps[0] > 0
+    assert set(report.seconds) >= {"emst", "sdg", "rfs", "hc", "swap"}
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_shape_dtype_and_input_untouched(dtype):
+    points = noisy_sphere(600, 0.005, seed=1, dtype=dtype)
+    copy = points.copy()
+    out = core.smooth_point_cloud(points, rounds=3)
+    assert out.dtype == dtype and out.shape == points.shape
+    assert np.array_equal(points, copy)
+    assert not np.shares_memory(out, points)
+    assert np.abs(out - points).max() > 0
+
+
+@pytest.mark.parametrize("as_indices", [False, True])
+def test_fixed_points_do_not_move(as_indices):
+    points = noisy_sphere(800, 0.01, seed=2, dtype=np.float32)
+    mask = np.zeros(len(points), bool)
+    mask[::7] = True
+    fixed = np.flatnonzero(mask) if as_indices else mask
+    out = core.smooth_point_cloud(points, rounds=4, fixed=fixed)
+    assert np.array_equal(out[mask], points[mask])
+    assert np.all(np.any(out[~mask] != points[~mask], axis=1).mean() > 0.9)
+
+
+def test_duplicates_move_together():
+    points = with_duplicates(400) * [1, 1, 0.01]  # a thin slab: surface-like
+    out = core.smooth_point_cloud(points, rounds=3)
+    _, inverse = np.unique(points, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    for group in np.unique(inverse):
+        same = out[inverse == group]
+        assert np.all(same == same[0])
+
+
+def test_zero_rounds_returns_a_copy():
+    points = noisy_sphere(200, 0.01)
+    out = core.smooth_point_cloud(points, rounds=0)
+    assert np.array_equal(out, points) and out is not points
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 3, 4])
+def test_tiny_inputs(n):
+    points = np.random.default_rng(0).random((n, 3))
+    out = core.smooth_point_cloud(points, rounds=2)
+    assert out.shape == (n, 3)
+
+
+def test_progress_and_cancel():
+    points = noisy_sphere(300, 0.01)
+    calls = []
+    core.smooth_point_cloud(points, rounds=3, progress=lambda done, total: calls.append((done, total)))
+    assert calls == [(1, 3), (2, 3), (3, 3)]
+    with pytest.raises(Cancelled):
+        core.smooth_point_cloud(points, rounds=3, progress=lambda done, total: done < 2)
+
+
+@pytest.mark.parametrize("options, message", [
+    (dict(points=np.zeros((5, 2))), "shape"),
+    (dict(points=np.array([[0.0, 0, 0], [np.inf, 0, 0]])), "infinite"),
+    (dict(points=np.zeros((5, 3), dtype=np.int64)), "float32 or float64"),
+    (dict(alpha=1.5), "alpha"),
+    (dict(beta=-0.1), "beta"),
+    (dict(rounds=-1), "rounds"),
+    (dict(rounds=2.5), "rounds"),
+    (dict(iterations_per_round=0), "iterations_per_round"),
+    (dict(neighbours=1), "neighbours"),
+    (dict(spacing_factor=0), "spacing_factor"),
+    (dict(spacing_factor=4.0, gap_factor=3.0), "gap_factor"),
+    (dict(min_quality=2), "min_quality"),
+    (dict(fixed=np.zeros(3, bool)), "length"),
+    (dict(fixed=[10 ** 6]), "fixed"),
+    (dict(progress=5), "progress"),
+])
+def test_bad_input(options, message):
+    options = dict(options)
+    points = options.pop("points", noisy_sphere(50, 0.01))
+    with pytest.raises(ValueError, match=message):
+        core.smooth_point_cloud(points, **options)
