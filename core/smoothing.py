@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from . import parallel
 from .adjacency import Umbrella, umbrella_operator
 from .triangular import triangular_solver
 from .convergence import ConvergenceWarning, convergence_message
@@ -172,7 +173,7 @@ class _Stepper:
             self.neighbour_mean = self.sequential.neighbour_mean  # spares memory: T itself is not built
         else:
             self.sequential = None
-            self.neighbour_mean = operator.matrix(dtype).__matmul__
+            self.neighbour_mean = parallel.product(operator.matrix(dtype))
         if method in ("hc", "original") and alpha > 0.0:
             self.alpha_origin = alpha * origin  # α o, constant over the run
 
@@ -233,6 +234,7 @@ class _GaussSeidel:
         row_weight[scale] = weight / operator.degree[scale]
         self.upper = sp.csr_matrix(
             (np.repeat(row_weight, counts), operator.upper_indices, operator.upper_indptr), shape=(n, n))
+        self.upper_product = parallel.product(self.upper)
         # I - w L in CSC: column j is the diagonal 1, then -w t_ij for the neighbours i > j (the upper
         # pattern of row j, since adj is symmetric), already in increasing row order.
         indptr = np.zeros(n + 1, dtype=operator.upper_indptr.dtype)
@@ -251,13 +253,13 @@ class _GaussSeidel:
     def neighbour_mean(self, x):
         """T x on movable rows (fixed rows: anything; callers overwrite them), from the two triangles.
         Valid for the weight 1 of the HC Laplacian pass: then L x = x - (I - L) x."""
-        result = self.upper @ x
+        result = self.upper_product(x)
         result += x
         result -= self.system @ x
         return result
 
     def solve(self, q, anchor):
-        rhs = self.upper @ q
+        rhs = self.upper_product(q)
         if anchor is not None:
             rhs += anchor
         rhs[self.fixed_index] = q[self.fixed_index]

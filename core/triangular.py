@@ -11,6 +11,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve_triangular
 
+from . import parallel
+
 try:
     from scipy.sparse.linalg._dsolve._superlu import gstrs as _gstrs
 except ImportError:  # pragma: no cover - depends on the SciPy build
@@ -45,7 +47,9 @@ def triangular_solver(lower_unit):
         return np.ascontiguousarray(x)
 
     def solver(b):
-        return fast(b) if solver.fast else fallback(b)
+        if not solver.fast:
+            return fallback(b)
+        return parallel.solve_columns(fast, b)  # columns are independent solves: one per thread
 
     solver.fast = _gstrs is not None and n > 0
     return solver

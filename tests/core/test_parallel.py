@@ -1,0 +1,48 @@
+"""Threaded products and solves give bit-identical results to the one-thread path."""
+
+import numpy as np
+import pytest
+
+import core
+from core import parallel
+
+
+def grid_edges(side):
+    index = np.arange(side * side).reshape(side, side)
+    right = np.stack([index[:, :-1].ravel(), index[:, 1:].ravel()], axis=1)
+    down = np.stack([index[:-1, :].ravel(), index[1:, :].ravel()], axis=1)
+    diagonal = np.stack([index[:-1, :-1].ravel(), index[1:, 1:].ravel()], axis=1)
+    return np.concatenate([right, down, diagonal])
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("mode", ["simultaneous", "sequential"])
+@pytest.mark.parametrize("method", ["hc", "original"])
+def test_threads_change_nothing_but_speed(monkeypatch, dtype, mode, method):
+    rng = np.random.default_rng(5)
+    side = 40
+    edges = rng.permutation(grid_edges(side))
+    positions = rng.normal(size=(side * side, 3)).astype(dtype)
+    fixed = rng.random(side * side) < 0.1
+    kwargs = dict(method=method, alpha=0.2, beta=0.7, iterations=6, mode=mode, fixed=fixed)
+
+    monkeypatch.setattr(parallel, "thread_count", lambda: 1)
+    one = core.smooth(positions, edges, **kwargs).positions
+    monkeypatch.setattr(parallel, "thread_count", lambda: 3)
+    monkeypatch.setattr(parallel, "MIN_WORK", 0)
+    threaded = core.smooth(positions, edges, **kwargs).positions
+    assert threaded.dtype == dtype
+    assert np.array_equal(threaded.view(np.uint8), one.view(np.uint8))
+
+
+def test_row_blocks_cover_every_row_once():
+    indptr = np.array([0, 5, 5, 6, 20, 21, 40])
+    bounds = parallel._row_blocks(indptr, 3)
+    assert bounds[0] == 0 and bounds[-1] == 6 and np.all(np.diff(bounds) > 0)
+
+
+def test_thread_cap_from_the_environment(monkeypatch):
+    monkeypatch.setenv("HC_SMOOTH_THREADS", "1")
+    assert parallel.thread_count() == 1
+    monkeypatch.setenv("HC_SMOOTH_THREADS", "not a number")
+    assert parallel.thread_count() >= 1
