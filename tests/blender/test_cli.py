@@ -11,7 +11,7 @@ import pytest
 
 import core
 from blender_scene import make_mesh_object, noisy_sphere, positions_of, select_only
-from conftest import ADDON
+from blender_scene import ADDON
 
 FORMATS = ("ply", "obj", "stl")
 

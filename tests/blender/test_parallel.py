@@ -12,7 +12,7 @@ import bpy
 import pytest
 
 from blender_scene import noisy_sphere, select_only
-from conftest import ADDON
+from blender_scene import ADDON
 
 HERE = pathlib.Path(__file__).resolve().parent
 DOCS = HERE.parents[1] / "docs" / "command_line.md"
