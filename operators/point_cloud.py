@@ -1,0 +1,249 @@
+"""object.hc_smooth_points: smooth point clouds (meshes of loose vertices, PointCloud objects) through
+their RFS mesh (paper section 7, core.smooth_point_cloud).
+
+Thin like the mesh operators: read every selected cloud, validate, smooth, and only then write, so a
+failure leaves everything as it was. execute() depends only on the properties and the objects, so the
+redo panel (F9) can re-run it.
+"""
+
+import warnings
+
+import bpy
+import numpy as np
+from bpy.props import BoolProperty, FloatProperty, IntProperty, StringProperty
+
+from .. import core
+from . import mesh_io
+
+POINT_TYPES = ("MESH", "POINTCLOUD")
+
+
+class CloudError(Exception):
+    """A message for the user; nothing has been written."""
+
+
+def _read_pointcloud_positions(cloud):
+    buffer = np.empty(len(cloud.points) * 3, dtype=np.float32)
+    cloud.attributes["position"].data.foreach_get("vector", buffer)
+    return buffer.reshape(-1, 3)
+
+
+def _write_pointcloud_positions(cloud, positions):
+    cloud.attributes["position"].data.foreach_set("vector", np.ascontiguousarray(positions, np.float32).ravel())
+    cloud.update_tag()
+
+
+def _attribute_mask(data, name, count):
+    """Point-domain boolean/float/int attribute as a mask (value != 0), or None if there is none."""
+    attribute = data.attributes.get(name)
+    if attribute is None or attribute.domain != "POINT":
+        return None
+    kinds = {"BOOLEAN": (bool, "value"), "FLOAT": (np.float32, "value"), "INT": (np.int32, "value")}
+    if attribute.data_type not in kinds:
+        return None
+    dtype, key = kinds[attribute.data_type]
+    values = np.empty(count, dtype=dtype)
+    attribute.data.foreach_get(key, values)
+    return values != 0
+
+
+class Cloud:
+    """One object to smooth: where its points come from and go to."""
+
+    def __init__(self, obj, props):
+        if obj.type not in POINT_TYPES:
+            raise CloudError(f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object: "
+                             "select a mesh of loose vertices or a point cloud")
+        for what, datablock in (("Object", obj), ("Data", obj.data)):
+            if datablock.library is not None or not datablock.is_editable:
+                raise CloudError(f"{what} '{datablock.name}' is linked or not editable: make it local first "
+                                 "(Object > Relations > Make Local)")
+        self.obj, self.data, self.key_block = obj, obj.data, None
+        count = len(obj.data.vertices) if obj.type == "MESH" else len(obj.data.points)
+        if count == 0:
+            raise CloudError(f"'{obj.data.name}' has no points: nothing to smooth")
+        if obj.type == "MESH":
+            mesh = obj.data
+            if len(mesh.edges) or len(mesh.polygons):
+                raise CloudError(f"Mesh '{mesh.name}' has edges or faces: HC Smooth Points works on loose "
+                                 "vertices. Use HC Smooth (object.hc_smooth) for meshes")
+            if mesh.shape_keys is not None and obj.active_shape_key is not None:
+                self.key_block = obj.active_shape_key
+                positions = mesh_io.read_shape_key(self.key_block)
+            else:
+                positions = mesh_io.read_positions(mesh)
+        else:
+            positions = _read_pointcloud_positions(obj.data)
+        bad = np.flatnonzero(~np.isfinite(positions).all(axis=1))
+        if bad.size:
+            raise CloudError(f"'{obj.data.name}' has {bad.size} points with NaN or infinite coordinates "
+                             f"(first: point {int(bad[0])}): fix or delete them first")
+        self.positions = positions
+        self.fixed = self._fixed(props)
+        self.result = None
+        self.report = None
+
+    def _fixed(self, props):
+        n = len(self.positions)
+        if not props.vertex_group:
+            return None
+        if self.obj.type == "MESH":
+            group = self.obj.vertex_groups.get(props.vertex_group)
+            if group is None:
+                raise CloudError(f"Object '{self.obj.name}' has no vertex group '{props.vertex_group}'")
+            members = mesh_io.vertex_group_members(self.obj, group.index)
+        else:  # point clouds have no vertex groups: a point attribute of that name plays the part
+            members = _attribute_mask(self.data, props.vertex_group, n)
+            if members is None:
+                raise CloudError(f"Point cloud '{self.data.name}' has no point attribute '{props.vertex_group}' "
+                                 "(boolean, integer or float) to use as the fixed group")
+        return ~members if props.invert_vertex_group else members
+
+    def write(self):
+        if self.obj.type == "POINTCLOUD":
+            _write_pointcloud_positions(self.data, self.result)
+        elif self.key_block is not None:
+            mesh_io.write_shape_key(self.key_block, self.result)
+            if self.key_block != self.data.shape_keys.reference_key:
+                self.data.update()
+                return
+            mesh_io.write_positions(self.data, self.result)
+        else:
+            mesh_io.write_positions(self.data, self.result)
+
+    def add_rfs_object(self, context):
+        """The final RFS mesh at the smoothed positions, as a new object beside the cloud."""
+        mesh = bpy.data.meshes.new(self.obj.name + " RFS")
+        faces = self.report.mesh.faces
+        mesh.vertices.add(len(self.result))
+        mesh.vertices.foreach_set("co", np.ascontiguousarray(self.result, np.float32).ravel())
+        mesh.loops.add(faces.size)
+        mesh.loops.foreach_set("vertex_index", faces.astype(np.int32).ravel())
+        mesh.polygons.add(len(faces))
+        mesh.polygons.foreach_set("loop_start", np.arange(0, faces.size, 3, dtype=np.int32))
+        mesh.polygons.foreach_set("loop_total", np.full(len(faces), 3, dtype=np.int32))
+        mesh.update(calc_edges=True)
+        mesh.validate(clean_customdata=False)
+        obj = bpy.data.objects.new(mesh.name, mesh)
+        obj.matrix_world = self.obj.matrix_world.copy()
+        for collection in self.obj.users_collection or (context.scene.collection,):
+            collection.objects.link(obj)
+        obj.display_type = "WIRE"
+        return obj
+
+
+class OBJECT_OT_hc_smooth_points(bpy.types.Operator):
+    """Smooth point clouds (meshes of loose vertices, point cloud objects) without shrinking them: HC steps on a temporary RFS mesh, alternating with edge swapping"""
+
+    bl_idname = "object.hc_smooth_points"
+    bl_label = "HC Smooth Points"
+    bl_options = {"REGISTER", "UNDO"}
+
+    alpha: FloatProperty(name="Alpha", default=0.1, min=0.0, max=1.0,
+                         description="Pull towards the original positions")
+    beta: FloatProperty(name="Beta", default=0.6, min=0.0, max=1.0,
+                        description="Weight of a point's own difference against its neighbours' (converges above 0.5)")
+    rounds: IntProperty(name="Rounds", default=10, min=0, soft_max=100,
+                        description="HC steps alternating with edge swapping on the RFS mesh")
+    iterations_per_round: IntProperty(name="Steps per Round", default=1, min=1, soft_max=10,
+                                      description="HC iterations between two passes of edge swapping")
+    neighbours: IntProperty(name="Neighbours", default=16, min=2, soft_max=64,
+                            description="How many nearest neighbours each point may connect to")
+    spacing_factor: FloatProperty(
+        name="Reach", default=2.0, min=0.1, soft_max=5.0,
+        description="Connect neighbours up to this many times the local point spacing "
+                    "(larger: wider neighbourhoods, stronger smoothing)")
+    gap_factor: FloatProperty(
+        name="Gap", default=3.0, min=0.1, soft_max=10.0,
+        description="Never connect across a gap wider than this many local spacings: separate parts stay "
+                    "separate (must be at least Reach)")
+    min_quality: FloatProperty(name="Face Quality", default=0.3, min=0.0, max=1.0,
+                               description="Drop RFS faces below this Bank-Smith quality (1 = equilateral)")
+    swap: BoolProperty(name="Edge Swapping", default=True,
+                       description="Swap edges of the RFS mesh between HC steps (paper section 7)")
+    vertex_group: StringProperty(name="Vertex Group",
+                                 description="Points in this vertex group (weight above 0) stay fixed; for "
+                                             "point cloud objects, a point attribute of that name")
+    invert_vertex_group: BoolProperty(name="Invert", description="Fix every point outside the group instead")
+    keep_rfs_mesh: BoolProperty(name="Keep RFS Mesh",
+                                description="Add the final RFS mesh as a new wireframe object to inspect it")
+
+    @classmethod
+    def poll(cls, context):
+        return context.mode == "OBJECT"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        for name in ("alpha", "beta", "rounds", "iterations_per_round", "neighbours", "spacing_factor",
+                     "gap_factor", "min_quality", "swap"):
+            layout.prop(self, name)
+        obj = context.active_object
+        row = layout.row(align=True)
+        if obj is not None and obj.type == "MESH":
+            row.prop_search(self, "vertex_group", obj, "vertex_groups", text="Fixed Group")
+        else:
+            row.prop(self, "vertex_group", text="Fixed Group")
+        row.prop(self, "invert_vertex_group", text="", icon="ARROW_LEFTRIGHT")
+        layout.prop(self, "keep_rfs_mesh")
+        if not core.in_convergence_region(self.alpha, self.beta):
+            layout.label(text="Outside the convergence region (Alpha > 0, Beta > 0.5)", icon="ERROR")
+
+    def _clouds(self, context):
+        objects = [obj for obj in context.selected_objects if obj.type in POINT_TYPES]
+        if not objects:
+            others = ", ".join(sorted({obj.type.lower() for obj in context.selected_objects}))
+            raise CloudError("Select a mesh of loose vertices or a point cloud object"
+                             + (f" (selected: {others})" if others else ""))
+        seen, clouds = set(), []
+        for obj in objects:
+            if obj.data.as_pointer() not in seen:
+                seen.add(obj.data.as_pointer())
+                clouds.append(Cloud(obj, self))
+        return clouds
+
+    def execute(self, context):
+        interactive = not bpy.app.background and context.window_manager is not None
+        try:
+            clouds = self._clouds(context)
+            total = max(1, self.rounds * len(clouds))
+            if interactive:
+                context.window_manager.progress_begin(0, total)
+            for number, cloud in enumerate(clouds):
+                def progress(done, _rounds, offset=number * self.rounds):
+                    if interactive:
+                        context.window_manager.progress_update(offset + done)
+                with warnings.catch_warnings():  # reported below, once
+                    warnings.simplefilter("ignore", core.ConvergenceWarning)
+                    cloud.result, cloud.report = core.smooth_point_cloud(
+                        cloud.positions, alpha=self.alpha, beta=self.beta, rounds=self.rounds,
+                        iterations_per_round=self.iterations_per_round, fixed=cloud.fixed,
+                        neighbours=self.neighbours, spacing_factor=self.spacing_factor,
+                        gap_factor=self.gap_factor, min_quality=self.min_quality, swap=self.swap,
+                        progress=progress, return_mesh=True)
+        except (CloudError, ValueError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        finally:
+            if interactive:
+                context.window_manager.progress_end()
+        for cloud in clouds:
+            cloud.write()
+            if self.keep_rfs_mesh:
+                cloud.add_rfs_object(context)
+        self.report({"INFO"}, self._summary(clouds))
+        message = core.convergence_message(self.alpha, self.beta)
+        if message:
+            self.report({"WARNING"}, message)
+        return {"FINISHED"}
+
+    def _summary(self, clouds):
+        points = sum(len(c.positions) for c in clouds)
+        seconds = sum(sum(c.report.seconds.values()) for c in clouds)
+        still = sum(c.report.isolated for c in clouds)
+        names = f"{len(clouds)} objects" if len(clouds) > 1 else f"'{clouds[0].data.name}'"
+        return (f"HC Smooth Points on {names}: {points} points, {self.rounds} rounds, {seconds:.2f} s"
+                + (f", {still} points without RFS faces stayed put" if still else ""))
+
+
+classes = (OBJECT_OT_hc_smooth_points,)
