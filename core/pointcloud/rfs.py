@@ -76,18 +76,17 @@ def corona_faces(points, edges, max_gap=np.pi):
     return np.stack([row[ok], neighbour[ok], neighbour[nxt[ok]]], axis=1)
 
 
-def _best_pairs(points, inc, over):
-    """For each overfull edge (numbers ``over``) the incidences of the pair with the largest
-    dihedral angle, and that angle's cos. Edges are handled in buckets of equal face count, so
-    the all-pairs arrays are (edges, count, count) with no padding."""
-    first = np.empty(over.size, dtype=np.int64)
-    second = np.empty(over.size, dtype=np.int64)
-    best_cos = np.empty(over.size)
-    count = inc.edge_count[over]
-    for width in np.unique(count):
-        rows = np.flatnonzero(count == width)
-        edge = over[rows]
-        incidence = inc.order[inc.edge_start[edge][:, None] + np.arange(width)[None, :]]
+def _best_pairs(points, inc, edges, order, start, count):
+    """For each edge in ``edges`` (with its live incidences ``order[start:start + count]``): the
+    two incidences of the pair with the largest dihedral angle, and that angle's cos. Edges are
+    handled in buckets of equal face count, so the all-pairs arrays have no padding."""
+    first = np.empty(edges.size, dtype=np.int64)
+    second = np.empty(edges.size, dtype=np.int64)
+    best_cos = np.empty(edges.size)
+    for width in np.unique(count[edges]):
+        rows = np.flatnonzero(count[edges] == width)
+        edge = edges[rows]
+        incidence = order[start[edge][:, None] + np.arange(width)[None, :]]
         # Unit vectors from the edge towards each face's third vertex, perpendicular to the edge:
         # the dihedral angle of two faces is the angle between their vectors.
         u, v = inc.edges[edge, 0], inc.edges[edge, 1]
@@ -113,40 +112,51 @@ def keep_best_pairs(points, faces):
 
     This is the paper's edge-by-edge rule, done in rounds: each round settles a set of overfull
     edges that share no face (so their choices cannot conflict), flattest best pair first, exactly
-    as if they were handled one after another; then the counts are recomputed. Settling all edges
+    as if they were handled one after another; then the counts are updated. Settling all edges
     at once instead would delete a face that one edge keeps because another edge drops it, and
-    lose about half of the faces.
+    lose about half of the faces. An edge's best pair is recomputed only after it lost a face.
     """
-    n = max(points.shape[0], 1)
-    alive = np.flatnonzero(np.ones(faces.shape[0], dtype=bool))
+    n_faces = faces.shape[0]
+    inc = Incidence(faces, max(points.shape[0], 1))
+    n_edges = inc.edge_count.size
+    edge_sorted = np.repeat(np.arange(n_edges), inc.edge_count)  # edge of each incidence in inc.order
+    alive = np.ones(n_faces, dtype=bool)
+    known = np.zeros(n_edges, dtype=bool)  # best pair cached and still valid
+    first = np.full(n_edges, -1, dtype=np.int64)
+    second = np.full(n_edges, -1, dtype=np.int64)
+    best_cos = np.zeros(n_edges)
+    order, edge = inc.order, edge_sorted
     while True:
-        inc = Incidence(faces[alive], n)
-        over = np.flatnonzero(inc.edge_count > 2)
+        # Only incidences of overfull edges matter, and counts only fall: shrink the work each round.
+        live = alive[order // 3]
+        order, edge = order[live], edge[live]
+        count = np.bincount(edge, minlength=n_edges)
+        count[count <= 2] = 0
+        keep = count[edge] > 0
+        order, edge = order[keep], edge[keep]
+        over = np.flatnonzero(count)
         if over.size == 0:
             break
-        first, second, best_cos = _best_pairs(points, inc, over)
+        start = np.cumsum(count) - count
+        stale = over[~known[over]]
+        if stale.size:
+            first[stale], second[stale], best_cos[stale] = _best_pairs(points, inc, stale, order, start, count)
+            known[stale] = True
         # Priority: flatter best pair first; distinct integers so each face has one top edge.
-        priority = np.empty(over.size, dtype=np.int64)
-        priority[np.argsort(-best_cos, kind="stable")] = np.arange(over.size)
-        # Incidences of overfull edges, with their edge's row in ``over``.
-        row_of_edge = np.full(inc.edge_count.size, -1, dtype=np.int64)
-        row_of_edge[over] = np.arange(over.size)
-        row = row_of_edge[inc.edge_of]
-        member = np.flatnonzero(row >= 0)
+        priority = np.full(n_edges, -1, dtype=np.int64)
+        priority[over[np.argsort(-best_cos[over], kind="stable")]] = np.arange(over.size)
+        member, member_edge = order, edge
         face = member // 3
-        top = np.full(alive.size, -1, dtype=np.int64)
-        np.maximum.at(top, face, priority[row[member]])
+        top = np.full(n_faces, -1, dtype=np.int64)
+        np.maximum.at(top, face, priority[member_edge])
         # An edge settles when it is the top priority at every one of its faces.
-        blocked = np.zeros(over.size, dtype=bool)
-        blocked[row[member][top[face] != priority[row[member]]]] = True
-        settle = ~blocked
-        losing = settle[row[member]] & (member != first[row[member]]) & (member != second[row[member]])
-        dead = np.zeros(alive.size, dtype=bool)
-        dead[face[losing]] = True
-        alive = alive[~dead]
-    keep = np.zeros(faces.shape[0], dtype=bool)
-    keep[alive] = True
-    return keep
+        blocked = np.zeros(n_edges, dtype=bool)
+        blocked[member_edge[top[face] != priority[member_edge]]] = True
+        losing = ~blocked[member_edge] & (member != first[member_edge]) & (member != second[member_edge])
+        dead = np.unique(face[losing])
+        alive[dead] = False
+        known[inc.edge_of[(3 * dead[:, None] + np.arange(3)).ravel()]] = False
+    return alive
 
 
 def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):

@@ -118,11 +118,9 @@ def smooth_point_cloud(
                          fixed=rows_fixed, original=index.points, operator=operator).positions
         lap("hc")
         if swap:
-            faces, count = swap_pass(current, faces)
+            faces, edges, count = swap_pass(current, faces)
             swaps.append(count)
-            if count:
-                from .geometry import Incidence
-                mesh = RFSMesh(faces, Incidence(faces, max(m, 1)).edges)
+            mesh = RFSMesh(faces, edges)
             lap("swap")
         if progress is not None and progress(done, rounds) is False:
             raise Cancelled(f"cancelled after {done} of {rounds} rounds")

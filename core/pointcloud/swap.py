@@ -23,38 +23,38 @@ _MIN_GAIN = 1e-9  # radians; ignores swaps that only win by rounding
 
 
 def _swap_candidates(points, faces, inc):
-    """Interior edges as pairs (f1, f2, a, b, c, d) and the gain of swapping each."""
+    """Interior edges whose swap is allowed, as (edge, f1, f2, a, b, c, d), and the gain of each."""
     interior = np.flatnonzero(inc.edge_count == 2)
     i1 = inc.order[inc.edge_start[interior]]
     i2 = inc.order[inc.edge_start[interior] + 1]
-    f1, f2 = i1 // 3, i2 // 3
     a, b = inc.edges[interior, 0], inc.edges[interior, 1]
     c, d = inc.third[i1], inc.third[i2]
-    usable = ~inc.has_edge(c, d) & (c != d)
-    f1, f2, a, b, c, d = (x[usable] for x in (f1, f2, a, b, c, d))
-
+    # Today's dihedral angle at every interior edge (NaN elsewhere): the "before" sums are lookups.
+    angle = np.full(inc.edge_count.size, np.nan)
+    angle[interior] = dihedral(points, a, b, c, d)
     # For each incidence the third vertex of the face on the other side of its edge (-1: none).
     other = np.full(inc.third.size, -1, dtype=np.int64)
-    pair = np.flatnonzero(inc.edge_count == 2)
-    j1, j2 = inc.order[inc.edge_start[pair]], inc.order[inc.edge_start[pair] + 1]
-    other[j1], other[j2] = inc.third[j2], inc.third[j1]
+    other[i1], other[i2] = d, c
 
-    def beyond(face, opposite):
-        # The incidence of edge "face minus vertex `opposite`" is 3*face + slot of that vertex.
+    usable = ~inc.has_edge(c, d) & (c != d)
+    edge, i1, i2, a, b, c, d = (x[usable] for x in (interior, i1, i2, a, b, c, d))
+    f1, f2 = i1 // 3, i2 // 3
+
+    def outer(face, opposite):
+        # The edge of ``face`` opposite vertex ``opposite`` is incidence 3*face + its slot.
         slot = np.argmax(faces[face] == opposite[:, None], axis=1)
-        return other[3 * face + slot]
+        return 3 * face + slot
 
-    x_bc, x_ac = beyond(f1, a), beyond(f1, b)  # faces beyond bc and ac (both edges of abc)
-    x_bd, x_ad = beyond(f2, a), beyond(f2, b)
-    before = dihedral(points, a, b, c, d)
+    before = angle[edge].copy()
     after = dihedral(points, c, d, a, b)
-    for u, v, x, old, new in ((a, c, x_ac, b, d), (b, c, x_bc, a, d), (a, d, x_ad, b, c), (b, d, x_bd, a, c)):
-        has = x >= 0
-        xs = np.where(has, x, 0)
-        before += np.where(has, dihedral(points, u, v, old, xs), 0.0)
-        after += np.where(has, dihedral(points, u, v, new, xs), 0.0)
-    gain = after - before
-    return f1, f2, a, b, c, d, gain
+    # Outer edges: bc and ac of (a, b, c) get d as their new third vertex, bd and ad of (a, b, d) get c.
+    for incidence, u, v, new in ((outer(f1, a), b, c, d), (outer(f1, b), a, c, d),
+                                 (outer(f2, a), b, d, c), (outer(f2, b), a, d, c)):
+        x = other[incidence]
+        has = x >= 0  # an outer edge without a face beyond counts the same before and after: skip
+        before[has] += angle[inc.edge_of[incidence[has]]]
+        after[has] += dihedral(points, u[has], v[has], new[has], x[has])
+    return edge, f1, f2, a, b, c, d, after - before
 
 
 def _independent(vertex_sets, priority, n):
@@ -66,13 +66,14 @@ def _independent(vertex_sets, priority, n):
 
 
 def swap_pass(points, faces, *, rounds=3):
-    """One pass of edge swapping. Returns (new faces, number of swaps). ``faces`` is not modified."""
+    """One pass of edge swapping. Returns (new faces, their edges, number of swaps); ``faces`` is
+    not modified."""
     n = points.shape[0]
     faces = faces.astype(np.int64, copy=True)
+    inc = Incidence(faces, max(n, 1))
     if faces.shape[0] < 2:
-        return faces, 0
-    inc = Incidence(faces, n)
-    f1, f2, a, b, c, d, gain = _swap_candidates(points, faces, inc)
+        return faces, inc.edges, 0
+    edge, f1, f2, a, b, c, d, gain = _swap_candidates(points, faces, inc)
     good = np.flatnonzero(np.nan_to_num(gain, nan=-1.0) > _MIN_GAIN)
     vertex_sets = np.stack([a, b, c, d], axis=1)[good]
     priority = np.empty(good.size, dtype=np.int64)
@@ -90,4 +91,8 @@ def swap_pass(points, faces, *, rounds=3):
     s = good[chosen]
     faces[f1[s]] = np.stack([c[s], d[s], a[s]], axis=1)
     faces[f2[s]] = np.stack([c[s], d[s], b[s]], axis=1)
-    return faces, int(s.size)
+    # Edges: every swap trades its ab for cd.
+    keep = np.ones(inc.edges.shape[0], dtype=bool)
+    keep[edge[s]] = False
+    new_edges = np.stack([np.minimum(c[s], d[s]), np.maximum(c[s], d[s])], axis=1)
+    return faces, np.concatenate([inc.edges[keep], new_edges]), int(s.size)

@@ -172,10 +172,10 @@ def test_swap_takes_the_flatter_diagonal():
     a, b, c, d = [-2, 0, 0], [2, 0, 0], [0, 1, 1], [0, -1, 1]
     points = np.array([a, b, c, d], dtype=float)
     faces = np.array([[0, 1, 2], [1, 0, 3]])  # diagonal ab: dihedral 90 deg; cd would give ~127 deg
-    new, count = swap_pass(points, faces)
+    new, _, count = swap_pass(points, faces)
     assert count == 1
     assert sorted(map(sorted, new.tolist())) == [[0, 2, 3], [1, 2, 3]]
-    again, count = swap_pass(points, new)
+    again, _, count = swap_pass(points, new)
     assert count == 0  # and not back
 
 
@@ -183,7 +183,7 @@ def test_swap_never_creates_an_existing_edge():
     # Same quad, but cd already exists (in a third face): swapping would give cd three faces.
     points = np.array([[-2, 0, 0], [2, 0, 0], [0, 1, 1], [0, -1, 1], [0, 0, 3]], dtype=float)
     faces = np.array([[0, 1, 2], [1, 0, 3], [2, 3, 4]])
-    new, count = swap_pass(points, faces)
+    new, _, count = swap_pass(points, faces)
     assert count == 0 and np.array_equal(new, faces)
 
 
@@ -194,12 +194,12 @@ def test_swap_invariants_and_monotone_dihedral_sum(seed):
     total = interior_dihedral_sum(index.points, faces)
     counts = []
     for _ in range(4):
-        before = faces.copy()
-        faces, count = swap_pass(index.points, faces)
-        assert np.array_equal(np.sort(before, axis=None), np.sort(before, axis=None))  # input untouched
+        before, snapshot = faces, faces.copy()
+        faces, edges, count = swap_pass(index.points, before)
+        assert np.array_equal(before, snapshot)  # input untouched
         counts.append(count)
         assert len(faces) == len(before)
-        assert_mesh_invariants(index.points, faces)
+        assert_mesh_invariants(index.points, faces, edges)
         now = interior_dihedral_sum(index.points, faces)
         assert now >= total - 1e-9  # swaps are independent, so each one's gain adds up
         total = now
@@ -217,5 +217,5 @@ def test_rfs_and_swap_invariants_on_random_clouds(n, seed, noise):
     assert_mesh_invariants(index.points, mesh.faces, mesh.edges, min_quality=0.2)
     faces = mesh.faces
     for _ in range(3):
-        faces, _ = swap_pass(index.points, faces)
-        assert_mesh_invariants(index.points, faces)
+        faces, edges, _ = swap_pass(index.points, faces)
+        assert_mesh_invariants(index.points, faces, edges)
