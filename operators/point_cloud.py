@@ -150,7 +150,7 @@ class OBJECT_OT_hc_smooth_points(bpy.types.Operator):
     neighbours: IntProperty(name="Neighbours", default=16, min=2, soft_max=64,
                             description="How many nearest neighbours each point may connect to")
     spacing_factor: FloatProperty(
-        name="Reach", default=2.0, min=0.1, soft_max=5.0,
+        name="Reach", default=3.0, min=0.1, soft_max=5.0,
         description="Connect neighbours up to this many times the local point spacing "
                     "(larger: wider neighbourhoods, stronger smoothing)")
     gap_factor: FloatProperty(

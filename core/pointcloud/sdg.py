@@ -18,7 +18,8 @@ It works on distinct points (``NeighbourIndex`` rows) and uses one number per po
 
 * **Adaptive nearest-neighbour edges**: p is joined to each cached neighbour q with
   |pq| <= ``spacing_factor`` x min(h(p), h(q)). The number of neighbours per point therefore follows
-  the local density (about 6-8 on an even surface sampling with the default factor 2), and the min
+  the local density (about 6-8 on an even surface sampling with factor 2, 10-14 with the default 3:
+  wider neighbourhoods smooth noisier data better, see bench/README.md), and the min
   keeps a sparse point from reaching deep into a denser region.
 
 Guarantees (tested): every SDG edge is at most ``gap_factor`` x max(h(p), h(q)) long (we require
@@ -82,7 +83,7 @@ def unique_undirected(u, v, n):
     return np.stack([keys // n, keys % n], axis=1)
 
 
-def surface_description_graph(index, emst_edges, *, spacing_factor=2.0, gap_factor=3.0):
+def surface_description_graph(index, emst_edges, *, spacing_factor=3.0, gap_factor=3.0):
     """The SDG of the distinct points of ``index`` given their EMST (rows of ``index``)."""
     if not 0 < spacing_factor <= gap_factor:
         raise ValueError(

@@ -54,7 +54,7 @@ def smooth_point_cloud(
     iterations_per_round=1,
     fixed=None,
     neighbours=16,
-    spacing_factor=2.0,
+    spacing_factor=3.0,
     gap_factor=3.0,
     min_quality=0.3,
     swap=True,

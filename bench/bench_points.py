@@ -1,0 +1,320 @@
+"""Point-cloud smoothing quality: core.smooth_point_cloud (HC on the RFS mesh, paper section 7)
+against a PCA plane-projection baseline, CGAL jet / bilateral smoothing and MeshLab APSS / RIMLS.
+
+Noisy samples of known surfaces (sphere, torus, cube with sharp edges, open spherical cap), Gaussian
+noise sigma = 0.5 / 1 / 2 % of the bounding-box diagonal. Reported per method: RMS distance to the
+true surface before and after, size change (mean distance to the shape's centre, after vs before),
+and wall time of the smoothing call (conversions to the peers' data structures excluded).
+
+    python bench/bench_points.py                       # 20k and 100k points, every shape and sigma
+    python bench/bench_points.py --sizes 20k --shapes sphere,cube --sigmas 0.01
+    python bench/bench_points.py --timing 100k,1M      # end-to-end time of core.smooth_point_cloud only
+
+Peers that are not installed are listed as such; the machine's python3 runs the core and baseline.
+"""
+
+import argparse
+import pathlib
+import sys
+import time
+import warnings
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+import core  # noqa: E402
+
+
+# --- shapes: sampling and exact distance --------------------------------------------------------------
+
+def _sphere_dirs(rng, n):
+    v = rng.normal(size=(n, 3))
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def sample_sphere(rng, n):
+    return _sphere_dirs(rng, n)
+
+
+def distance_sphere(p):
+    return np.abs(np.linalg.norm(p, axis=1) - 1.0)
+
+
+TORUS_R, TORUS_r = 1.0, 0.4
+
+
+def sample_torus(rng, n):
+    out = np.empty((0, 3))
+    while len(out) < n:  # area-uniform: accept the tube angle with weight (R + r cos v) / (R + r)
+        u, v = rng.random((2, 2 * n)) * 2 * np.pi
+        keep = rng.random(2 * n) < (TORUS_R + TORUS_r * np.cos(v)) / (TORUS_R + TORUS_r)
+        u, v = u[keep], v[keep]
+        ring = TORUS_R + TORUS_r * np.cos(v)
+        out = np.concatenate([out, np.stack([ring * np.cos(u), ring * np.sin(u), TORUS_r * np.sin(v)], 1)])
+    return out[:n]
+
+
+def distance_torus(p):
+    ring = np.hypot(p[:, 0], p[:, 1]) - TORUS_R
+    return np.abs(np.hypot(ring, p[:, 2]) - TORUS_r)
+
+
+def sample_cube(rng, n):
+    face = rng.integers(0, 6, n)
+    p = rng.random((n, 3)) * 2 - 1
+    axis = face % 3
+    p[np.arange(n), axis] = np.where(face < 3, -1.0, 1.0)
+    return p
+
+
+def distance_cube(p):
+    q = np.abs(p) - 1.0
+    outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
+    return np.abs(outside + np.minimum(q.max(axis=1), 0.0))
+
+
+CAP_RADIUS, CAP_ANGLE = 1.5, np.radians(60)
+
+
+def sample_cap(rng, n):
+    z = rng.uniform(np.cos(CAP_ANGLE), 1.0, n)  # Archimedes: z uniform gives area-uniform points
+    phi = rng.random(n) * 2 * np.pi
+    s = np.sqrt(1 - z * z)
+    return CAP_RADIUS * np.stack([s * np.cos(phi), s * np.sin(phi), z], 1)
+
+
+def distance_cap(p):
+    # Exact for points within the cap's cone, which is where noisy samples of it land (up to the rim).
+    return np.abs(np.linalg.norm(p, axis=1) - CAP_RADIUS)
+
+
+SHAPES = {
+    "sphere": (sample_sphere, distance_sphere, np.zeros(3)),
+    "torus": (sample_torus, distance_torus, np.zeros(3)),
+    "cube": (sample_cube, distance_cube, np.zeros(3)),
+    "patch": (sample_cap, distance_cap, np.array([0, 0, CAP_RADIUS * (1 + np.cos(CAP_ANGLE)) / 2])),
+}
+
+
+def noisy(shape, n, sigma_fraction, seed=0):
+    sample, distance, centre = SHAPES[shape]
+    rng = np.random.default_rng(seed)
+    clean = sample(rng, n)
+    diagonal = np.linalg.norm(clean.max(axis=0) - clean.min(axis=0))
+    return clean + rng.normal(scale=sigma_fraction * diagonal, size=clean.shape), diagonal
+
+
+# --- methods -----------------------------------------------------------------------------------------
+
+def pca_projection(points, k=24):
+    """Baseline: project each point onto the PCA plane of its k nearest neighbours."""
+    _, neighbours = cKDTree(points).query(points, k, workers=-1)
+    out = np.empty_like(points)
+    for start in range(0, len(points), 200_000):
+        block = slice(start, start + 200_000)
+        nb = points[neighbours[block]]
+        centre = nb.mean(axis=1)
+        centred = nb - centre[:, None]
+        _, vectors = np.linalg.eigh(np.einsum("nki,nkj->nij", centred, centred))
+        normal = vectors[:, :, 0]
+        offset = points[block] - centre
+        out[block] = points[block] - np.einsum("ni,ni->n", offset, normal)[:, None] * normal
+    return out
+
+
+def _cgal_point_set(points):
+    from CGAL import CGAL_Point_set_3
+
+    point_set = CGAL_Point_set_3.Point_set_3()
+    point_set.insert_range(np.ascontiguousarray(points, np.float64).ravel().tolist())
+    return point_set
+
+
+def _cgal_points(point_set):
+    return np.array([[p.x(), p.y(), p.z()] for p in point_set.points()])
+
+
+def cgal_jet(points, k=24):
+    from CGAL import CGAL_Point_set_processing_3 as P
+
+    point_set = _cgal_point_set(points)
+    start = time.perf_counter()
+    P.jet_smooth_point_set(point_set, k)
+    return _cgal_points(point_set), time.perf_counter() - start
+
+
+def cgal_bilateral(points, k=24, passes=3):
+    from CGAL import CGAL_Point_set_processing_3 as P
+
+    point_set = _cgal_point_set(points)
+    start = time.perf_counter()
+    point_set.add_normal_map()
+    P.jet_estimate_normals(point_set, k)  # bilateral smoothing needs normals
+    for _ in range(passes):
+        P.bilateral_smooth_point_set(point_set, k, sharpness_angle=25.0)
+    return _cgal_points(point_set), time.perf_counter() - start
+
+
+def _meshlab(points, filter_name):
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.ascontiguousarray(points, np.float64)))
+    start = time.perf_counter()
+    ms.apply_filter("compute_normal_for_point_clouds", k=10)
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.ascontiguousarray(points, np.float64)))  # the proxy
+    ms.set_current_mesh(0)  # with the proxy current, MeshLab 2025.7 segfaults
+    ms.apply_filter(filter_name, controlmesh=0, proxymesh=1)
+    seconds = time.perf_counter() - start
+    return ms.mesh(1).vertex_matrix().copy(), seconds
+
+
+def meshlab_apss(points):
+    return _meshlab(points, "compute_mls_projection_apss")
+
+
+def meshlab_rimls(points):
+    return _meshlab(points, "compute_mls_projection_rimls")
+
+
+def hc_rfs(points, **options):
+    start = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", core.ConvergenceWarning)
+        out = core.smooth_point_cloud(points, **options)
+    return out, time.perf_counter() - start
+
+
+def timed(function):
+    def run(points):
+        start = time.perf_counter()
+        out = function(points)
+        return out, time.perf_counter() - start
+    return run
+
+
+def available_methods(hc_options):
+    methods = {"HC on RFS (ours, defaults)": lambda p: hc_rfs(p, **hc_options),
+               "HC on RFS (ours, α=0.02, 30 rounds)": lambda p: hc_rfs(p, **{**hc_options, "alpha": 0.02,
+                                                                              "rounds": 30}),
+               "PCA projection k=24": timed(pca_projection)}
+    missing = []
+    try:
+        import CGAL.CGAL_Point_set_processing_3  # noqa: F401
+
+        methods["CGAL jet k=24"] = cgal_jet
+        methods["CGAL bilateral k=24 x3"] = cgal_bilateral
+    except ImportError:
+        missing.append("CGAL (pip cgal)")
+    try:
+        import pymeshlab  # noqa: F401
+
+        methods["MeshLab APSS"] = meshlab_apss
+        methods["MeshLab RIMLS"] = meshlab_rimls
+    except ImportError:
+        missing.append("PyMeshLab")
+    return methods, missing
+
+
+def rms(values):
+    return float(np.sqrt(np.mean(values ** 2)))
+
+
+def size_of(points, centre):
+    return float(np.linalg.norm(points - centre, axis=1).mean())
+
+
+def parse_count(text):
+    text = text.strip().lower()
+    scale = {"k": 1_000, "m": 1_000_000}.get(text[-1], 1)
+    return int(float(text[:-1] if scale > 1 else text) * scale)
+
+
+def quality(args, out):
+    methods, missing = available_methods(hc_options(args))
+    if args.methods:
+        wanted = [w.strip().lower() for w in args.methods.split(",")]
+        methods = {k: v for k, v in methods.items() if any(w in k.lower() for w in wanted)}
+    out("## Point-cloud smoothing quality\n")
+    if missing:
+        out("Not installed: " + ", ".join(missing) + "\n")
+    out("RMS distance to the true surface as % of the bounding-box diagonal (before → after), size change "
+        "(mean distance to the centre, after vs before), wall time of the smoothing call.\n")
+    out("| shape | points | σ | method | RMS before | RMS after | after/before | size change | time (s) |")
+    out("|---|---|---|---|---|---|---|---|---|")
+    for n in [parse_count(s) for s in args.sizes.split(",")]:
+        for shape in args.shapes.split(","):
+            _, distance, centre = SHAPES[shape]
+            for sigma in [float(s) for s in args.sigmas.split(",")]:
+                points, diagonal = noisy(shape, n, sigma, seed=args.seed)
+                before = rms(distance(points)) / diagonal
+                for name, method in methods.items():
+                    try:
+                        result, seconds = method(points)
+                    except Exception as error:  # a peer failing is a result too
+                        out(f"| {shape} | {n} | {sigma:.1%} | {name} | failed: {type(error).__name__}: {error} |||||")
+                        continue
+                    after = rms(distance(result)) / diagonal
+                    size = size_of(result, centre) / size_of(points, centre) - 1
+                    out(f"| {shape} | {n} | {sigma:.1%} | {name} | {before:.3%} | {after:.3%} | "
+                        f"{after / before:.2f} | {size:+.2%} | {seconds:.2f} |")
+
+
+def timing(args, out):
+    out("## End-to-end time of core.smooth_point_cloud (noisy sphere, σ 0.5 %, float32)\n")
+    out("| points | total (s) | neighbours | EMST | SDG | RFS | HC | swapping | faces | points without faces |")
+    out("|---|---|---|---|---|---|---|---|---|---|")
+    for n in [parse_count(s) for s in args.timing.split(",")]:
+        points, _ = noisy("sphere", n, 0.005, seed=args.seed)
+        points = points.astype(np.float32)
+        start = time.perf_counter()
+        _, report = core.smooth_point_cloud(points, return_mesh=True, **hc_options(args))
+        total = time.perf_counter() - start
+        s = report.seconds
+        out(f"| {n} | {total:.1f} | " + " | ".join(f"{s.get(k, 0):.1f}" for k in
+                                                    ("neighbours", "emst", "sdg", "rfs", "hc", "swap"))
+            + f" | {len(report.mesh.faces)} | {report.isolated} |")
+
+
+def hc_options(args):
+    options = {}
+    for name in ("rounds", "alpha", "beta"):
+        if getattr(args, name) is not None:
+            options[name] = getattr(args, name)
+    if args.spacing_factor is not None:
+        options["spacing_factor"] = args.spacing_factor
+        options["gap_factor"] = max(args.spacing_factor, 3.0)
+    if args.iterations_per_round is not None:
+        options["iterations_per_round"] = args.iterations_per_round
+    return options
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--sizes", default="20k,100k")
+    parser.add_argument("--shapes", default="sphere,torus,cube,patch")
+    parser.add_argument("--sigmas", default="0.005,0.01,0.02")
+    parser.add_argument("--methods", default="", help="comma-separated name fragments, e.g. 'ours,jet'")
+    parser.add_argument("--timing", default="", help="sizes for the end-to-end timing table instead, e.g. 100k,1M")
+    parser.add_argument("--rounds", type=int, default=None, help="for our default row (default: the core's)")
+    parser.add_argument("--alpha", type=float, default=None)
+    parser.add_argument("--beta", type=float, default=None)
+    parser.add_argument("--spacing-factor", type=float, default=None)
+    parser.add_argument("--iterations-per-round", type=int, default=None)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    results = ROOT / "bench" / "results"
+    results.mkdir(exist_ok=True)
+    report = results / f"bench_points-{time.strftime('%Y%m%d-%H%M%S')}.md"
+    with report.open("w") as handle:
+        def out(line):
+            print(line, flush=True)
+            handle.write(line + "\n")
+        (timing if args.timing else quality)(args, out)
+    print(f"\n(written to {report})")
+
+
+if __name__ == "__main__":
+    main()
