@@ -13,6 +13,7 @@ import numpy as np
 from bpy.props import BoolProperty, FloatProperty, IntProperty, StringProperty
 
 from .. import core
+from ..core.pointcloud import PointCloudSmoother
 from . import mesh_io
 
 POINT_TYPES = ("MESH", "POINTCLOUD")
@@ -202,31 +203,26 @@ class OBJECT_OT_hc_smooth_points(bpy.types.Operator):
                 clouds.append(Cloud(obj, self))
         return clouds
 
-    def execute(self, context):
-        interactive = not bpy.app.background and context.window_manager is not None
-        try:
-            clouds = self._clouds(context)
-            total = max(1, self.rounds * len(clouds))
-            if interactive:
-                context.window_manager.progress_begin(0, total)
-            for number, cloud in enumerate(clouds):
-                def progress(done, _rounds, offset=number * self.rounds):
-                    if interactive:
-                        context.window_manager.progress_update(offset + done)
-                with warnings.catch_warnings():  # reported below, once
-                    warnings.simplefilter("ignore", core.ConvergenceWarning)
-                    cloud.result, cloud.report = core.smooth_point_cloud(
-                        cloud.positions, alpha=self.alpha, beta=self.beta, rounds=self.rounds,
-                        iterations_per_round=self.iterations_per_round, fixed=cloud.fixed,
-                        neighbours=self.neighbours, spacing_factor=self.spacing_factor,
-                        gap_factor=self.gap_factor, min_quality=self.min_quality, swap=self.swap,
-                        progress=progress, return_mesh=True)
-        except (CloudError, ValueError) as error:
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        finally:
-            if interactive:
-                context.window_manager.progress_end()
+    def _smoother(self, cloud):
+        return PointCloudSmoother(
+            cloud.positions, alpha=self.alpha, beta=self.beta, rounds=self.rounds,
+            iterations_per_round=self.iterations_per_round, fixed=cloud.fixed, neighbours=self.neighbours,
+            spacing_factor=self.spacing_factor, gap_factor=self.gap_factor, min_quality=self.min_quality,
+            swap=self.swap)
+
+    def _runner(self, clouds):
+        """Every cloud's stages in turn; yields the fraction done. Writes nothing."""
+        steps_per_cloud = self.rounds + 4  # four build stages, then the rounds
+        total = steps_per_cloud * len(clouds)
+        for number, cloud in enumerate(clouds):
+            run = self._smoother(cloud)
+            with warnings.catch_warnings():  # the convergence region is reported once, at the end
+                warnings.simplefilter("ignore", core.ConvergenceWarning)
+                for step, _ in enumerate(run.steps(), start=1):
+                    yield (number * steps_per_cloud + step) / total
+            cloud.result, cloud.report = run.result, run.report
+
+    def _finish(self, context, clouds):
         for cloud in clouds:
             cloud.write()
             if self.keep_rfs_mesh:
@@ -236,6 +232,61 @@ class OBJECT_OT_hc_smooth_points(bpy.types.Operator):
         if message:
             self.report({"WARNING"}, message)
         return {"FINISHED"}
+
+    def execute(self, context):
+        try:
+            clouds = self._clouds(context)
+            for _ in self._runner(clouds):
+                pass
+        except (CloudError, ValueError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        return self._finish(context, clouds)
+
+    def invoke(self, context, event):
+        """Interactively: run step by step from a timer, with progress, and Esc to cancel."""
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        try:
+            self._clouds_pending = self._clouds(context)
+            for cloud in self._clouds_pending:  # check the settings before the first timer tick
+                self._smoother(cloud)
+        except (CloudError, ValueError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self._steps = self._runner(self._clouds_pending)
+        window_manager = context.window_manager
+        self._timer = window_manager.event_timer_add(0.01, window=context.window)
+        window_manager.progress_begin(0, 100)
+        window_manager.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _end_modal(self, context):
+        context.window_manager.event_timer_remove(self._timer)
+        context.window_manager.progress_end()
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+
+    def modal(self, context, event):
+        if event.type == "ESC":
+            self._end_modal(context)
+            self.report({"WARNING"}, "HC Smooth Points cancelled: nothing was changed")
+            return {"CANCELLED"}
+        if event.type != "TIMER":
+            return {"RUNNING_MODAL"}
+        try:
+            fraction = next(self._steps)
+        except StopIteration:
+            self._end_modal(context)
+            return self._finish(context, self._clouds_pending)
+        except ValueError as error:
+            self._end_modal(context)
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        context.window_manager.progress_update(int(fraction * 100))
+        if context.workspace is not None:
+            context.workspace.status_text_set(f"HC Smooth Points: {fraction:.0%} — Esc to cancel")
+        return {"RUNNING_MODAL"}
 
     def _summary(self, clouds):
         points = sum(len(c.positions) for c in clouds)

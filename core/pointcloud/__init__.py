@@ -6,9 +6,9 @@ swapping) -> smooth (HC alternating with swapping).
 
 from .rfs import RFSMesh, rfs_mesh
 from .sdg import surface_description_graph
-from .smooth import PointCloudReport, smooth_point_cloud
+from .smooth import PointCloudReport, PointCloudSmoother, smooth_point_cloud
 from .spanning_tree import emst
 from .swap import swap_pass
 
-__all__ = ["PointCloudReport", "RFSMesh", "emst", "rfs_mesh", "smooth_point_cloud",
+__all__ = ["PointCloudReport", "PointCloudSmoother", "RFSMesh", "emst", "rfs_mesh", "smooth_point_cloud",
            "surface_description_graph", "swap_pass"]

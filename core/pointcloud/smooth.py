@@ -73,66 +73,92 @@ def smooth_point_cloud(
     The input is never modified. Exact duplicates move together; points the RFS mesh leaves without
     a face (isolated or unusable neighbourhoods) stay where they are.
     """
-    start = check_positions(points, "points")
-    n = start.shape[0]
-    alpha = check_unit_interval(alpha, "alpha")
-    beta = check_unit_interval(beta, "beta")
-    rounds = _whole(rounds, "rounds", 0)
-    iterations_per_round = _whole(iterations_per_round, "iterations_per_round", 1)
-    neighbours = _whole(neighbours, "neighbours", 2)
-    spacing_factor = _positive(spacing_factor, "spacing_factor")
-    gap_factor = _positive(gap_factor, "gap_factor")
-    if spacing_factor > gap_factor:
-        raise ValueError(f"spacing_factor ({spacing_factor}) must not exceed gap_factor ({gap_factor})")
-    min_quality = check_unit_interval(min_quality, "min_quality")
-    fixed_mask = check_fixed(fixed, n)
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable progress(done, total) or None")
+    run = PointCloudSmoother(points, alpha=alpha, beta=beta, rounds=rounds,
+                             iterations_per_round=iterations_per_round, fixed=fixed, neighbours=neighbours,
+                             spacing_factor=spacing_factor, gap_factor=gap_factor, min_quality=min_quality,
+                             swap=swap)
+    for stage, done in run.steps():
+        if stage == "round" and progress is not None and progress(done, run.rounds) is False:
+            raise Cancelled(f"cancelled after {done} of {run.rounds} rounds")
+    return (run.result, run.report) if return_mesh else run.result
 
-    seconds = {}
-    clock = time.perf_counter()
 
-    def lap(name):
-        nonlocal clock
-        now = time.perf_counter()
-        seconds[name] = seconds.get(name, 0.0) + now - clock
-        clock = now
+class PointCloudSmoother:
+    """smooth_point_cloud in steps, for callers that interleave it with other work (a modal operator
+    that shows progress and lets Esc cancel): checks everything on construction, then ``steps()``
+    yields (stage, rounds done) after each stage and round; afterwards ``result`` and ``report``
+    are set. Abandoning the generator leaves the input untouched."""
 
-    index = NeighbourIndex(start, neighbours)  # distinct points, in KD-tree order
-    m = index.n_points
-    rows_fixed = np.zeros(m, dtype=bool)
-    np.logical_or.at(rows_fixed, index.representative, fixed_mask)  # a fixed copy pins its duplicates
-    lap("neighbours")
-    tree, _ = boruvka_emst(index)
-    lap("emst")
-    graph = surface_description_graph(index, tree, spacing_factor=spacing_factor, gap_factor=gap_factor)
-    lap("sdg")
-    current = index.points  # float64 copy, ours to move
-    mesh = rfs_mesh(current, graph.edges, min_quality=min_quality)
-    lap("rfs")
-    faces = mesh.faces
-    swaps = []
-    for done in range(1, rounds + 1):
-        operator = umbrella_operator(mesh.edges, m)
-        current = smooth(current, None, method="hc", alpha=alpha, beta=beta, iterations=iterations_per_round,
-                         fixed=rows_fixed, original=index.points, operator=operator).positions
-        lap("hc")
-        if swap:
-            faces, edges, count = swap_pass(current, faces)
-            swaps.append(count)
-            mesh = RFSMesh(faces, edges)
-            lap("swap")
-        if progress is not None and progress(done, rounds) is False:
-            raise Cancelled(f"cancelled after {done} of {rounds} rounds")
+    def __init__(self, points, *, alpha=0.1, beta=0.6, rounds=10, iterations_per_round=1, fixed=None,
+                 neighbours=16, spacing_factor=3.0, gap_factor=3.0, min_quality=0.3, swap=True):
+        self.points = check_positions(points, "points")
+        self.alpha = check_unit_interval(alpha, "alpha")
+        self.beta = check_unit_interval(beta, "beta")
+        self.rounds = _whole(rounds, "rounds", 0)
+        self.iterations_per_round = _whole(iterations_per_round, "iterations_per_round", 1)
+        self.neighbours = _whole(neighbours, "neighbours", 2)
+        self.spacing_factor = _positive(spacing_factor, "spacing_factor")
+        self.gap_factor = _positive(gap_factor, "gap_factor")
+        if self.spacing_factor > self.gap_factor:
+            raise ValueError(f"spacing_factor ({self.spacing_factor}) must not exceed gap_factor "
+                             f"({self.gap_factor})")
+        self.min_quality = check_unit_interval(min_quality, "min_quality")
+        self.fixed = check_fixed(fixed, self.points.shape[0])
+        self.swap = bool(swap)
+        self.result = None
+        self.report = None
 
-    result = current[index.representative].astype(start.dtype)
-    result[fixed_mask] = start[fixed_mask]  # bit-identical, whatever the float round trip did
-    if not return_mesh:
-        return result
-    has_face = np.zeros(m, dtype=bool)
-    has_face[mesh.faces.ravel()] = True
-    report = PointCloudReport(
-        mesh=RFSMesh(index.original[mesh.faces], index.original[mesh.edges]),
-        n_distinct=m, sdg_edges=int(graph.edges.shape[0]), emst_cut=graph.emst_cut,
-        isolated=int(m - has_face.sum()), swaps=swaps, seconds=seconds)
-    return result, report
+    def steps(self):
+        start, fixed_mask = self.points, self.fixed
+        seconds = {}
+        clock = time.perf_counter()
+
+        def lap(name):
+            nonlocal clock
+            now = time.perf_counter()
+            seconds[name] = seconds.get(name, 0.0) + now - clock
+            clock = now
+
+        index = NeighbourIndex(start, self.neighbours)  # distinct points, in KD-tree order
+        m = index.n_points
+        rows_fixed = np.zeros(m, dtype=bool)
+        np.logical_or.at(rows_fixed, index.representative, fixed_mask)  # a fixed copy pins its duplicates
+        lap("neighbours")
+        yield "neighbours", 0
+        tree, _ = boruvka_emst(index)
+        lap("emst")
+        yield "emst", 0
+        graph = surface_description_graph(index, tree, spacing_factor=self.spacing_factor,
+                                          gap_factor=self.gap_factor)
+        lap("sdg")
+        yield "sdg", 0
+        current = index.points  # float64 copy, ours to move
+        mesh = rfs_mesh(current, graph.edges, min_quality=self.min_quality)
+        lap("rfs")
+        yield "rfs", 0
+        faces = mesh.faces
+        swaps = []
+        for done in range(1, self.rounds + 1):
+            operator = umbrella_operator(mesh.edges, m)
+            current = smooth(current, None, method="hc", alpha=self.alpha, beta=self.beta,
+                             iterations=self.iterations_per_round, fixed=rows_fixed, original=index.points,
+                             operator=operator).positions
+            lap("hc")
+            if self.swap:
+                faces, edges, count = swap_pass(current, faces)
+                swaps.append(count)
+                mesh = RFSMesh(faces, edges)
+                lap("swap")
+            yield "round", done
+
+        result = current[index.representative].astype(start.dtype)
+        result[fixed_mask] = start[fixed_mask]  # bit-identical, whatever the float round trip did
+        has_face = np.zeros(m, dtype=bool)
+        has_face[mesh.faces.ravel()] = True
+        self.report = PointCloudReport(
+            mesh=RFSMesh(index.original[mesh.faces], index.original[mesh.edges]),
+            n_distinct=m, sdg_edges=int(graph.edges.shape[0]), emst_cut=graph.emst_cut,
+            isolated=int(m - has_face.sum()), swaps=swaps, seconds=seconds)
+        self.result = result

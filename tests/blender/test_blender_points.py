@@ -111,3 +111,10 @@ def test_point_cloud_object(scene):
     after = np.empty(len(points) * 3, np.float32)
     cloud.attributes["position"].data.foreach_get("vector", after)
     assert rms(after.reshape(-1, 3)) < 0.85 * rms(points)
+
+
+def test_invoke_in_background_runs_execute(scene):
+    obj = cloud_object()
+    before = positions_of(obj.data)
+    assert bpy.ops.object.hc_smooth_points("INVOKE_DEFAULT", rounds=2) == {"FINISHED"}
+    assert np.any(positions_of(obj.data) != before)

@@ -117,3 +117,15 @@ def test_bad_input(options, message):
     points = options.pop("points", noisy_sphere(50, 0.01))
     with pytest.raises(ValueError, match=message):
         core.smooth_point_cloud(points, **options)
+
+
+def test_stepwise_run_equals_one_call_and_reports_stages():
+    from core.pointcloud import PointCloudSmoother
+
+    points = noisy_sphere(500, 0.01, seed=4)
+    run = PointCloudSmoother(points, rounds=3)
+    stages = list(run.steps())
+    assert stages == [("neighbours", 0), ("emst", 0), ("sdg", 0), ("rfs", 0), ("round", 1), ("round", 2), ("round", 3)]
+    assert np.array_equal(run.result, core.smooth_point_cloud(points, rounds=3))
+    with pytest.raises(ValueError, match="alpha"):
+        PointCloudSmoother(points, alpha=2)  # checked before any work
