@@ -44,6 +44,24 @@ def dihedral_cos(points, u, v, s, t):
     return np.clip(cos, -1.0, 1.0)
 
 
+def perpendicular(points, u, v, s):
+    """Unit vectors from line (u, v) towards s, perpendicular to it (NaN when degenerate). The
+    dihedral angle at an edge is the angle between two such vectors; they do not depend on which
+    end of the edge is u."""
+    origin = points[u]
+    e = points[v] - origin
+    a = points[s] - origin
+    a -= (_dot(a, e) / _dot(e, e))[..., None] * e
+    with np.errstate(invalid="ignore", divide="ignore"):
+        a /= np.sqrt(_dot(a, a))[..., None]
+    return a
+
+
+def angle_between(x, y):
+    """Angle between unit vectors (NaN stays NaN)."""
+    return np.arccos(np.clip(_dot(x, y), -1.0, 1.0))
+
+
 def dihedral(points, u, v, s, t):
     """Dihedral angle in radians (see ``dihedral_cos``)."""
     return np.arccos(dihedral_cos(points, u, v, s, t))

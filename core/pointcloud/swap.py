@@ -17,7 +17,7 @@ mesh the swap is applied to. The set is picked greedily by gain (a Luby-style in
 
 import numpy as np
 
-from .geometry import Incidence, dihedral
+from .geometry import Incidence, angle_between, dihedral, perpendicular
 
 _MIN_GAIN = 1e-9  # radians; ignores swaps that only win by rounding
 
@@ -29,12 +29,13 @@ def _swap_candidates(points, faces, inc):
     i2 = inc.order[inc.edge_start[interior] + 1]
     a, b = inc.edges[interior, 0], inc.edges[interior, 1]
     c, d = inc.third[i1], inc.third[i2]
-    # Today's dihedral angle at every interior edge (NaN elsewhere): the "before" sums are lookups.
-    angle = np.full(inc.edge_count.size, np.nan)
-    angle[interior] = dihedral(points, a, b, c, d)
-    # For each incidence the third vertex of the face on the other side of its edge (-1: none).
+    # Per incidence (face, edge) the unit vector from the edge into the face: dihedral angles of
+    # today's mesh are angles between two of these, so the "before" sums need no new geometry.
+    f = inc.faces
+    w = perpendicular(points, f[:, [1, 2, 0]].ravel(), f[:, [2, 0, 1]].ravel(), f.ravel())
+    # For each incidence the incidence on the other side of its edge (-1: none).
     other = np.full(inc.third.size, -1, dtype=np.int64)
-    other[i1], other[i2] = d, c
+    other[i1], other[i2] = i2, i1
 
     usable = ~inc.has_edge(c, d) & (c != d)
     edge, i1, i2, a, b, c, d = (x[usable] for x in (interior, i1, i2, a, b, c, d))
@@ -45,15 +46,15 @@ def _swap_candidates(points, faces, inc):
         slot = np.argmax(faces[face] == opposite[:, None], axis=1)
         return 3 * face + slot
 
-    before = angle[edge].copy()
+    before = angle_between(w[i1], w[i2])
     after = dihedral(points, c, d, a, b)
     # Outer edges: bc and ac of (a, b, c) get d as their new third vertex, bd and ad of (a, b, d) get c.
     for incidence, u, v, new in ((outer(f1, a), b, c, d), (outer(f1, b), a, c, d),
                                  (outer(f2, a), b, d, c), (outer(f2, b), a, d, c)):
-        x = other[incidence]
-        has = x >= 0  # an outer edge without a face beyond counts the same before and after: skip
-        before[has] += angle[inc.edge_of[incidence[has]]]
-        after[has] += dihedral(points, u[has], v[has], new[has], x[has])
+        beyond = other[incidence]
+        has = beyond >= 0  # an outer edge without a face beyond counts the same before and after: skip
+        before[has] += angle_between(w[incidence[has]], w[beyond[has]])
+        after[has] += angle_between(perpendicular(points, u[has], v[has], new[has]), w[beyond[has]])
     return edge, f1, f2, a, b, c, d, after - before
 
 
