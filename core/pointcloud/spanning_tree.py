@@ -16,10 +16,13 @@ What we do instead is Borůvka's algorithm on the complete graph, with the kNN l
   long, and a point with a foreign point in its list already offered its shortest outgoing edge.
   So C is *certified* when best(C) <= min d_k(p) over its exhausted points.
 * When too few components are certified, the others get their exact shortest outgoing edge from
-  KD-tree queries restricted to other components: components get distinct non-zero codes, and for
-  each bit of the code a tree over the points whose bit is 0 answers the queries of points whose
-  bit is 1 and vice versa. Two different codes differ in some bit, so the minimum over bits is the
-  nearest point of another component. Only exhausted points below their component's bound ask.
+  KD-tree queries restricted to other components. Few askers: growing-k queries on the full tree
+  until a foreign point turns up or the list passes the bound. Many askers (scan lines): components
+  get distinct non-zero codes, and for each bit of the code a tree over the points whose bit is 0
+  answers the queries of points whose bit is 1 and vice versa. Two different codes differ in some
+  bit, so the minimum over bits is the nearest point of another component. A sample of the askers
+  goes first to bound each component, so the rest search small balls. Only exhausted points below
+  their component's bound ask.
 * Ties: each component takes *a* shortest outgoing edge. With ties the picks can close a cycle, and
   every such cycle consists of equally long edges (around it each pick is no longer than the
   previous one), so keeping a spanning forest of the picks (dropping one edge per cycle) keeps the
@@ -135,7 +138,10 @@ def _nearest_foreign_by_growing_k(tree, label_code, ask, bound, k, budget):
 
 def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16):
     """For each point index in ``ask``: the nearest point whose code differs, if closer than
-    ``bound`` (per asking point). Returns (distance, index), inf / -1 where none is closer."""
+    ``bound`` (per asking point). Returns (distance, index), inf / -1 where none is closer.
+
+    Callers only use the minimum per code, so a point may also report nothing when another point of
+    its code already found something at least as near (see the sampling in _search_by_bits)."""
     best_distance = np.full(ask.size, np.inf)
     best_index = np.full(ask.size, -1, dtype=np.int64)
     if tree is not None and ask.size:
@@ -147,9 +153,44 @@ def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16)
         if resolved.all():
             return best_distance, best_index
         rest = np.flatnonzero(~resolved)
-        rest_distance, rest_index = _exact_nearest_foreign(tree_points, label_code, ask[rest], bound[rest])
+        rest_distance, rest_index = _search_by_bits(tree_points, label_code, ask[rest], bound[rest])
         best_distance[rest], best_index[rest] = rest_distance, rest_index
         return best_distance, best_index
+    return _search_by_bits(tree_points, label_code, ask, bound)
+
+
+_SAMPLE_STRIDE = 16
+
+
+def _search_by_bits(tree_points, label_code, ask, bound):
+    """Many askers (e.g. whole scan lines, whose kNN lists never leave the line): first a sample of
+    every 16th asker (spread out, as rows are in KD-tree order) finds an upper bound per code, then
+    the others search only below it, which lets the KD-tree prune nearly everything."""
+    if ask.size <= 4 * _SAMPLE_STRIDE:
+        return _query_by_bits(tree_points, label_code, ask, bound)
+    sample = np.zeros(ask.size, dtype=bool)
+    sample[::_SAMPLE_STRIDE] = True
+    best_distance = np.full(ask.size, np.inf)
+    best_index = np.full(ask.size, -1, dtype=np.int64)
+    best_distance[sample], best_index[sample] = _query_by_bits(tree_points, label_code, ask[sample], bound[sample])
+    code_bound = np.full(int(label_code.max()) + 1, np.inf)
+    np.minimum.at(code_bound, label_code[ask[sample]], best_distance[sample])
+    rest = ~sample
+    limit = np.minimum(bound[rest], code_bound[label_code[ask[rest]]])
+    best_distance[rest], best_index[rest] = _query_by_bits(tree_points, label_code, ask[rest], limit)
+    return best_distance, best_index
+
+
+def _query_by_bits(tree_points, label_code, ask, bound):
+    """Exact nearest point of another code below ``bound``: codes differ in some bit, so one tree
+    per bit and side (points whose bit is 0 answer points whose bit is 1 and vice versa) covers all.
+    Askers are queried in groups of similar bound, because a KD-tree query takes one upper bound."""
+    best_distance = np.full(ask.size, np.inf)
+    best_index = np.full(ask.size, -1, dtype=np.int64)
+    if ask.size == 0:
+        return best_distance, best_index
+    with np.errstate(divide="ignore"):
+        group = np.where(np.isfinite(bound), np.floor(np.log2(np.maximum(bound, 1e-300))), np.inf)
     n_bits = int(label_code.max()).bit_length()
     for bit in range(n_bits):
         side = (label_code >> bit) & 1
@@ -158,15 +199,16 @@ def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16)
             askers = np.flatnonzero(side[ask] != target_side)
             if targets.size == 0 or askers.size == 0:
                 continue
-            limit = bound[askers]
-            upper = float(limit.max())
             tree = cKDTree(tree_points[targets])
-            distance, found = tree.query(tree_points[ask[askers]], 1, workers=-1,
-                                         distance_upper_bound=upper if np.isfinite(upper) else np.inf)
-            better = (distance < limit) & (distance < best_distance[askers])
-            rows = askers[better]
-            best_distance[rows] = distance[better]
-            best_index[rows] = targets[found[better]]
+            for value in np.unique(group[askers]):
+                rows = askers[group[askers] == value]
+                limit = bound[rows]
+                upper = float(limit.max())
+                distance, found = tree.query(tree_points[ask[rows]], 1, workers=-1,
+                                             distance_upper_bound=upper if np.isfinite(upper) else np.inf)
+                better = (distance < limit) & (distance < best_distance[rows])
+                best_distance[rows[better]] = distance[better]
+                best_index[rows[better]] = targets[found[better]]
     return best_distance, best_index
 
 

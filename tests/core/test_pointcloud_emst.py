@@ -66,20 +66,38 @@ def test_duplicates_are_tied_to_their_first_copy():
     assert len(np.unique(points, axis=0)) == len(first)
 
 
-def test_growing_k_path_equals_bit_path():
-    # The two exact nearest-foreign searches must agree (the cheap one falls back to the other).
+def brute_force_minimum_per_code(points, code, ask, bound):
+    from scipy.spatial.distance import cdist
+
+    distance = cdist(points[ask], points)
+    distance[code[ask][:, None] == code[None, :]] = np.inf
+    nearest = distance.min(axis=1)
+    nearest[nearest >= bound] = np.inf
+    result = np.full(code.max() + 1, np.inf)
+    np.minimum.at(result, code[ask], nearest)
+    return result
+
+
+@pytest.mark.parametrize("n_ask", [20, 300])  # few askers: growing k; many: sampled bit search
+@pytest.mark.parametrize("use_tree", [False, True])
+def test_nearest_foreign_search_gives_each_codes_exact_minimum(n_ask, use_tree):
+    # The contract the EMST relies on: per code, the minimum reported equals the true nearest
+    # point of another code below the bound (single askers may report nothing).
     rng = np.random.default_rng(3)
     index = NeighbourIndex(clusters(4, 100, seed=3), 4)
     code = rng.integers(0, 5, index.n_points)
-    ask = np.flatnonzero(code > 0)
+    code[:50] = 7  # one big code, as a long scan line would be
+    ask = np.sort(rng.choice(index.n_points, n_ask, replace=False))
     bound = np.full(ask.size, np.inf)
     bound[::3] = 0.005
-    d1, i1 = _exact_nearest_foreign(index.points, code, ask, bound)
-    d2, i2 = _exact_nearest_foreign(index.points, code, ask, bound, tree=index.tree, k=2)
-    assert np.array_equal(d1, d2)
-    assert np.all(code[i1[i1 >= 0]] != code[ask[i1 >= 0]])
-    same = i1 == i2
-    assert np.all(same | (d1 == d2))  # equally near points may differ
+    kwargs = dict(tree=index.tree, k=2) if use_tree else {}
+    distance, found = _exact_nearest_foreign(index.points, code, ask, bound, **kwargs)
+    hit = found >= 0
+    assert np.all(code[found[hit]] != code[ask[hit]])
+    assert np.allclose(np.linalg.norm(index.points[found[hit]] - index.points[ask[hit]], axis=1), distance[hit])
+    reported = np.full(code.max() + 1, np.inf)
+    np.minimum.at(reported, code[ask], distance)
+    assert np.allclose(reported, brute_force_minimum_per_code(index.points, code, ask, bound), rtol=1e-12, atol=0)
 
 
 @settings(max_examples=25, deadline=None)
