@@ -106,6 +106,20 @@ def _best_pairs(points, inc, edges, order, start, count):
     return first, second, best_cos
 
 
+_EDGE_BITS = 26
+
+
+def _priority(best_cos, edge, n_edges):
+    """Distinct int64 priorities, larger for a larger best dihedral angle (smaller cos), ties by edge
+    number; without a sort: the angle quantized to 2^-35 in the high bits, the edge in the low."""
+    if n_edges >= 1 << _EDGE_BITS:  # too many edges for the packed key: rank by sorting
+        priority = np.empty(edge.size, dtype=np.int64)
+        priority[np.lexsort((edge, -best_cos))] = np.arange(edge.size)
+        return priority
+    level = np.round((1.0 - np.clip(best_cos, -1.0, 1.0)) * 2.0 ** 35).astype(np.int64)
+    return (level << _EDGE_BITS) | edge
+
+
 def keep_best_pairs(points, faces):
     """Delete faces until no edge has more than two: at an overfull edge the pair with the largest
     dihedral angle stays. Returns the boolean mask of faces kept.
@@ -142,9 +156,9 @@ def keep_best_pairs(points, faces):
         if stale.size:
             first[stale], second[stale], best_cos[stale] = _best_pairs(points, inc, stale, order, start, count)
             known[stale] = True
-        # Priority: flatter best pair first; distinct integers so each face has one top edge.
+        # Priority: flatter best pair first, ties by edge number; distinct, so each face has one top edge.
         priority = np.full(n_edges, -1, dtype=np.int64)
-        priority[over[np.argsort(-best_cos[over], kind="stable")]] = np.arange(over.size)
+        priority[over] = _priority(best_cos[over], over, n_edges)
         member, member_edge = order, edge
         face = member // 3
         top = np.full(n_faces, -1, dtype=np.int64)
@@ -153,8 +167,9 @@ def keep_best_pairs(points, faces):
         blocked = np.zeros(n_edges, dtype=bool)
         blocked[member_edge[top[face] != priority[member_edge]]] = True
         losing = ~blocked[member_edge] & (member != first[member_edge]) & (member != second[member_edge])
-        dead = np.unique(face[losing])
-        alive[dead] = False
+        was_alive = alive.copy()
+        alive[face[losing]] = False
+        dead = np.flatnonzero(was_alive != alive)  # a mask, not np.unique: no hashing per round
         known[inc.edge_of[(3 * dead[:, None] + np.arange(3)).ravel()]] = False
     return alive
 

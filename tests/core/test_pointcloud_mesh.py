@@ -223,3 +223,15 @@ def test_rfs_and_swap_invariants_on_random_clouds(n, seed, noise):
     for _ in range(3):
         faces, edges, _ = swap_pass(index.points, faces)
         assert_mesh_invariants(index.points, faces, edges)
+
+
+def test_pair_priorities_order_flattest_first_in_both_encodings():
+    from core.pointcloud.rfs import _priority
+
+    rng = np.random.default_rng(0)
+    cos = np.round(rng.uniform(-1, 1, 500), 2)  # many ties
+    edge = rng.permutation(10_000)[:500]
+    packed, ranked = _priority(cos, edge, 10_000), _priority(cos, edge, 1 << 30)
+    assert len(set(packed)) == 500 and len(set(ranked)) == 500
+    assert np.array_equal(np.argsort(packed), np.argsort(ranked))
+    assert cos[np.argmax(packed)] == cos.min()  # the largest dihedral angle comes first
