@@ -106,10 +106,14 @@ def _spanning_forest(u, v, n_components):
     return unique[forest.data.astype(np.int64) - 1]
 
 
+_QUERY_ENTRIES = 1 << 22  # neighbours per KD-tree query call: bounds the (rows, k) result arrays
+
+
 def _nearest_foreign_by_growing_k(tree, label_code, ask, bound, k, budget):
-    """The cheap path for few askers: query the full tree with growing k until each asker either
-    meets a point of another code (the first one met is its nearest foreign point) or has seen
-    every point closer than its bound. Returns (distance, index, resolved)."""
+    """Query the full tree with growing k until each asker either meets a point of another code
+    (the first one met is its nearest foreign point) or has seen every point closer than its bound.
+    Stops when the next k would exceed ``budget`` neighbours in all. Returns (distance, index,
+    resolved)."""
     distance_out = np.full(ask.size, np.inf)
     index_out = np.full(ask.size, -1, dtype=np.int64)
     resolved = np.zeros(ask.size, dtype=bool)
@@ -117,23 +121,32 @@ def _nearest_foreign_by_growing_k(tree, label_code, ask, bound, k, budget):
     todo = np.arange(ask.size)
     while todo.size and k * todo.size <= budget:
         k = min(k, m)
-        upper = float(bound[todo].max())
-        distance, found = tree.query(tree.data[ask[todo]], k, workers=-1,
-                                     distance_upper_bound=upper if np.isfinite(upper) else np.inf)
-        valid = np.isfinite(distance)
-        foreign = valid & (label_code[np.where(valid, found, 0)] != label_code[ask[todo]][:, None])
-        foreign &= distance < bound[todo][:, None]
-        has = foreign.any(axis=1)
-        first = np.argmax(foreign, axis=1)
-        rows = todo[has]
-        distance_out[rows] = distance[has, first[has]]
-        index_out[rows] = found[has, first[has]]
-        # Done without a hit when the list ran past the bound (or past every point within reach).
-        done = has | ~valid[:, -1] | (distance[:, -1] >= bound[todo]) | (k >= m)
-        resolved[todo[done]] = True
-        todo = todo[~done]
+        step = max(1, _QUERY_ENTRIES // k)
+        done_rows = []
+        for start in range(0, todo.size, step):
+            rows = todo[start:start + step]
+            limit = bound[rows]
+            upper = float(limit.max())
+            distance, found = tree.query(tree.data[ask[rows]], k, workers=-1,
+                                         distance_upper_bound=upper if np.isfinite(upper) else np.inf)
+            distance, found = distance.reshape(rows.size, k), found.reshape(rows.size, k)
+            valid = np.isfinite(distance)
+            foreign = valid & (label_code[np.where(valid, found, 0)] != label_code[ask[rows]][:, None])
+            foreign &= distance < limit[:, None]
+            has = foreign.any(axis=1)
+            first = np.argmax(foreign, axis=1)
+            distance_out[rows[has]] = distance[has, first[has]]
+            index_out[rows[has]] = found[has, first[has]]
+            # Done without a hit when the list ran past the bound (or past every point within reach).
+            done_rows.append(rows[has | ~valid[:, -1] | (distance[:, -1] >= limit) | (k >= m)])
+        done = np.concatenate(done_rows)
+        resolved[done] = True
+        todo = todo[~resolved[todo]]
         k *= 2
     return distance_out, index_out, resolved
+
+
+_SAMPLE_STRIDE = 16
 
 
 def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16):
@@ -141,43 +154,55 @@ def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16)
     ``bound`` (per asking point). Returns (distance, index), inf / -1 where none is closer.
 
     Callers only use the minimum per code, so a point may also report nothing when another point of
-    its code already found something at least as near (see the sampling in _search_by_bits)."""
+    its code already found something at least as near. Few askers (k x askers <= points) grow k on
+    the full tree; otherwise three stages:
+    1. many askers (e.g. whole scan lines, whose kNN lists never leave the line): a sample of every
+       16th asker (spread out: rows are in KD-tree order) searches first and bounds each code;
+    2. growing-k queries on the full tree (when given), which settle most askers below that bound;
+    3. the rest: one KD-tree per code bit (_query_by_bits), searching only below the bound."""
     best_distance = np.full(ask.size, np.inf)
     best_index = np.full(ask.size, -1, dtype=np.int64)
-    if tree is not None and ask.size:
+    if ask.size == 0:
+        return best_distance, best_index
+    bound = np.asarray(bound, dtype=np.float64).copy()
+    rest = np.arange(ask.size)
+    if tree is not None and k * ask.size <= tree_points.shape[0]:
         # Few askers (the usual case on surfaces): growing-k queries on the one tree we have cost
         # far less than building two trees per code bit over all points.
         found_distance, found_index, resolved = _nearest_foreign_by_growing_k(
             tree, label_code, ask, bound, k, budget=tree_points.shape[0])
         best_distance[resolved], best_index[resolved] = found_distance[resolved], found_index[resolved]
-        if resolved.all():
-            return best_distance, best_index
-        rest = np.flatnonzero(~resolved)
-        rest_distance, rest_index = _search_by_bits(tree_points, label_code, ask[rest], bound[rest])
-        best_distance[rest], best_index[rest] = rest_distance, rest_index
-        return best_distance, best_index
-    return _search_by_bits(tree_points, label_code, ask, bound)
-
-
-_SAMPLE_STRIDE = 16
-
-
-def _search_by_bits(tree_points, label_code, ask, bound):
-    """Many askers (e.g. whole scan lines, whose kNN lists never leave the line): first a sample of
-    every 16th asker (spread out, as rows are in KD-tree order) finds an upper bound per code, then
-    the others search only below it, which lets the KD-tree prune nearly everything."""
-    if ask.size <= 4 * _SAMPLE_STRIDE:
-        return _query_by_bits(tree_points, label_code, ask, bound)
-    sample = np.zeros(ask.size, dtype=bool)
-    sample[::_SAMPLE_STRIDE] = True
-    best_distance = np.full(ask.size, np.inf)
-    best_index = np.full(ask.size, -1, dtype=np.int64)
-    best_distance[sample], best_index[sample] = _query_by_bits(tree_points, label_code, ask[sample], bound[sample])
-    code_bound = np.full(int(label_code.max()) + 1, np.inf)
-    np.minimum.at(code_bound, label_code[ask[sample]], best_distance[sample])
-    rest = ~sample
-    limit = np.minimum(bound[rest], code_bound[label_code[ask[rest]]])
-    best_distance[rest], best_index[rest] = _query_by_bits(tree_points, label_code, ask[rest], limit)
+        rest = rest[~resolved]
+        tree = None  # whoever is left needs the bit search
+    if rest.size > 4 * _SAMPLE_STRIDE:
+        sample = rest[::_SAMPLE_STRIDE]
+        best_distance[sample], best_index[sample] = _query_by_bits(tree_points, label_code, ask[sample],
+                                                                   bound[sample])
+        code_bound = np.full(int(label_code.max()) + 1, np.inf)
+        np.minimum.at(code_bound, label_code[ask[sample]], best_distance[sample])
+        bound = np.minimum(bound, code_bound[label_code[ask]])
+        rest = np.setdiff1d(rest, sample, assume_unique=True)
+    if tree is not None and rest.size:
+        # A pilot (every 16th) shows whether growing k pays: on scan lines far apart relative to
+        # their point spacing it would need hundreds of neighbours per point.
+        pilot = np.zeros(rest.size, dtype=bool)
+        pilot[::_SAMPLE_STRIDE] = True
+        left = np.ones(rest.size, dtype=bool)  # still to search by bits
+        for part in (pilot, ~pilot):
+            position = np.flatnonzero(part)
+            if position.size == 0:
+                continue
+            rows = rest[position]
+            found_distance, found_index, resolved = _nearest_foreign_by_growing_k(
+                tree, label_code, ask[rows], bound[rows], k, budget=4 * k * rows.size)  # k <= 4 k0
+            best_distance[rows[resolved]] = found_distance[resolved]
+            best_index[rows[resolved]] = found_index[resolved]
+            left[position[resolved]] = False
+            if part is pilot and position.size >= 8 and resolved.mean() < 0.5:
+                break  # the others go straight to the bit search
+        rest = rest[left]
+    if rest.size:
+        best_distance[rest], best_index[rest] = _query_by_bits(tree_points, label_code, ask[rest], bound[rest])
     return best_distance, best_index
 
 
