@@ -1,6 +1,6 @@
-"""Sparse products and triangular solves spread over CPU cores with threads.
+"""Sparse matrix products spread over CPU cores with threads.
 
-SciPy's sparse kernels (and SuperLU's solve) release the GIL, so plain threads run them in parallel.
+SciPy's sparse kernels release the GIL, so plain threads run them in parallel.
 A product is split into row blocks of about equal non-zeros: each output row is computed by exactly
 the same loop as in the one-call product, so the results are bit-identical, whatever the thread
 count. Small problems stay on one thread: below ~1M non-zeros the hand-off costs more than it saves.
@@ -91,20 +91,3 @@ def product(matrix):
         return out
 
     return multiply
-
-
-def solve_columns(solve, b):
-    """Apply ``solve`` (a triangular solve of an (n, 1) right-hand side) to each column of ``b`` in
-    parallel when it is large; returns the (n, k) solution, row-major."""
-    if b.ndim == 1 or b.shape[1] == 1 or thread_count() == 1 or b.shape[0] * b.shape[1] < MIN_WORK:
-        return solve(b)
-    columns = np.asfortranarray(b)
-    results = [None] * b.shape[1]
-
-    def column_task(k):
-        def task():
-            results[k] = solve(columns[:, k:k + 1])
-        return task
-
-    _run_all([column_task(k) for k in range(b.shape[1])])
-    return np.hstack(results)
