@@ -186,14 +186,14 @@ class _Stepper:
         elif self.method == "original" and self.alpha > 0.0:
             anchor = self.alpha_origin
         if self.sequential is not None:
-            p = self.sequential.solve(q, anchor)
-        else:
-            p = self.neighbour_mean(q)
-            if w != 1.0:
-                p *= w
-            if anchor is not None:
-                p += anchor
-        p[self.fixed_index] = q[self.fixed_index]
+            return self.sequential.solve(q, anchor)  # fixed rows of the system read p_i = q_i exactly
+        p = self.neighbour_mean(q)
+        if w != 1.0:
+            p *= w
+        if anchor is not None:
+            p += anchor
+        if self.method != "hc":  # HC zeroes b on fixed rows and resets them at the end of its step
+            p[self.fixed_index] = q[self.fixed_index]
         return p
 
     def __call__(self, q):
