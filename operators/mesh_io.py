@@ -7,16 +7,21 @@ is written back whole or not at all.
 import numpy as np
 
 
-def read_positions(mesh):
-    """Vertex positions (n, 3) float32 through the position attribute (the fast path)."""
-    buffer = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
-    mesh.attributes["position"].data.foreach_get("vector", buffer)
+def read_positions(data):
+    """Positions (n, 3) float32 through the position attribute (the fast path) of a mesh or point cloud."""
+    attribute = data.attributes["position"]
+    buffer = np.empty(len(attribute.data) * 3, dtype=np.float32)
+    attribute.data.foreach_get("vector", buffer)
     return buffer.reshape(-1, 3)
 
 
-def write_positions(mesh, positions):
-    mesh.attributes["position"].data.foreach_set("vector", np.ascontiguousarray(positions, np.float32).ravel())
-    mesh.update()
+def write_positions(data, positions):
+    """Write positions of a mesh (then recomputes what depends on them) or a point cloud (then tagged)."""
+    data.attributes["position"].data.foreach_set("vector", np.ascontiguousarray(positions, np.float32).ravel())
+    if hasattr(data, "polygons"):
+        data.update()
+    else:
+        data.update_tag()
 
 
 def read_edges(mesh):

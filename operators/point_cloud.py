@@ -23,17 +23,6 @@ class CloudError(Exception):
     """A message for the user; nothing has been written."""
 
 
-def _read_pointcloud_positions(cloud):
-    buffer = np.empty(len(cloud.points) * 3, dtype=np.float32)
-    cloud.attributes["position"].data.foreach_get("vector", buffer)
-    return buffer.reshape(-1, 3)
-
-
-def _write_pointcloud_positions(cloud, positions):
-    cloud.attributes["position"].data.foreach_set("vector", np.ascontiguousarray(positions, np.float32).ravel())
-    cloud.update_tag()
-
-
 def _attribute_mask(data, name, count):
     """Point-domain boolean/float/int attribute as a mask (value != 0), or None if there is none."""
     attribute = data.attributes.get(name)
@@ -74,7 +63,7 @@ class Cloud:
             else:
                 positions = mesh_io.read_positions(mesh)
         else:
-            positions = _read_pointcloud_positions(obj.data)
+            positions = mesh_io.read_positions(obj.data)
         bad = np.flatnonzero(~np.isfinite(positions).all(axis=1))
         if bad.size:
             raise CloudError(f"'{obj.data.name}' has {bad.size} points with NaN or infinite coordinates "
@@ -102,7 +91,7 @@ class Cloud:
 
     def write(self):
         if self.obj.type == "POINTCLOUD":
-            _write_pointcloud_positions(self.data, self.result)
+            mesh_io.write_positions(self.data, self.result)
         elif self.key_block is not None:
             mesh_io.write_shape_key(self.key_block, self.result)
             if self.key_block != self.data.shape_keys.reference_key:
