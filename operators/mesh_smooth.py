@@ -12,6 +12,7 @@ from .. import core
 from . import jobs as jobs_module
 from . import mesh_io
 from .jobs import JobError
+from .modal_progress import ModalProgress
 
 METHOD_ITEMS = [
     ("HC", "HC", "Laplacian steps pushed back towards the previous and original points: removes noise "
@@ -87,7 +88,7 @@ class SmoothProperties:
             layout.label(text="Outside the convergence region (Alpha > 0, Beta > 0.5)", icon="ERROR")
 
 
-class _SmoothOperator(SmoothProperties):
+class _SmoothOperator(SmoothProperties, ModalProgress):
     """What the two operators share: prepare jobs, run (synchronously or modal), write, report."""
 
     bl_options = {"REGISTER", "UNDO"}
@@ -136,12 +137,7 @@ class _SmoothOperator(SmoothProperties):
         if work < MODAL_WORK:
             return self._finish_now(context)
         chunk = max(1, int(MODAL_WORK // max(1, work // max(1, self.iterations))))
-        self._runner = jobs_module.run(self._jobs, self, chunk=chunk)
-        window_manager = context.window_manager
-        self._timer = window_manager.event_timer_add(0.01, window=context.window)
-        window_manager.progress_begin(0, 100)
-        window_manager.modal_handler_add(self)
-        return {"RUNNING_MODAL"}
+        return self.start_modal(context, jobs_module.run(self._jobs, self, chunk=chunk))
 
     def _finish_now(self, context):
         try:
@@ -151,41 +147,15 @@ class _SmoothOperator(SmoothProperties):
             self.abandon(context)
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
+        return self.modal_finish(context)
+
+    def modal_finish(self, context):
         self.finish(context, self._jobs)
         self._report_done(self._jobs)
         return {"FINISHED"}
 
-    def _end_modal(self, context):
-        window_manager = context.window_manager
-        window_manager.event_timer_remove(self._timer)
-        window_manager.progress_end()
-        if context.workspace is not None:
-            context.workspace.status_text_set(None)
-
-    def modal(self, context, event):
-        if event.type == "ESC":
-            self._end_modal(context)
-            self.abandon(context)
-            self.report({"WARNING"}, "HC Smooth cancelled: nothing was changed")
-            return {"CANCELLED"}
-        if event.type != "TIMER":
-            return {"RUNNING_MODAL"}
-        try:
-            fraction = next(self._runner)
-        except StopIteration:
-            self._end_modal(context)
-            self.finish(context, self._jobs)
-            self._report_done(self._jobs)
-            return {"FINISHED"}
-        except ValueError as error:
-            self._end_modal(context)
-            self.abandon(context)
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        context.window_manager.progress_update(int(fraction * 100))
-        if context.workspace is not None:
-            context.workspace.status_text_set(f"HC Smooth: {fraction:.0%} — Esc to cancel")
-        return {"RUNNING_MODAL"}
+    def modal_abandon(self, context):
+        self.abandon(context)
 
 
 class OBJECT_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):

@@ -15,6 +15,7 @@ from bpy.props import BoolProperty, FloatProperty, IntProperty, StringProperty
 from .. import core
 from ..core.pointcloud import PointCloudSmoother
 from . import mesh_io
+from .modal_progress import ModalProgress
 
 POINT_TYPES = ("MESH", "POINTCLOUD")
 
@@ -122,12 +123,13 @@ class Cloud:
         return obj
 
 
-class OBJECT_OT_hc_smooth_points(bpy.types.Operator):
+class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
     """Smooth point clouds (meshes of loose vertices, point cloud objects) without shrinking them: HC steps on a temporary RFS mesh, alternating with edge swapping"""
 
     bl_idname = "object.hc_smooth_points"
     bl_label = "HC Smooth Points"
     bl_options = {"REGISTER", "UNDO"}
+    progress_label = "HC Smooth Points"
 
     alpha: FloatProperty(name="Alpha", default=0.1, min=0.0, max=1.0,
                          description="Pull towards the original positions")
@@ -243,39 +245,10 @@ class OBJECT_OT_hc_smooth_points(bpy.types.Operator):
         except (CloudError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        self._steps = self._runner(self._clouds_pending)
-        window_manager = context.window_manager
-        self._timer = window_manager.event_timer_add(0.01, window=context.window)
-        window_manager.progress_begin(0, 100)
-        window_manager.modal_handler_add(self)
-        return {"RUNNING_MODAL"}
+        return self.start_modal(context, self._runner(self._clouds_pending))
 
-    def _end_modal(self, context):
-        context.window_manager.event_timer_remove(self._timer)
-        context.window_manager.progress_end()
-        if context.workspace is not None:
-            context.workspace.status_text_set(None)
-
-    def modal(self, context, event):
-        if event.type == "ESC":
-            self._end_modal(context)
-            self.report({"WARNING"}, "HC Smooth Points cancelled: nothing was changed")
-            return {"CANCELLED"}
-        if event.type != "TIMER":
-            return {"RUNNING_MODAL"}
-        try:
-            fraction = next(self._steps)
-        except StopIteration:
-            self._end_modal(context)
-            return self._finish(context, self._clouds_pending)
-        except ValueError as error:
-            self._end_modal(context)
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        context.window_manager.progress_update(int(fraction * 100))
-        if context.workspace is not None:
-            context.workspace.status_text_set(f"HC Smooth Points: {fraction:.0%} — Esc to cancel")
-        return {"RUNNING_MODAL"}
+    def modal_finish(self, context):
+        return self._finish(context, self._clouds_pending)
 
     def _summary(self, clouds):
         points = sum(len(c.positions) for c in clouds)

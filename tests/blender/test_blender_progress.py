@@ -48,3 +48,92 @@ def test_leaving_between_chunks_writes_nothing(scene):
     runner.close()  # Esc: the modal handler stops stepping and never calls finish()
     assert np.array_equal(positions_of(obj.data).view(np.uint32), before.view(np.uint32))
     assert obj.data.shape_keys is None
+
+
+class FakeWindowManager:
+    def __init__(self):
+        self.calls = []
+
+    def event_timer_add(self, step, window=None):
+        self.calls.append("timer_add")
+        return "timer"
+
+    def event_timer_remove(self, timer):
+        self.calls.append("timer_remove")
+
+    def progress_begin(self, low, high):
+        self.calls.append("begin")
+
+    def progress_update(self, value):
+        self.calls.append(value)
+
+    def progress_end(self):
+        self.calls.append("end")
+
+    def modal_handler_add(self, operator):
+        self.calls.append("handler")
+
+
+def modal_operator():
+    """A ModalProgress user with Blender's window manager, workspace and report() stood in for."""
+    base = importlib.import_module(f"{ADDON}.operators.modal_progress").ModalProgress
+
+    class Operator(base):
+        def __init__(self):
+            self.reports, self.finished, self.abandoned = [], False, False
+
+        def report(self, level, message):
+            self.reports.append((set(level), message))
+
+        def modal_finish(self, context):
+            self.finished = True
+            return {"FINISHED"}
+
+        def modal_abandon(self, context):
+            self.abandoned = True
+
+    statuses = []
+    context = SimpleNamespace(window=None, window_manager=FakeWindowManager(),
+                              workspace=SimpleNamespace(status_text_set=statuses.append))
+    return Operator(), context, statuses
+
+
+def work(fractions, fail_at=None):
+    for index, fraction in enumerate(fractions):
+        if index == fail_at:
+            raise ValueError("bad settings")
+        yield fraction
+
+
+TIMER, ESC, MOUSE = (SimpleNamespace(type=kind) for kind in ("TIMER", "ESC", "MOUSEMOVE"))
+
+
+def test_modal_steps_show_progress_then_finish():
+    operator, context, statuses = modal_operator()
+    assert operator.start_modal(context, work([0.25, 0.5, 1.0])) == {"RUNNING_MODAL"}
+    assert operator.modal(context, MOUSE) == {"RUNNING_MODAL"}  # other events pass through
+    assert [operator.modal(context, TIMER) for _ in range(3)] == [{"RUNNING_MODAL"}] * 3
+    assert not operator.finished
+    assert operator.modal(context, TIMER) == {"FINISHED"} and operator.finished
+    assert context.window_manager.calls == ["timer_add", "begin", "handler", 25, 50, 100, "timer_remove", "end"]
+    assert statuses[:3] == ["HC Smooth: 25% — Esc to cancel", "HC Smooth: 50% — Esc to cancel",
+                            "HC Smooth: 100% — Esc to cancel"] and statuses[-1] is None
+
+
+def test_modal_escape_abandons_without_finishing():
+    operator, context, statuses = modal_operator()
+    operator.start_modal(context, work([0.5, 1.0]))
+    operator.modal(context, TIMER)
+    assert operator.modal(context, ESC) == {"CANCELLED"}
+    assert operator.abandoned and not operator.finished
+    assert operator.reports == [({"WARNING"}, "HC Smooth cancelled: nothing was changed")]
+    assert context.window_manager.calls[-2:] == ["timer_remove", "end"] and statuses[-1] is None
+
+
+def test_modal_error_is_reported_and_abandons():
+    operator, context, _ = modal_operator()
+    operator.start_modal(context, work([0.5, 1.0], fail_at=1))
+    operator.modal(context, TIMER)
+    assert operator.modal(context, TIMER) == {"CANCELLED"}
+    assert operator.abandoned and not operator.finished
+    assert operator.reports == [({"ERROR"}, "bad settings")]
