@@ -1,6 +1,6 @@
 """The uniform umbrella operator T of paper section 5: row i averages the positions of adj(i).
 
-Built once per mesh (one sort of the edge keys, then counting placement into CSR: no COO summation)
+Built once per mesh (counting placement into CSR, duplicates merged within each short row)
 and reused across iterations, runs and dtypes. Only the sparsity pattern is stored; the weights
 1/|adj(i)| are laid over it per dtype.
 """
@@ -21,16 +21,32 @@ def _exclusive_cumsum(counts, dtype):
 
 @dataclass(eq=False)
 class Umbrella:
-    """The pattern of adj() twice: in full (row i: all neighbours, increasing) and as the upper
-    triangle (row i: neighbours j > i), i.e. each edge once, which the sequential smoothers use."""
+    """The pattern of adj(): row i lists all neighbours of i, increasing. The upper triangle (row i:
+    neighbours j > i, i.e. each edge once), which only the sequential smoothers need, is derived on
+    first use."""
 
     n_vertices: int
     degree: np.ndarray  # |adj(i)|
     indptr: np.ndarray
     indices: np.ndarray
-    upper_indptr: np.ndarray
-    upper_indices: np.ndarray
     _matrices: dict = field(default_factory=dict, repr=False)
+    _upper: tuple = field(default=None, repr=False)
+
+    @property
+    def upper_indptr(self):
+        return self._upper_pattern()[0]
+
+    @property
+    def upper_indices(self):
+        return self._upper_pattern()[1]
+
+    def _upper_pattern(self):
+        if self._upper is None:
+            row = np.repeat(np.arange(self.n_vertices, dtype=self.indices.dtype), self.degree)
+            upper = self.indices > row
+            counts = np.bincount(row[upper], minlength=self.n_vertices).astype(self.indptr.dtype)
+            self._upper = (_exclusive_cumsum(counts, self.indptr.dtype), self.indices[upper])
+        return self._upper
 
     @property
     def isolated(self):
@@ -46,6 +62,10 @@ class Umbrella:
         nonzero = self.degree > 0
         inverse[nonzero] = 1.0 / self.degree[nonzero]
         return inverse
+
+    def weights(self, dtype=np.float64, scale=1.0):
+        """The values of ``scale`` T over the stored pattern (``indptr``, ``indices``): scale/|adj(i)|."""
+        return np.repeat(self._row_weights(np.dtype(dtype)) * np.dtype(dtype).type(scale), self.degree)
 
     def matrix(self, dtype=np.float64):
         """T as CSR: t_ij = 1/|adj(i)| for every edge {i, j}; rows of isolated vertices are empty.
@@ -88,27 +108,16 @@ def umbrella_operator(edges, n_vertices):
     edges = check_edges(edges, n)
     index = np.int32 if n < np.iinfo(np.int32).max // 2 else np.int64
 
-    # One key per undirected edge, low * n + high, sorted and deduplicated.
-    low = np.minimum(edges[:, 0], edges[:, 1]).astype(np.int64)
-    high = np.maximum(edges[:, 0], edges[:, 1]).astype(np.int64)
-    keys = (low * n + high)[low != high]
-    del low, high
-    keys.sort()  # sort + mask: np.unique hashes first in NumPy 2.x, many times slower here
-    keys = keys[np.concatenate(([True], keys[1:] != keys[:-1]))] if keys.size else keys
-    low = (keys // max(n, 1)).astype(index)
-    high = (keys - low.astype(np.int64) * n).astype(index)
-    del keys
-
-    # CSR by SciPy's counting placement (coo -> csr, O(nnz), no sort): lower neighbours (high == i)
-    # listed before upper ones (low == i), each group increasing because the keys are sorted, so every
-    # row comes out sorted and without duplicates.
-    rows = np.concatenate((high, low))
-    columns = np.concatenate((low, high))
+    # Both directions of every edge, self-loops dropped; SciPy's coo -> csr places them by counting
+    # (O(nnz), no global sort) and merges duplicates, leaving each row sorted and unique.
+    rows = np.concatenate((edges[:, 0], edges[:, 1])).astype(index, copy=False)
+    columns = np.concatenate((edges[:, 1], edges[:, 0])).astype(index, copy=False)
+    loops = rows == columns
+    if loops.any():
+        rows, columns = rows[~loops], columns[~loops]
     pattern = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, columns)), shape=(n, n)).tocsr()
     del rows, columns
+    pattern.sum_duplicates()  # a no-op when tocsr already did it (SciPy version dependent)
     indptr = pattern.indptr.astype(index, copy=False)
     indices = pattern.indices.astype(index, copy=False)
-    degree = np.diff(indptr)
-    upper_counts = np.bincount(low, minlength=n).astype(index)
-    return Umbrella(n_vertices=n, degree=degree, indptr=indptr, indices=indices,
-                    upper_indptr=_exclusive_cumsum(upper_counts, index), upper_indices=high)
+    return Umbrella(n_vertices=n, degree=np.diff(indptr), indptr=indptr, indices=indices)

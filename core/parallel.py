@@ -1,9 +1,9 @@
-"""Sparse matrix products spread over CPU cores with threads.
+"""Work on row blocks of a sparse matrix, spread over CPU cores with threads.
 
-SciPy's sparse kernels release the GIL, so plain threads run them in parallel.
-A product is split into row blocks of about equal non-zeros: each output row is computed by exactly
-the same loop as in the one-call product, so the results are bit-identical, whatever the thread
-count. Small problems stay on one thread: below ~1M non-zeros the hand-off costs more than it saves.
+SciPy's sparse kernels and NumPy's element-wise loops release the GIL, so plain threads run them in
+parallel. The rows are split into blocks of about equal non-zeros; every output row is computed by
+exactly the same loop as with one block, so results are bit-identical whatever the thread count.
+Small problems stay on one thread: below ~1M non-zeros the hand-off costs more than it saves.
 
 ``HC_SMOOTH_THREADS`` (environment) caps the threads; 1 turns this off.
 """
@@ -13,13 +13,14 @@ import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+import scipy.sparse as sp
 
-try:  # the kernel behind ``csr_matrix @ dense``; private, so it has a public fallback
+try:  # the kernel behind ``csr_matrix @ dense`` (y += A x); private, so it has a public fallback
     from scipy.sparse._sparsetools import csr_matvecs as _csr_matvecs
-except ImportError:  # pragma: no cover - depends on the SciPy build
+except ImportError:  # SciPy without the private kernel
     _csr_matvecs = None
 
-MIN_WORK = 1_000_000  # non-zeros (times columns) below which one thread is faster
+MIN_WORK = 1_000_000  # non-zeros below which one thread is faster
 _pool = None
 _pool_lock = threading.Lock()
 
@@ -47,9 +48,11 @@ def _run_all(tasks):
         tasks[0]()
         return
     futures = [_executor(len(tasks) - 1).submit(task) for task in tasks[1:]]
-    tasks[0]()
-    for future in futures:
-        future.result()
+    try:
+        tasks[0]()
+    finally:
+        for future in futures:
+            future.result()
 
 
 def _row_blocks(indptr, count):
@@ -60,34 +63,57 @@ def _row_blocks(indptr, count):
     return np.unique(bounds)
 
 
-def product(matrix):
-    """Return ``multiply(x) -> matrix @ x`` for a CSR ``matrix`` and (n,) or (n, k) ``x``, over threads."""
-    rows, columns = matrix.shape
-    workers = thread_count()
-    if workers == 1 or matrix.nnz < MIN_WORK or _csr_matvecs is None:
-        return matrix.__matmul__
-    bounds = _row_blocks(matrix.indptr, workers)
-    blocks = []
-    for start, stop in zip(bounds[:-1], bounds[1:]):
-        first, last = matrix.indptr[start], matrix.indptr[stop]
-        # Views of the matrix arrays (no copy); only the block's indptr is rebased.
-        blocks.append((int(start), int(stop), matrix.indptr[start:stop + 1] - first,
-                       matrix.indices[first:last], matrix.data[first:last]))
+class RowBlocks:
+    """The rows of a CSR sparsity pattern cut into blocks of about equal non-zeros, one per thread.
 
-    def multiply(x):
-        if x.dtype != matrix.dtype:  # the kernel wants one dtype: let SciPy convert
-            return matrix @ x
-        x = np.ascontiguousarray(x)
-        vectors = 1 if x.ndim == 1 else x.shape[1]
-        out = np.zeros((rows,) + x.shape[1:], dtype=x.dtype)
-        flat_x = x.reshape(-1)
+    ``run(task)`` calls ``task(block)`` for every block at once; ``block.rows`` is its slice of rows
+    and ``block.add_product(x, out, data)`` does ``out[block.rows] += A[block.rows] @ x`` for the
+    matrix A with this pattern and the values ``data`` (one per non-zero), so one pattern serves
+    several scalings of a matrix. Tasks write only their own rows, so they never race; a product
+    reads all of ``x``, so a step that needs the product of something computed in the same pass
+    must wait for the next ``run``.
+    """
 
-        def block_task(block):
-            start, stop, indptr, indices, data = block
-            return lambda: _csr_matvecs(stop - start, columns, vectors, indptr, indices, data, flat_x,
-                                        out[start:stop].reshape(-1))
+    def __init__(self, indptr, indices, n_columns, workers=None):
+        workers = thread_count() if workers is None else workers
+        if indptr[-1] < MIN_WORK or _csr_matvecs is None:
+            workers = 1
+        self.n_rows, self.n_columns = indptr.size - 1, n_columns
+        bounds = _row_blocks(indptr, workers) if self.n_rows else np.array([0, 0])
+        self.blocks = [_Block(indptr, indices, n_columns, int(start), int(stop))
+                       for start, stop in zip(bounds[:-1], bounds[1:])]
 
-        _run_all([block_task(block) for block in blocks])
+    @classmethod
+    def of(cls, matrix, workers=None):
+        matrix = sp.csr_matrix(matrix)
+        return cls(matrix.indptr, matrix.indices, matrix.shape[1], workers)
+
+    def run(self, task):
+        _run_all([lambda block=block: task(block) for block in self.blocks])
+
+    def product(self, x, data):
+        """A @ x for (n,) or (n, k) ``x`` of the dtype of ``data``."""
+        x = np.ascontiguousarray(x, dtype=data.dtype)
+        out = np.zeros((self.n_rows,) + x.shape[1:], dtype=data.dtype)
+        self.run(lambda block: block.add_product(x, out, data))
         return out
 
-    return multiply
+
+class _Block:
+    def __init__(self, indptr, indices, n_columns, start, stop):
+        self.rows = slice(start, stop)
+        self._first, self._last = int(indptr[start]), int(indptr[stop])
+        # Views of the pattern (no copy); only the block's indptr is rebased.
+        self._indptr = indptr[start:stop + 1] - self._first
+        self._indices = indices[self._first:self._last]
+        self._shape = (stop - start, n_columns)
+
+    def add_product(self, x, out, data):
+        """out[rows] += A[rows] @ x; x and out C-contiguous, of the dtype of ``data``."""
+        values = data[self._first:self._last]
+        if _csr_matvecs is not None:
+            vectors = 1 if x.ndim == 1 else x.shape[1]
+            _csr_matvecs(self._shape[0], self._shape[1], vectors, self._indptr, self._indices, values,
+                         x.reshape(-1), out[self.rows].reshape(-1))
+        else:  # SciPy without the private kernel
+            out[self.rows] += sp.csr_matrix((values, self._indices, self._indptr), shape=self._shape) @ x

@@ -89,16 +89,17 @@ def smooth(
     step = _Stepper(operator, fixed_mask, origin, method, mode, alpha, beta, start.dtype)
     threshold = tolerance * bbox_diagonal(start)
     current = start.copy()
+    spare = np.empty_like(current)  # the step writes here; the two swap roles every iteration
     done = 0
     stopped_early = False
     if not step.movable.any():
         iterations = 0  # nothing can move: every iteration would return its input
     for done in range(1, iterations + 1):
-        new = step(current)
+        new = step(current, spare)
         if tolerance > 0.0:
             largest_move = np.sqrt(np.max(np.einsum("ij,ij->i", new - current, new - current)))
             stopped_early = largest_move < threshold
-        current = new
+        current, spare = new, current
         if progress is not None and progress(done, iterations) is False:
             raise Cancelled(f"cancelled after {done} of {iterations} iterations")
         if stopped_early:
@@ -160,7 +161,10 @@ def laplacian_smooth(
 
 
 class _Stepper:
-    """One iteration q -> p of the chosen smoother, with everything reusable prepared once."""
+    """One iteration q -> p of the chosen smoother, with everything reusable prepared once.
+
+    ``step(q, out)`` returns the new positions, written into ``out`` where it can; ``q`` is kept.
+    """
 
     def __init__(self, operator, fixed_mask, origin, method, mode, alpha, beta, dtype):
         self.movable = ~fixed_mask
@@ -168,44 +172,97 @@ class _Stepper:
         self.method, self.alpha, self.beta = method, alpha, beta
         # Weight of the neighbour average in the Laplacian pass (HC's pass is the plain one).
         self.neighbour_weight = 1.0 - alpha if method in ("central", "original") else 1.0
+        self.alpha_origin = alpha * origin if method in ("hc", "original") and alpha > 0.0 else None
         if mode == "sequential":
             self.sequential = _GaussSeidel(operator, self.movable, self.neighbour_weight, dtype)
             self.neighbour_mean = self.sequential.neighbour_mean  # spares memory: T itself is not built
+            return
+        self.sequential = None
+        self.blocks = parallel.RowBlocks(operator.indptr, operator.indices, operator.n_vertices)
+        # Each block resets its own fixed rows.
+        edges = np.searchsorted(self.fixed_index, [block.rows.start for block in self.blocks.blocks]
+                                + [operator.n_vertices])
+        self.block_fixed = {id(block): self.fixed_index[edges[k]:edges[k + 1]]
+                            for k, block in enumerate(self.blocks.blocks)}
+        # The products' values, with the step's constant factors folded in (they cost nothing there).
+        if method == "hc":
+            keep = 1.0 - beta
+            self.scaled_mean = operator.weights(dtype, keep)  # (1-β) T
+            self.negative_mean = operator.weights(dtype, -1.0)  # -T
         else:
-            self.sequential = None
-            self.neighbour_mean = parallel.product(operator.matrix(dtype))
-        if method in ("hc", "original") and alpha > 0.0:
-            self.alpha_origin = alpha * origin  # α o, constant over the run
+            self.scaled_mean = operator.weights(dtype, self.neighbour_weight)  # w T
+        self.scratch = None  # b of HC, allocated on the first step
 
-    def laplacian(self, q):
-        """The Laplacian pass: p_i = a s_i + (1-a)/|adj(i)| Σ_j (p_j if sequential and j < i else q_j)."""
-        w = self.neighbour_weight
+    def __call__(self, q, out):
+        if self.sequential is not None:
+            return self._sequential_step(q)
+        if self.method == "hc":
+            self._hc_step(q, out)
+        else:
+            self._laplacian_step(q, out)
+        return out
+
+    def _laplacian_step(self, q, p):
+        """p_i = a s_i + w/|adj(i)| Σ_j q_j on movable rows, with a s_i = α q_i (central), α o_i (original)."""
+
+        def block_step(block):
+            rows, fixed = block.rows, self.block_fixed[id(block)]
+            if self.method == "central":
+                np.multiply(q[rows], self.alpha, out=p[rows])
+            elif self.alpha_origin is not None:
+                p[rows] = self.alpha_origin[rows]
+            else:
+                p[rows] = 0.0
+            block.add_product(q, p, self.scaled_mean)
+            p[fixed] = q[fixed]
+
+        self.blocks.run(block_step)
+
+    def _hc_step(self, q, p):
+        """Algorithm 1, rearranged so that every pass runs on row blocks and the products accumulate
+        in place with their constant factors folded into the matrix values.
+
+        With s = α o + (1-α) q the paper's b = T q - s and p = T q - (β b + (1-β) T b); substituting
+        T q = b + s gives p = s + d - T d for d = (1-β) b. d is zero on fixed vertices (they are not
+        in V_var) and p = q there.
+        """
+        if self.scratch is None:
+            self.scratch = np.empty_like(q)
+        d = self.scratch
+        keep = 1.0 - self.beta
+
+        def differences(block):  # p = s, then d = -(1-β) s + (1-β) T q
+            rows, fixed = block.rows, self.block_fixed[id(block)]
+            s = np.multiply(q[rows], 1.0 - self.alpha, out=p[rows])
+            if self.alpha_origin is not None:
+                s += self.alpha_origin[rows]
+            np.multiply(s, -keep, out=d[rows])
+            block.add_product(q, d, self.scaled_mean)
+            d[fixed] = 0.0
+
+        def corrected(block):  # p = s + d - T d
+            rows, fixed = block.rows, self.block_fixed[id(block)]
+            p[rows] += d[rows]
+            block.add_product(d, p, self.negative_mean)
+            p[fixed] = q[fixed]
+
+        self.blocks.run(differences)
+        self.blocks.run(corrected)
+
+    def _sequential_step(self, q):
+        """Gauss–Seidel Laplacian pass, then (HC) the correction with b built from the new points."""
         anchor = None  # a s_i: α q_i (central) or α o_i (original)
         if self.method == "central" and self.alpha > 0.0:
             anchor = self.alpha * q
-        elif self.method == "original" and self.alpha > 0.0:
+        elif self.method == "original":
             anchor = self.alpha_origin
-        if self.sequential is not None:
-            return self.sequential.solve(q, anchor)  # fixed rows of the system read p_i = q_i exactly
-        p = self.neighbour_mean(q)
-        if w != 1.0:
-            p *= w
-        if anchor is not None:
-            p += anchor
-        if self.method != "hc":  # HC zeroes b on fixed rows and resets them at the end of its step
-            p[self.fixed_index] = q[self.fixed_index]
-        return p
-
-    def __call__(self, q):
-        p = self.laplacian(q)
+        p = self.sequential.solve(q, anchor)  # fixed rows of the system read p_i = q_i exactly
         if self.method != "hc":
             return p
         # b_i = p_i - (α o_i + (1-α) q_i); zero on fixed vertices, which are not in V_var.
-        # In-place steps: on a million vertices each pass over the arrays costs a third of a sparse
-        # product. (BLAS axpy would save passes, but OpenBLAS threads it and that measured slower.)
         b = np.multiply(q, 1.0 - self.alpha)
         np.subtract(p, b, out=b)
-        if self.alpha > 0.0:
+        if self.alpha_origin is not None:
             b -= self.alpha_origin
         b[self.fixed_index] = 0.0
         # p_i -= β b_i + (1-β)/|adj(i)| Σ_j b_j
@@ -235,7 +292,8 @@ class _GaussSeidel:
         row_weight[scale] = weight / operator.degree[scale]
         self.upper = sp.csr_matrix(
             (np.repeat(row_weight, counts), operator.upper_indices, operator.upper_indptr), shape=(n, n))
-        self.upper_product = parallel.product(self.upper)
+        upper_blocks = parallel.RowBlocks.of(self.upper)
+        self.upper_product = lambda x: upper_blocks.product(x, self.upper.data)
         # I - w L in CSC: column j is the diagonal 1, then -w t_ij for the neighbours i > j (the upper
         # pattern of row j, since adj is symmetric), already in increasing row order.
         indptr = np.zeros(n + 1, dtype=operator.upper_indptr.dtype)

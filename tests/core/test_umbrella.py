@@ -26,3 +26,14 @@ def test_matches_dense_definition(n, m, seed):
     assert operator.matrix(np.float32).dtype == np.float32
     assert np.array_equal(operator.isolated, degree == 0)
     assert operator.n_edges == int(np.triu(dense).sum())
+
+
+def test_many_duplicates_of_one_edge_count_once():
+    # Duplicates are merged by summing a small counter; 256 copies must neither wrap it to zero nor
+    # drop the edge, and the upper triangle must hold each edge once.
+    edges = np.array([[0, 1]] * 256 + [[1, 2]] * 3 + [[2, 2]] * 5 + [[2, 0]])
+    operator = core.umbrella_operator(edges, 4)
+    np.testing.assert_array_equal(operator.degree, [2, 2, 2, 0])
+    np.testing.assert_array_equal(operator.upper_indptr, [0, 2, 3, 3, 3])
+    np.testing.assert_array_equal(operator.upper_indices, [1, 2, 2])
+    assert operator.n_edges == 3
