@@ -143,7 +143,8 @@ def smooth_objects(objects, plan, outcome):
             pass
     for job in jobs:
         jobs_module.write(job, settings)
-        outcome.changes.append(core.measure_change(job.positions, job.result, faces=job.faces))
+        outcome.changes.append(core.measure_change(job.positions, job.result, faces=job.faces,
+                                                        closed=job.closed))
         outcome.vertices += len(job.positions)
         outcome.iterations = max(outcome.iterations, job.iterations_run)
     if clouds:

@@ -28,7 +28,7 @@ class Job:
     mesh: object
     positions: np.ndarray  # float32 (n, 3): the mesh's, or its active shape key's
     edges: np.ndarray
-    faces: object
+    faces: object  # (offsets, corner_verts) of a closed mesh, else None (not needed)
     fixed: np.ndarray  # bool (n,)
     closed: bool = False  # the faces enclose a volume (consistently oriented, no boundary)
     key_block: object = None  # the active shape key that holds ``positions``, if any
@@ -76,7 +76,9 @@ def make_job(obj, props, extra_fixed=None):
     if bad.size:
         raise JobError(f"Mesh '{mesh.name}' has {bad.size} vertices with NaN or infinite coordinates "
                        f"(first: vertex {int(bad[0])}): fix or delete them first")
-    faces = mesh_io.read_faces(mesh)
+    edges = mesh_io.read_edges(mesh)
+    corner_verts, corner_edges = mesh_io.read_corners(mesh)
+    closed = mesh_io.is_closed(edges, corner_verts, corner_edges)
     fixed = np.zeros(n, dtype=bool) if extra_fixed is None else extra_fixed.copy()
     if props.vertex_group:
         group = obj.vertex_groups.get(props.vertex_group)
@@ -85,10 +87,10 @@ def make_job(obj, props, extra_fixed=None):
         members = mesh_io.vertex_group_members(obj, group.index)
         fixed |= ~members if props.invert_vertex_group else members
     if props.pin_boundary:
-        fixed |= mesh_io.boundary_vertices(n, faces)
-    edges = mesh_io.read_edges(mesh)
+        fixed |= mesh_io.boundary_vertices(n, edges, corner_edges)
+    faces = mesh_io.read_faces(mesh, corner_verts) if closed else None  # whole faces: only for the volume
     return Job(obj=obj, mesh=mesh, positions=positions, edges=edges, faces=faces, fixed=fixed,
-               closed=mesh_io.is_closed(mesh, edges, faces), key_block=key_block)
+               closed=closed, key_block=key_block)
 
 
 def run(jobs, props, chunk=None, should_stop=None):
