@@ -3,19 +3,65 @@
 import numpy as np
 
 from .sdg import unique_sorted
+from .threads import run_blocks
 
 SQRT3 = np.sqrt(3.0)
 
 
+def _normals_block(points, faces):
+    """Unit normals (3, f) of faces (p0, p1, p2) by (p1 - p0) x (p2 - p0), and twice their areas."""
+    p = [tuple(points[faces[:, k], j] for j in range(3)) for k in range(3)]
+    e1 = [p[1][j] - p[0][j] for j in range(3)]
+    e2 = [p[2][j] - p[0][j] for j in range(3)]
+    normal = np.stack([e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]])
+    double_area = np.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        normal /= double_area  # NaN for a degenerate face
+    return normal, double_area, e1, e2
+
+
+def face_normals(points, faces):
+    """Unit normals of the faces as a (3, f) array (one contiguous row per component); NaN for a
+    degenerate face. The normal follows the face's vertex order (right-hand rule)."""
+    out = np.empty((3, faces.shape[0]))
+
+    def block(lo, hi):
+        out[:, lo:hi] = _normals_block(points, faces[lo:hi])[0]
+
+    run_blocks(block, faces.shape[0])
+    return out
+
+
+def _face_quality_block(points, faces):
+    _, double_area, e1, e2 = _normals_block(points, faces)
+    e3 = [e2[j] - e1[j] for j in range(3)]
+    squares = sum(x[j] * x[j] for x in (e1, e2, e3) for j in range(3))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        quality = 2.0 * SQRT3 * double_area / squares
+    return np.nan_to_num(quality, nan=0.0)
+
+
 def face_quality(points, faces):
     """Bank & Smith quality q = 4*sqrt(3)*A / (l1^2 + l2^2 + l3^2): 1 for equilateral, 0 degenerate."""
-    a, b, c = points[faces[:, 0]], points[faces[:, 1]], points[faces[:, 2]]
-    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    squares = (np.einsum("ij,ij->i", b - a, b - a) + np.einsum("ij,ij->i", c - b, c - b)
-               + np.einsum("ij,ij->i", a - c, a - c))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        quality = 4.0 * SQRT3 * area / squares
-    return np.nan_to_num(quality, nan=0.0)
+    parts = run_blocks(lambda lo, hi: _face_quality_block(points, faces[lo:hi]), faces.shape[0])
+    return np.concatenate(parts) if len(parts) > 1 else parts[0]
+
+
+def incidence_cos(normals, faces, x, y):
+    """cos of the dihedral angle between the faces of incidences x and y of one edge (incidence
+    3*f + j: the edge of face f opposite its slot j), from the faces' unit normals (3, f).
+
+    The vector from the edge into face f, perpendicular to the edge, is s * (n_f x e) for the
+    edge's direction e, with s = +1 when the face runs along the edge in direction e (its slot
+    j+1 holds the edge's start); n_f and n_g are perpendicular to e, so the two vectors' dot is
+    s_f s_g (n_f . n_g): +1 when both faces run along the edge the same way. Two faces of a
+    consistently oriented flat mesh run opposite ways: cos -1, the angle pi.
+    """
+    fx, fy = x // 3, y // 3
+    flat = faces.reshape(-1)
+    same = flat[3 * fx + (x + 1) % 3] == flat[3 * fy + (y + 1) % 3]
+    dot = normals[0][fx] * normals[0][fy] + normals[1][fx] * normals[1][fy] + normals[2][fx] * normals[2][fy]
+    return np.where(same, dot, -dot)
 
 
 def _dot(x, y):

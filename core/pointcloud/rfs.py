@@ -18,7 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..adjacency import umbrella_operator
-from .geometry import Incidence, face_quality, unique_faces
+from .geometry import Incidence, face_normals, face_quality, unique_faces
+from .threads import run_blocks
 
 _CHUNK = 1 << 18
 
@@ -29,80 +30,119 @@ class RFSMesh:
     edges: np.ndarray  # (e, 2) the edges of the faces, each once
 
 
-def tangent_frames(points, indptr, indices):
-    """Per vertex an orthonormal (t1, t2, normal) from the PCA of the vertex and its neighbours."""
-    n = points.shape[0]
-    degree = np.diff(indptr)
-    row = np.repeat(np.arange(n), degree)
-    offset = points[indices] - points[row]  # local differences: no cancellation far from the origin
-    total = np.stack([np.bincount(row, offset[:, j], minlength=n) for j in range(3)], axis=1)
+def _normals_from_offsets(offset, row, degree):
+    """Per vertex the unit normal of the PCA plane of the vertex and its neighbours (the
+    eigenvector of the smallest eigenvalue of their covariance), given the neighbours' offsets
+    from their vertex as three component arrays (local differences: no cancellation far from the
+    origin) and each offset's vertex ``row``."""
+    n = degree.size
+    total = [np.bincount(row, offset[j], minlength=n) for j in range(3)]
     cov = np.empty((n, 3, 3))
     for i in range(3):
         for j in range(i, 3):
-            cov[:, i, j] = cov[:, j, i] = np.bincount(row, offset[:, i] * offset[:, j], minlength=n)
-    # Centre on the mean of the vertex and its neighbours (the vertex is the origin here).
-    cov -= total[:, :, None] * total[:, None, :] / (degree + 1.0)[:, None, None]
-    frames = np.empty((n, 3, 3))
+            # Centre on the mean of the vertex and its neighbours (the vertex is the origin here).
+            cov[:, i, j] = cov[:, j, i] = (np.bincount(row, offset[i] * offset[j], minlength=n)
+                                           - total[i] * total[j] / (degree + 1.0))
+    normal = np.empty((n, 3))
     for start in range(0, n, _CHUNK):
         block = slice(start, min(start + _CHUNK, n))
-        _, vectors = np.linalg.eigh(cov[block])  # ascending eigenvalues: normal first
-        frames[block, 2] = vectors[:, :, 0]
-        frames[block, 0] = vectors[:, :, 2]
-        frames[block, 1] = np.cross(vectors[:, :, 0], vectors[:, :, 2])
-    return frames
+        normal[block] = np.linalg.eigh(cov[block])[1][:, :, 0]  # ascending eigenvalues: normal first
+    return normal
+
+
+def tangent_frames(points, indptr, indices):
+    """Per vertex an orthonormal (t1, t2, normal): the normal of the PCA plane of the vertex and its
+    neighbours, t1 and t2 any orthonormal pair across it (the angular order of the neighbours
+    around the normal does not depend on which)."""
+    degree = np.diff(indptr)
+    row = np.repeat(np.arange(degree.size), degree)
+    offset = [points[indices, j] - points[row, j] for j in range(3)]
+    normal = _normals_from_offsets(offset, row, degree)
+    # t1: the normal crossed with the coordinate axis it is least aligned with.
+    axis = np.argmin(np.abs(normal), axis=1)
+    t1 = np.cross(normal, np.eye(3)[axis])
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    return np.stack([t1, np.cross(normal, t1), normal], axis=1)
+
+
+def _corona_block(points, indptr, indices, first, last, max_gap):
+    """corona_faces for the vertices first..last-1 (their rows of the adjacency)."""
+    degree = np.diff(indptr[first:last + 1])
+    neighbours = indices[indptr[first]:indptr[last]]
+    row = np.repeat(np.arange(degree.size), degree)  # local vertex number
+    columns = [points[:, j] for j in range(3)]
+    here = [x[first:last] for x in columns]
+    offset = [x[neighbours] - h[row] for x, h in zip(columns, here)]  # 1-D gathers: faster than rows
+    frames = tangent_frames_from_normals(_normals_from_offsets(offset, row, degree))
+    along = [sum(offset[j] * frames[k][j][row] for j in range(3)) for k in (0, 1)]
+    angle = np.arctan2(along[1], along[0])  # (-pi, pi]
+    # Row-major then angle: rows are already contiguous, so one sort of row + fraction does it.
+    order = np.argsort(row + (angle + np.pi) / (2 * np.pi + 1e-9), kind="stable")
+    neighbour, angle = neighbours[order], angle[order]
+    # Each neighbour's successor in its row's angular order; the last one's is the row's first.
+    nxt = np.arange(1, neighbours.size + 1)
+    ends = np.cumsum(degree)
+    has = degree > 0
+    nxt[ends[has] - 1] = ends[has] - degree[has]
+    gap = np.mod(angle[nxt] - angle, 2 * np.pi)
+    gap[degree[row] < 2] = 2 * np.pi  # a single neighbour makes no face
+    ok = np.flatnonzero(gap < max_gap)
+    out = np.empty((ok.size, 3), dtype=np.int64)
+    out[:, 0] = row[ok] + first
+    out[:, 1] = neighbour[ok]
+    out[:, 2] = neighbour[nxt[ok]]
+    return out
+
+
+def tangent_frames_from_normals(normal):
+    """(t1, t2) as (2, 3, n) component arrays: an orthonormal pair across each unit normal."""
+    axis = np.argmin(np.abs(normal), axis=1)
+    t1 = np.cross(normal, np.eye(3)[axis])
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(normal, t1)
+    return np.ascontiguousarray(np.stack([t1.T, t2.T]))
 
 
 def corona_faces(points, edges, max_gap=np.pi):
-    """Candidate faces of every vertex's corona (may repeat across coronas)."""
+    """Candidate faces of every vertex's corona (may repeat across coronas). Each vertex's corona
+    is its own business, so blocks of vertices run in parallel threads."""
     n = points.shape[0]
     umbrella = umbrella_operator(edges, n)
     indptr = umbrella.indptr.astype(np.int64)
     indices = umbrella.indices.astype(np.int64)
-    degree = np.diff(indptr)
-    frames = tangent_frames(points, indptr, indices)
-    row = np.repeat(np.arange(n), degree)
-    offset = points[indices] - points[row]
-    angle = np.arctan2(np.einsum("ij,ij->i", offset, frames[row, 1]),
-                       np.einsum("ij,ij->i", offset, frames[row, 0]))  # (-pi, pi]
-    # Row-major then angle: rows are already contiguous, so one sort of row + fraction does it.
-    order = np.argsort(row + (angle + np.pi) / (2 * np.pi + 1e-9), kind="stable")
-    neighbour, angle = indices[order], angle[order]
-    position = np.arange(indices.size)
-    start = indptr[row]
-    nxt = start + (position - start + 1) % np.maximum(degree[row], 1)
-    gap = np.mod(angle[nxt] - angle, 2 * np.pi)
-    gap[nxt == position] = 2 * np.pi  # a single neighbour makes no face
-    ok = (degree[row] >= 2) & (gap < max_gap)
-    return np.stack([row[ok], neighbour[ok], neighbour[nxt[ok]]], axis=1)
+    parts = run_blocks(lambda first, last: _corona_block(points, indptr, indices, first, last, max_gap),
+                       n, share=0.2)
+    return np.concatenate(parts) if len(parts) > 1 else parts[0]
 
 
-def _best_pairs(points, inc, edges, order, start, count):
+def _best_pairs(normals, inc, edges, order, start, count):
     """For each edge in ``edges`` (with its live incidences ``order[start:start + count]``): the
     two incidences of the pair with the largest dihedral angle, and that angle's cos. Edges are
-    handled in buckets of equal face count, so the all-pairs arrays have no padding."""
+    handled in buckets of equal face count, so the all-pairs arrays have no padding.
+
+    The cos comes from the faces' normals (see ``incidence_cos``): each incidence contributes its
+    face's normal, signed by the direction in which the face runs along the edge."""
     first = np.empty(edges.size, dtype=np.int64)
     second = np.empty(edges.size, dtype=np.int64)
     best_cos = np.empty(edges.size)
-    for width in np.unique(count[edges]):
-        rows = np.flatnonzero(count[edges] == width)
+    widths = count[edges]
+    flat = inc.faces.reshape(-1)
+    for width in np.unique(widths):
+        rows = np.flatnonzero(widths == width)
         edge = edges[rows]
-        incidence = order[start[edge][:, None] + np.arange(width)[None, :]]
-        # Unit vectors from the edge towards each face's third vertex, perpendicular to the edge:
-        # the dihedral angle of two faces is the angle between their vectors.
-        u, v = inc.edges[edge, 0], inc.edges[edge, 1]
-        axis = points[v] - points[u]
-        axis /= np.linalg.norm(axis, axis=1, keepdims=True)
-        w = points[inc.third[incidence]] - points[u][:, None, :]
-        w -= (w * axis[:, None, :]).sum(axis=2, keepdims=True) * axis[:, None, :]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            w /= np.linalg.norm(w, axis=2, keepdims=True)
-        cos = np.matmul(w, w.transpose(0, 2, 1))
-        cos[:, np.arange(width), np.arange(width)] = np.inf
+        incidence = order[start[edge][:, None] + np.arange(width)[None, :]]  # (rows, width)
+        face = incidence // 3
+        forward = flat[3 * face + (incidence + 1) % 3] == inc.edges[edge, 0][:, None]
+        sign = np.where(forward, 1.0, -1.0)
+        v = [normals[j][face] * sign for j in range(3)]
+        i, j = np.triu_indices(width, 1)
+        cos = v[0][:, i] * v[0][:, j] + v[1][:, i] * v[1][:, j] + v[2][:, i] * v[2][:, j]  # (rows, pairs)
         cos[np.isnan(cos)] = np.inf  # degenerate faces never win
-        flat = np.argmin(cos.reshape(rows.size, -1), axis=1)
-        best_cos[rows] = cos.reshape(rows.size, -1)[np.arange(rows.size), flat]
-        first[rows] = incidence[np.arange(rows.size), flat // width]
-        second[rows] = incidence[np.arange(rows.size), flat % width]
+        pick = np.argmin(cos, axis=1)
+        at = np.arange(rows.size)
+        best_cos[rows] = cos[at, pick]
+        first[rows] = incidence[at, i[pick]]
+        second[rows] = incidence[at, j[pick]]
     return first, second, best_cos
 
 
@@ -120,7 +160,7 @@ def _priority(best_cos, edge, n_edges):
     return (level << _EDGE_BITS) | edge
 
 
-def keep_best_pairs(points, faces):
+def keep_best_pairs(points, faces, normals=None):
     """Delete faces until no edge has more than two: at an overfull edge the pair with the largest
     dihedral angle stays. Returns the boolean mask of faces kept.
 
@@ -129,48 +169,58 @@ def keep_best_pairs(points, faces):
     as if they were handled one after another; then the counts are updated. Settling all edges
     at once instead would delete a face that one edge keeps because another edge drops it, and
     lose about half of the faces. An edge's best pair is recomputed only after it lost a face.
+    Each round works only on the incidences of the edges still overfull (kept sorted by edge), so
+    the long tail of rounds with few such edges costs little.
     """
     n_faces = faces.shape[0]
     inc = Incidence(faces, max(points.shape[0], 1))
+    if normals is None:
+        normals = face_normals(points, faces)
     n_edges = inc.edge_count.size
-    edge_sorted = np.repeat(np.arange(n_edges), inc.edge_count)  # edge of each incidence in inc.order
     alive = np.ones(n_faces, dtype=bool)
     known = np.zeros(n_edges, dtype=bool)  # best pair cached and still valid
     first = np.full(n_edges, -1, dtype=np.int64)
     second = np.full(n_edges, -1, dtype=np.int64)
     best_cos = np.zeros(n_edges)
-    order, edge = inc.order, edge_sorted
-    while True:
-        # Only incidences of overfull edges matter, and counts only fall: shrink the work each round.
-        live = alive[order // 3]
-        order, edge = order[live], edge[live]
-        count = np.bincount(edge, minlength=n_edges)
-        count[count <= 2] = 0
-        keep = count[edge] > 0
-        order, edge = order[keep], edge[keep]
-        over = np.flatnonzero(count)
-        if over.size == 0:
-            break
-        start = np.cumsum(count) - count
+    count = np.zeros(n_edges, dtype=np.int64)
+    start = np.zeros(n_edges, dtype=np.int64)
+    top = np.full(n_faces, -1, dtype=np.int64)  # scratch, reset after each use
+    # Incidences of overfull edges, sorted by edge (inc.order is).
+    full = np.repeat(inc.edge_count > 2, inc.edge_count)
+    order = inc.order[full]
+    edge = np.repeat(np.arange(n_edges), inc.edge_count)[full]
+    while order.size:
+        # Runs of equal edge: the live overfull edges and their incidences.
+        run = np.flatnonzero(np.concatenate(([True], edge[1:] != edge[:-1])))
+        run_count = np.diff(np.append(run, edge.size))
+        over = edge[run]
+        if not (run_count > 2).all():  # edges that fell to two faces leave the lists
+            still = np.repeat(run_count > 2, run_count)
+            order, edge = order[still], edge[still]
+            continue
+        count[over] = run_count
+        start[over] = run
         stale = over[~known[over]]
         if stale.size:
-            first[stale], second[stale], best_cos[stale] = _best_pairs(points, inc, stale, order, start, count)
+            parts = run_blocks(lambda lo, hi: _best_pairs(normals, inc, stale[lo:hi], order, start, count),
+                               stale.size, share=0.5)
+            first[stale], second[stale], best_cos[stale] = (np.concatenate(x) for x in zip(*parts))
             known[stale] = True
         # Priority: flatter best pair first, ties by edge number; distinct, so each face has one top edge.
-        priority = np.full(n_edges, -1, dtype=np.int64)
-        priority[over] = _priority(best_cos[over], over, n_edges)
-        member, member_edge = order, edge
-        face = member // 3
-        top = np.full(n_faces, -1, dtype=np.int64)
-        np.maximum.at(top, face, priority[member_edge])
+        priority = np.repeat(_priority(best_cos[over], over, n_edges), run_count)
+        face = order // 3
+        np.maximum.at(top, face, priority)
         # An edge settles when it is the top priority at every one of its faces.
-        blocked = np.zeros(n_edges, dtype=bool)
-        blocked[member_edge[top[face] != priority[member_edge]]] = True
-        losing = ~blocked[member_edge] & (member != first[member_edge]) & (member != second[member_edge])
-        was_alive = alive.copy()
-        alive[face[losing]] = False
-        dead = np.flatnonzero(was_alive != alive)  # a mask, not np.unique: no hashing per round
+        beaten = top[face] != priority
+        top[face] = -1
+        blocked = np.repeat(np.add.reduceat(beaten, run) > 0, run_count)
+        losing = ~blocked & (order != first[edge]) & (order != second[edge])
+        dead = face[losing]  # distinct: a face has one top edge, so it loses at most once per round
+        alive[dead] = False
         known[inc.edge_of[(3 * dead[:, None] + np.arange(3)).ravel()]] = False
+        # Drop the incidences of the dead faces and of the settled edges (now exactly two faces).
+        survive = alive[face] & blocked
+        order, edge = order[survive], edge[survive]
     return alive
 
 
@@ -179,5 +229,5 @@ def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
     n = points.shape[0]
     faces = unique_faces(corona_faces(points, edges, max_gap), max(n, 1))
     faces = faces[face_quality(points, faces) >= min_quality]
-    faces = faces[keep_best_pairs(points, faces)]
+    faces = faces[keep_best_pairs(points, faces, face_normals(points, faces))]
     return RFSMesh(faces, Incidence(faces, max(n, 1)).edges)

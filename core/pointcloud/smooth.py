@@ -17,7 +17,7 @@ from ..validation import check_fixed, check_positions, check_unit_interval
 from .rfs import RFSMesh, rfs_mesh
 from .sdg import surface_description_graph
 from .spanning_tree import NeighbourIndex, boruvka_emst
-from .swap import swap_pass
+from .swap import EdgeSwapper
 
 
 @dataclass
@@ -138,18 +138,22 @@ class PointCloudSmoother:
         mesh = rfs_mesh(current, graph.edges, min_quality=self.min_quality)
         lap("rfs")
         yield "rfs", 0
-        faces = mesh.faces
+        swapper = EdgeSwapper(mesh.faces, m) if self.swap and self.rounds else None
         swaps = []
+        operator = None
         for done in range(1, self.rounds + 1):
-            operator = umbrella_operator(mesh.edges, m)
+            if operator is None:
+                operator = umbrella_operator(mesh.edges, m)
             current = smooth(current, None, method="hc", alpha=self.alpha, beta=self.beta,
                              iterations=self.iterations_per_round, fixed=rows_fixed, original=index.points,
                              operator=operator).positions
             lap("hc")
-            if self.swap:
-                faces, edges, count = swap_pass(current, faces)
+            if swapper is not None:
+                count = swapper.swap_pass(current)
                 swaps.append(count)
-                mesh = RFSMesh(faces, edges)
+                if count:
+                    mesh = RFSMesh(swapper.faces.copy(), swapper.edges)
+                    operator = None  # the neighbourhoods changed
                 lap("swap")
             yield "round", done
 

@@ -13,49 +13,18 @@ One pass swaps a set of pairs at once. Chosen pairs touch pairwise disjoint vert
 share no face, no two create the same edge, and the face beyond each outer edge (which contains
 two vertices of its pair) belongs to no other chosen pair, so every gain was computed on exactly the
 mesh the swap is applied to. The set is picked greedily by gain (a Luby-style independent set).
+
+``EdgeSwapper`` keeps the mesh's connectivity between passes (which incidence lies across each
+edge, the sorted edge keys) and updates it where swaps happened, so a pass only recomputes the
+geometry of the moved points; ``swap_pass`` is one pass on a fresh mesh.
 """
 
 import numpy as np
 
-from .geometry import Incidence, angle_between, dihedral, perpendicular
+from .geometry import Incidence, _dot, face_normals, incidence_cos
+from .threads import run_blocks
 
 _MIN_GAIN = 1e-9  # radians; ignores swaps that only win by rounding
-
-
-def _swap_candidates(points, faces, inc):
-    """Interior edges whose swap is allowed, as (edge, f1, f2, a, b, c, d), and the gain of each."""
-    interior = np.flatnonzero(inc.edge_count == 2)
-    i1 = inc.order[inc.edge_start[interior]]
-    i2 = inc.order[inc.edge_start[interior] + 1]
-    a, b = inc.edges[interior, 0], inc.edges[interior, 1]
-    c, d = inc.third[i1], inc.third[i2]
-    # Per incidence (face, edge) the unit vector from the edge into the face: dihedral angles of
-    # today's mesh are angles between two of these, so the "before" sums need no new geometry.
-    f = inc.faces
-    w = perpendicular(points, f[:, [1, 2, 0]].ravel(), f[:, [2, 0, 1]].ravel(), f.ravel())
-    # For each incidence the incidence on the other side of its edge (-1: none).
-    other = np.full(inc.third.size, -1, dtype=np.int64)
-    other[i1], other[i2] = i2, i1
-
-    usable = ~inc.has_edge(c, d) & (c != d)
-    edge, i1, i2, a, b, c, d = (x[usable] for x in (interior, i1, i2, a, b, c, d))
-    f1, f2 = i1 // 3, i2 // 3
-
-    def outer(face, opposite):
-        # The edge of ``face`` opposite vertex ``opposite`` is incidence 3*face + its slot.
-        slot = np.argmax(faces[face] == opposite[:, None], axis=1)
-        return 3 * face + slot
-
-    before = angle_between(w[i1], w[i2])
-    after = dihedral(points, c, d, a, b)
-    # Outer edges: bc and ac of (a, b, c) get d as their new third vertex, bd and ad of (a, b, d) get c.
-    for incidence, u, v, new in ((outer(f1, a), b, c, d), (outer(f1, b), a, c, d),
-                                 (outer(f2, a), b, d, c), (outer(f2, b), a, d, c)):
-        beyond = other[incidence]
-        has = beyond >= 0  # an outer edge without a face beyond counts the same before and after: skip
-        before[has] += angle_between(w[incidence[has]], w[beyond[has]])
-        after[has] += angle_between(perpendicular(points, u[has], v[has], new[has]), w[beyond[has]])
-    return edge, f1, f2, a, b, c, d, after - before
 
 
 def _independent(vertex_sets, priority, n):
@@ -66,34 +35,136 @@ def _independent(vertex_sets, priority, n):
     return np.all(top[vertex_sets] == priority[:, None], axis=1)
 
 
+class EdgeSwapper:
+    """A triangle mesh (at most two faces per edge) under repeated swap passes.
+
+    Incidence 3*f + j is the edge of face f opposite its slot j; ``other[i]`` is the incidence on
+    the other side of that edge (-1: none); ``keys`` are the sorted edge keys low * n + high.
+    """
+
+    def __init__(self, faces, n):
+        self.n = max(int(n), 1)
+        self.faces = np.array(faces, dtype=np.int64).reshape(-1, 3)
+        inc = Incidence(self.faces, self.n)
+        if inc.edge_count.size and inc.edge_count.max() > 2:
+            raise ValueError("edge swapping needs a mesh with at most two faces per edge")
+        self.other = np.full(3 * self.faces.shape[0], -1, dtype=np.int64)
+        two = np.flatnonzero(inc.edge_count == 2)
+        i1, i2 = inc.order[inc.edge_start[two]], inc.order[inc.edge_start[two] + 1]
+        self.other[i1], self.other[i2] = i2, i1
+        self.keys = inc.keys
+
+    @property
+    def edges(self):
+        return np.stack([self.keys // self.n, self.keys % self.n], axis=1)
+
+    def has_edge(self, u, v):
+        keys = np.minimum(u, v) * self.n + np.maximum(u, v)
+        if self.keys.size == 0:
+            return np.zeros(keys.shape, dtype=bool)
+        at = np.minimum(np.searchsorted(self.keys, keys), self.keys.size - 1)
+        return self.keys[at] == keys
+
+    def candidates(self, points):
+        """Allowed swaps as (i1, i2, a, b, c, d, outer incidences) and the gain of each: i1, i2 the
+        incidences of the shared edge ab in faces (a, b, c) and (a, b, d)."""
+        faces, other = self.faces, self.other
+        i1 = np.flatnonzero(other > np.arange(other.size))  # each interior edge once
+        i2 = other[i1]
+        f1, j1, f2, j2 = i1 // 3, i1 % 3, i2 // 3, i2 % 3
+        a, b, c = faces[f1, (j1 + 1) % 3], faces[f1, (j1 + 2) % 3], faces[f1, j1]
+        d = faces[f2, j2]
+        usable = (c != d) & ~self.has_edge(c, d)
+        i1, i2, f1, j1, f2, j2, a, b, c, d = (x[usable] for x in (i1, i2, f1, j1, f2, j2, a, b, c, d))
+        # Outer incidences: in (a, b, c) bc is opposite a, ac opposite b; likewise in (a, b, d).
+        f1_oa, f1_ob = 3 * f1 + (j1 + 1) % 3, 3 * f1 + (j1 + 2) % 3
+        a_in_f2_next = faces[f2, (j2 + 1) % 3] == a  # slot after d holds a (else b)
+        f2_oa = 3 * f2 + np.where(a_in_f2_next, (j2 + 1) % 3, (j2 + 2) % 3)
+        f2_ob = 3 * f2 + np.where(a_in_f2_next, (j2 + 2) % 3, (j2 + 1) % 3)
+        # Dihedral angles from face normals (see geometry.incidence_cos): today's faces need one
+        # normal each, and every candidate only the normals of its two new faces.
+        normals = face_normals(points, faces)
+        start = faces.reshape(-1)[3 * (np.arange(other.size) // 3) + (np.arange(other.size) + 1) % 3]
+        gain = np.empty(i1.size)
+
+        def evaluate(lo, hi):
+            part = slice(lo, hi)
+            pa, pb, pc, pd = (points[x[part]] for x in (a, b, c, d))
+            # New faces A = (c, d, a) and B = (c, d, b); their edges start at: A slot 0 (da) d,
+            # slot 1 (ac) a; B slot 0 (db) d, slot 1 (bc) b; both slot 2 (cd) c.
+            cd = pd - pc
+            new_a, new_b = np.cross(cd, pa - pc), np.cross(cd, pb - pc)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                new_a /= np.sqrt(_dot(new_a, new_a))[:, None]
+                new_b /= np.sqrt(_dot(new_b, new_b))[:, None]
+            before = np.arccos(np.clip(incidence_cos(normals, faces, i1[part], i2[part]), -1.0, 1.0))
+            after = np.arccos(np.clip(_dot(new_a, new_b), -1.0, 1.0))  # both run c -> d
+            for incidence, new, new_start in ((f1_oa[part], new_b, b[part]), (f1_ob[part], new_a, a[part]),
+                                              (f2_oa[part], new_b, d[part]), (f2_ob[part], new_a, d[part])):
+                beyond = other[incidence]
+                has = beyond >= 0  # an outer edge without a face beyond counts the same before and after
+                far = np.where(has, beyond, incidence)
+                before += np.where(has, np.arccos(np.clip(incidence_cos(normals, faces, incidence, far), -1, 1)), 0.0)
+                fb = far // 3
+                dot = new[:, 0] * normals[0][fb] + new[:, 1] * normals[1][fb] + new[:, 2] * normals[2][fb]
+                cos = np.where(start[far] == new_start, dot, -dot)
+                after += np.where(has, np.arccos(np.clip(cos, -1.0, 1.0)), 0.0)
+            gain[part] = after - before
+
+        run_blocks(evaluate, i1.size)
+        return (i1, i2, a, b, c, d, f1_oa, f1_ob, f2_oa, f2_ob), gain
+
+    def swap_pass(self, points, *, rounds=3):
+        """One pass of edge swapping at ``points``; returns the number of swaps."""
+        n = self.n
+        if self.faces.shape[0] < 2:
+            return 0
+        (i1, i2, a, b, c, d, f1_oa, f1_ob, f2_oa, f2_ob), gain = self.candidates(points)
+        good = np.flatnonzero(np.nan_to_num(gain, nan=-1.0) > _MIN_GAIN)
+        vertex_sets = np.stack([a[good], b[good], c[good], d[good]], axis=1)
+        priority = np.empty(good.size, dtype=np.int64)
+        priority[np.argsort(gain[good], kind="stable")] = np.arange(good.size)  # distinct, by gain
+        chosen = np.zeros(good.size, dtype=bool)
+        free = np.ones(good.size, dtype=bool)
+        used = np.zeros(n, dtype=bool)
+        for _ in range(rounds):  # a few greedy rounds over what the winners left free
+            if not free.any():
+                break
+            pick = np.flatnonzero(free)[_independent(vertex_sets[free], priority[free], n)]
+            chosen[pick] = True
+            used[vertex_sets[pick].ravel()] = True
+            free &= ~used[vertex_sets].any(axis=1)
+        s = good[chosen]
+        if s.size == 0:
+            return 0
+        self._apply(i1[s], i2[s], a[s], b[s], c[s], d[s], f1_oa[s], f1_ob[s], f2_oa[s], f2_ob[s])
+        return int(s.size)
+
+    def _apply(self, i1, i2, a, b, c, d, f1_oa, f1_ob, f2_oa, f2_ob):
+        f1, f2 = i1 // 3, i2 // 3
+        other = self.other
+        # Faces beyond the four outer edges, read before anything is rewritten.
+        beyond = [other[x] for x in (f2_ob, f1_ob, f2_oa, f1_oa)]
+        self.faces[f1] = np.stack([c, d, a], axis=1)  # slot 0: edge da, 1: ac, 2: cd
+        self.faces[f2] = np.stack([c, d, b], axis=1)  # slot 0: edge db, 1: bc, 2: cd
+        for mine, far in zip((3 * f1, 3 * f1 + 1, 3 * f2, 3 * f2 + 1), beyond):
+            other[mine] = far
+            has = far >= 0
+            other[far[has]] = mine[has]
+        other[3 * f1 + 2], other[3 * f2 + 2] = 3 * f2 + 2, 3 * f1 + 2
+        # Edge keys: every swap trades its ab for cd (both sorted lists, merged).
+        n = self.n
+        gone = np.sort(np.minimum(a, b) * n + np.maximum(a, b))
+        keep = np.ones(self.keys.size, dtype=bool)
+        keep[np.searchsorted(self.keys, gone)] = False
+        kept = self.keys[keep]
+        new = np.sort(np.minimum(c, d) * n + np.maximum(c, d))
+        self.keys = np.insert(kept, np.searchsorted(kept, new), new)
+
+
 def swap_pass(points, faces, *, rounds=3):
     """One pass of edge swapping. Returns (new faces, their edges, number of swaps); ``faces`` is
     not modified."""
-    n = points.shape[0]
-    faces = faces.astype(np.int64, copy=True)
-    inc = Incidence(faces, max(n, 1))
-    if faces.shape[0] < 2:
-        return faces, inc.edges, 0
-    edge, f1, f2, a, b, c, d, gain = _swap_candidates(points, faces, inc)
-    good = np.flatnonzero(np.nan_to_num(gain, nan=-1.0) > _MIN_GAIN)
-    vertex_sets = np.stack([a, b, c, d], axis=1)[good]
-    priority = np.empty(good.size, dtype=np.int64)
-    priority[np.argsort(gain[good], kind="stable")] = np.arange(good.size)  # distinct, by gain
-    chosen = np.zeros(good.size, dtype=bool)
-    free = np.ones(good.size, dtype=bool)
-    used = np.zeros(n, dtype=bool)
-    for _ in range(rounds):  # a few greedy rounds over what the winners left free
-        if not free.any():
-            break
-        pick = np.flatnonzero(free)[_independent(vertex_sets[free], priority[free], n)]
-        chosen[pick] = True
-        used[vertex_sets[pick].ravel()] = True
-        free &= ~used[vertex_sets].any(axis=1)
-    s = good[chosen]
-    faces[f1[s]] = np.stack([c[s], d[s], a[s]], axis=1)
-    faces[f2[s]] = np.stack([c[s], d[s], b[s]], axis=1)
-    # Edges: every swap trades its ab for cd.
-    keep = np.ones(inc.edges.shape[0], dtype=bool)
-    keep[edge[s]] = False
-    new_edges = np.stack([np.minimum(c[s], d[s]), np.maximum(c[s], d[s])], axis=1)
-    return faces, np.concatenate([inc.edges[keep], new_edges]), int(s.size)
+    swapper = EdgeSwapper(faces, points.shape[0])
+    count = swapper.swap_pass(points, rounds=rounds)
+    return swapper.faces, swapper.edges, count

@@ -235,3 +235,53 @@ def test_pair_priorities_order_flattest_first_in_both_encodings():
     assert len(set(packed)) == 500 and len(set(ranked)) == 500
     assert np.array_equal(np.argsort(packed), np.argsort(ranked))
     assert cos[np.argmax(packed)] == cos.min()  # the largest dihedral angle comes first
+
+
+# --- geometry from face normals, the swapper's kept state, threads ---------------------------------
+
+def test_incidence_cos_equals_the_dihedral_cos_whatever_the_face_orientation():
+    from core.pointcloud.geometry import dihedral_cos, face_normals, incidence_cos
+
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(4 * 300, 3))
+    quads = np.arange(4 * 300).reshape(-1, 4)  # per quad: edge (u, v), third vertices s and t
+    u, v, s, t = quads.T
+    # Faces in random vertex orders: the sign rule must not depend on it.
+    first = np.array([rng.permutation(x) for x in np.stack([u, v, s], 1)])
+    second = np.array([rng.permutation(x) for x in np.stack([u, v, t], 1)])
+    faces = np.concatenate([first, second])
+    x = 3 * np.arange(300) + np.argmax(first == s[:, None], axis=1)  # incidence opposite s
+    y = 3 * (300 + np.arange(300)) + np.argmax(second == t[:, None], axis=1)
+    cos = incidence_cos(face_normals(points, faces), faces, x, y)
+    assert np.allclose(cos, dihedral_cos(points, u, v, s, t), atol=1e-12)
+
+
+def test_swapper_state_stays_that_of_its_faces():
+    # The swapper updates "which incidence lies across each edge" and the edge keys in place; after
+    # passes at moving points they must equal what a fresh build from its faces gives.
+    from core.pointcloud.swap import EdgeSwapper
+
+    index, tree, graph = build_sdg(noisy_sphere(3000, 0.01, seed=4))
+    swapper = EdgeSwapper(rfs_mesh(index.points, graph.edges).faces, index.n_points)
+    rng = np.random.default_rng(0)
+    total = 0
+    for _ in range(4):
+        total += swapper.swap_pass(index.points + rng.normal(scale=0.003, size=index.points.shape))
+        fresh = EdgeSwapper(swapper.faces, index.n_points)
+        assert np.array_equal(swapper.other, fresh.other)
+        assert np.array_equal(swapper.keys, fresh.keys)
+        assert_mesh_invariants(index.points, swapper.faces, swapper.edges)
+    assert total > 0
+
+
+def test_results_do_not_depend_on_the_thread_count(monkeypatch):
+    import core
+    from core.pointcloud import threads
+
+    points = noisy_sphere(30_000, 0.01, seed=5)  # large enough to be split into blocks
+    monkeypatch.setattr(threads, "MIN_BLOCK", 1000)
+    monkeypatch.setenv("HC_SMOOTH_THREADS", "1")
+    one = core.smooth_point_cloud(points, rounds=2)
+    monkeypatch.setenv("HC_SMOOTH_THREADS", "2")
+    assert len(threads.blocks(10_000)) == min(2, threads.thread_count())
+    assert np.array_equal(one, core.smooth_point_cloud(points, rounds=2))
