@@ -69,7 +69,7 @@ def smooth(
     tolerance = check_tolerance(tolerance)
     start = check_positions(positions)
     n = start.shape[0]
-    if original is None:
+    if original is None or original is positions:
         origin = start
     else:
         origin = check_positions(original, "original")
@@ -88,7 +88,7 @@ def smooth(
 
     step = _Stepper(operator, fixed_mask, origin, method, mode, alpha, beta, start.dtype)
     del operator  # the step keeps what it needs; one built here is freed (sequential: ~28 B/vertex)
-    threshold = tolerance * bbox_diagonal(start)
+    threshold = tolerance * bbox_diagonal(start) if tolerance > 0.0 else 0.0
     current = start.copy()
     # The simultaneous step writes into ``spare``; the two swap roles every iteration. (The sequential
     # solve makes its own arrays.)

@@ -9,6 +9,8 @@ back to the public function, which gives the same result more slowly.
 
 import numpy as np
 import scipy.sparse as sp
+
+from . import parallel
 from scipy.sparse.linalg import spsolve_triangular
 
 
@@ -33,21 +35,43 @@ def triangular_solver(lower_unit):
     def fallback(b):
         return spsolve_triangular(matrix, b, lower=True, unit_diagonal=True, overwrite_b=True)
 
+    def kernel(b):
+        x, info = _gstrs("N", n, matrix.nnz, matrix.data, indices, indptr,
+                         n, 0, empty_data, empty_indices, empty_indptr, np.asfortranarray(b))
+        if info:
+            raise ValueError(f"SuperLU gstrs returned {info}")
+        return x
+
     def fast(b):
+        # SuperLU solves column by column and releases the GIL, so the columns (x, y, z) are spread
+        # over threads; each column's solve is unchanged, so the result is too. It comes back
+        # row-major, as the sparse products want it.
+        groups = _column_groups(b, matrix.nnz)
         try:
-            x, info = _gstrs("N", n, matrix.nnz, matrix.data, indices, indptr,
-                             n, 0, empty_data, empty_indices, empty_indptr, np.asfortranarray(b))
-        except (TypeError, ValueError):  # the private kernel changed: use the public path from now on
+            if len(groups) == 1:
+                return np.ascontiguousarray(kernel(b))
+            out = np.empty(b.shape, dtype=b.dtype)
+
+            def solve_group(columns):
+                out[:, columns] = kernel(b[:, columns])
+
+            parallel._run_all([lambda columns=columns: solve_group(columns) for columns in groups])
+            return out
+        except (TypeError, ValueError):  # the private kernel changed or failed: the public path from now on
             solver.fast = False
             return fallback(b)
-        if info:
-            return fallback(b)
-        # SuperLU solves column by column (Fortran order); hand the result back row-major, as SpMV wants it.
-        return np.ascontiguousarray(x)
 
     def solver(b):
-        # (Solving the columns on separate threads measured slower here: the sweep is memory-bound.)
         return fast(b) if solver.fast else fallback(b)
 
     solver.fast = _gstrs is not None and n > 0
     return solver
+
+
+def _column_groups(b, nnz):
+    """Slices of the columns of ``b`` for the threads (one group for a vector or a small system)."""
+    if b.ndim == 1 or b.shape[1] == 1 or nnz < parallel.MIN_WORK:
+        return [slice(None)]
+    workers = min(parallel.thread_count(), b.shape[1])
+    bounds = np.linspace(0, b.shape[1], workers + 1).round().astype(int)
+    return [slice(int(start), int(stop)) for start, stop in zip(bounds[:-1], bounds[1:]) if stop > start]

@@ -113,3 +113,22 @@ def test_triangular_fallback_gives_the_same_result(monkeypatch):
     monkeypatch.setattr(triangular, "_gstrs", None)
     slow = core.hc_smooth(positions, edges, alpha=0.1, beta=0.6, iterations=5, mode="sequential")
     np.testing.assert_allclose(slow, fast, rtol=0, atol=1e-13)
+
+
+def test_a_changed_private_kernel_switches_to_the_public_path(monkeypatch):
+    """If SciPy's private gstrs changes its signature, the solver notices once and stays on the public path."""
+    from core import triangular
+
+    positions, faces = sm.uv_sphere(6, 8)
+    positions, edges = sm.noisy(positions), sm.edges_of(faces)
+    expected = core.hc_smooth(positions, edges, alpha=0.1, beta=0.6, iterations=3, mode="sequential")
+    calls = []
+
+    def changed(*args):
+        calls.append(len(args))
+        raise TypeError("gstrs() takes different arguments now")
+
+    monkeypatch.setattr(triangular, "_gstrs", changed)
+    got = core.hc_smooth(positions, edges, alpha=0.1, beta=0.6, iterations=3, mode="sequential")
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-13)
+    assert len(calls) == 1  # tried once per solver, then the public path for every iteration
