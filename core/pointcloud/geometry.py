@@ -32,8 +32,7 @@ def face_normals(points, faces):
     return out
 
 
-def _face_quality_block(points, faces):
-    _, double_area, e1, e2 = _normals_block(points, faces)
+def _quality(double_area, e1, e2):
     e3 = [e2[j] - e1[j] for j in range(3)]
     squares = sum(x[j] * x[j] for x in (e1, e2, e3) for j in range(3))
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -43,8 +42,21 @@ def _face_quality_block(points, faces):
 
 def face_quality(points, faces):
     """Bank & Smith quality q = 4*sqrt(3)*A / (l1^2 + l2^2 + l3^2): 1 for equilateral, 0 degenerate."""
-    parts = run_blocks(lambda lo, hi: _face_quality_block(points, faces[lo:hi]), faces.shape[0])
-    return np.concatenate(parts) if len(parts) > 1 else parts[0]
+    return normals_and_quality(points, faces)[1]
+
+
+def normals_and_quality(points, faces):
+    """face_normals and face_quality in one pass over the faces."""
+    normals = np.empty((3, faces.shape[0]))
+    quality = np.empty(faces.shape[0])
+
+    def block(lo, hi):
+        normal, double_area, e1, e2 = _normals_block(points, faces[lo:hi])
+        normals[:, lo:hi] = normal
+        quality[lo:hi] = _quality(double_area, e1, e2)
+
+    run_blocks(block, faces.shape[0])
+    return normals, quality
 
 
 def incidence_cos(normals, faces, x, y):

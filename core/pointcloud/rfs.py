@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..adjacency import umbrella_operator
-from .geometry import Incidence, face_normals, face_quality, unique_faces
+from .geometry import Incidence, face_normals, normals_and_quality, unique_faces
 from .threads import run_blocks
 
 _CHUNK = 1 << 18
@@ -115,7 +115,7 @@ def corona_faces(points, edges, max_gap=np.pi):
     return np.concatenate(parts) if len(parts) > 1 else parts[0]
 
 
-def _best_pairs(normals, inc, edges, order, start, count):
+def _best_pairs(normals, forward, inc, edges, order, start, count):
     """For each edge in ``edges`` (with its live incidences ``order[start:start + count]``): the
     two incidences of the pair with the largest dihedral angle, and that angle's cos. Edges are
     handled in buckets of equal face count, so the all-pairs arrays have no padding.
@@ -126,14 +126,12 @@ def _best_pairs(normals, inc, edges, order, start, count):
     second = np.empty(edges.size, dtype=np.int64)
     best_cos = np.empty(edges.size)
     widths = count[edges]
-    flat = inc.faces.reshape(-1)
     for width in np.unique(widths):
         rows = np.flatnonzero(widths == width)
         edge = edges[rows]
         incidence = order[start[edge][:, None] + np.arange(width)[None, :]]  # (rows, width)
         face = incidence // 3
-        forward = flat[3 * face + (incidence + 1) % 3] == inc.edges[edge, 0][:, None]
-        sign = np.where(forward, 1.0, -1.0)
+        sign = np.where(forward[incidence], 1.0, -1.0)
         v = [normals[j][face] * sign for j in range(3)]
         i, j = np.triu_indices(width, 1)
         cos = v[0][:, i] * v[0][:, j] + v[1][:, i] * v[1][:, j] + v[2][:, i] * v[2][:, j]  # (rows, pairs)
@@ -172,10 +170,19 @@ def keep_best_pairs(points, faces, normals=None):
     Each round works only on the incidences of the edges still overfull (kept sorted by edge), so
     the long tail of rounds with few such edges costs little.
     """
+    return _prune(points, faces, normals)[0]
+
+
+def _prune(points, faces, normals=None):
+    """keep_best_pairs, also returning the faces' Incidence."""
     n_faces = faces.shape[0]
     inc = Incidence(faces, max(points.shape[0], 1))
     if normals is None:
         normals = face_normals(points, faces)
+    # Whether each incidence's face runs along its edge from the edge's low end (incidence_cos).
+    incidence = np.arange(3 * n_faces)
+    forward = faces.reshape(-1)[incidence - incidence % 3 + (incidence + 1) % 3] == inc.edges[inc.edge_of, 0]
+    del incidence
     n_edges = inc.edge_count.size
     alive = np.ones(n_faces, dtype=bool)
     known = np.zeros(n_edges, dtype=bool)  # best pair cached and still valid
@@ -202,7 +209,7 @@ def keep_best_pairs(points, faces, normals=None):
         start[over] = run
         stale = over[~known[over]]
         if stale.size:
-            parts = run_blocks(lambda lo, hi: _best_pairs(normals, inc, stale[lo:hi], order, start, count),
+            parts = run_blocks(lambda lo, hi: _best_pairs(normals, forward, inc, stale[lo:hi], order, start, count),
                                stale.size, share=0.5)
             first[stale], second[stale], best_cos[stale] = (np.concatenate(x) for x in zip(*parts))
             known[stale] = True
@@ -221,13 +228,18 @@ def keep_best_pairs(points, faces, normals=None):
         # Drop the incidences of the dead faces and of the settled edges (now exactly two faces).
         survive = alive[face] & blocked
         order, edge = order[survive], edge[survive]
-    return alive
+    return alive, inc
 
 
 def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
     """Build the RFS mesh of ``points`` (n, 3) float64 from graph ``edges`` (m, 2)."""
     n = points.shape[0]
     faces = unique_faces(corona_faces(points, edges, max_gap), max(n, 1))
-    faces = faces[face_quality(points, faces) >= min_quality]
-    faces = faces[keep_best_pairs(points, faces, face_normals(points, faces))]
-    return RFSMesh(faces, Incidence(faces, max(n, 1)).edges)
+    normals, quality = normals_and_quality(points, faces)
+    good = quality >= min_quality
+    faces, normals = faces[good], normals[:, good]
+    alive, inc = _prune(points, faces, normals)
+    # The mesh's edges: those with a face left (inc.edges is sorted, like a fresh Incidence's).
+    used = np.zeros(inc.edges.shape[0], dtype=bool)
+    used[inc.edge_of.reshape(-1, 3)[alive].ravel()] = True
+    return RFSMesh(faces[alive], inc.edges[used])
