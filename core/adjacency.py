@@ -31,6 +31,7 @@ class Umbrella:
     indices: np.ndarray
     _matrices: dict = field(default_factory=dict, repr=False)
     _upper: tuple = field(default=None, repr=False)
+    _renumbering: object = field(default=None, repr=False)  # core.locality's, once it has looked
 
     @property
     def upper_indptr(self):
@@ -62,6 +63,13 @@ class Umbrella:
         nonzero = self.degree > 0
         inverse[nonzero] = 1.0 / self.degree[nonzero]
         return inverse
+
+    def renumbered(self, order):
+        """The same graph with vertex k of the result being vertex ``order[k]`` of this one."""
+        inverse = np.empty(self.n_vertices, dtype=self.indices.dtype)
+        inverse[order] = np.arange(self.n_vertices, dtype=self.indices.dtype)
+        rows = inverse[np.repeat(np.arange(self.n_vertices, dtype=self.indices.dtype), self.degree)]
+        return _from_pairs(rows, inverse[self.indices], self.n_vertices)
 
     def weights(self, dtype=np.float64, scale=1.0):
         """The values of ``scale`` T over the stored pattern (``indptr``, ``indices``): scale/|adj(i)|."""
@@ -108,13 +116,19 @@ def umbrella_operator(edges, n_vertices):
     edges = check_edges(edges, n)
     index = np.int32 if n < np.iinfo(np.int32).max // 2 else np.int64
 
-    # Both directions of every edge, self-loops dropped; SciPy's coo -> csr places them by counting
-    # (O(nnz), no global sort) and merges duplicates, leaving each row sorted and unique.
+    # Both directions of every edge, self-loops dropped.
     rows = np.concatenate((edges[:, 0], edges[:, 1])).astype(index, copy=False)
     columns = np.concatenate((edges[:, 1], edges[:, 0])).astype(index, copy=False)
     loops = rows == columns
     if loops.any():
         rows, columns = rows[~loops], columns[~loops]
+    return _from_pairs(rows, columns, n)
+
+
+def _from_pairs(rows, columns, n):
+    """Umbrella from directed pairs holding both directions of every edge. SciPy's coo -> csr places
+    them by counting (O(nnz), no global sort) and merges duplicates, leaving rows sorted and unique."""
+    index = rows.dtype
     pattern = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, columns)), shape=(n, n)).tocsr()
     del rows, columns
     pattern.sum_duplicates()  # a no-op when tocsr already did it (SciPy version dependent)

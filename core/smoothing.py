@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from . import parallel
+from . import locality, parallel
 from .adjacency import Umbrella, umbrella_operator
 from .triangular import triangular_solver
 from .convergence import ConvergenceWarning, convergence_message
@@ -86,9 +86,16 @@ def smooth(
         if message:
             warnings.warn(message, ConvergenceWarning, stacklevel=3)
 
+    threshold = tolerance * bbox_diagonal(start) if tolerance > 0.0 else 0.0
+    renumbered = locality.renumbering(operator) if mode == "simultaneous" and iterations > 0 else None
+    if renumbered is not None:  # scattered vertex order: work in a cache-friendly one
+        order = renumbered.order
+        operator, fixed_mask = renumbered.operator, fixed_mask[order]
+        origin = None if origin is start else origin[order]
+        start = start[order]
+        origin = start if origin is None else origin
     step = _Stepper(operator, fixed_mask, origin, method, mode, alpha, beta, start.dtype)
     del operator  # the step keeps what it needs; one built here is freed (sequential: ~28 B/vertex)
-    threshold = tolerance * bbox_diagonal(start) if tolerance > 0.0 else 0.0
     current = start.copy()
     # The simultaneous step writes into ``spare``; the two swap roles every iteration. (The sequential
     # solve makes its own arrays.)
@@ -109,6 +116,10 @@ def smooth(
             raise Cancelled(f"cancelled after {done} of {iterations} iterations")
         if stopped_early:
             break
+    if renumbered is not None:
+        result = np.empty_like(current)
+        result[renumbered.order] = current
+        current = result
     return SmoothResult(current, done, stopped_early)
 
 

@@ -1,0 +1,54 @@
+"""Vertex order for cache locality in the simultaneous smoothers.
+
+Every iteration multiplies by the umbrella operator, which gathers the neighbours' positions. When
+neighbours sit close in memory (meshes from grids, subdivision, most exporters) those gathers hit
+the cache; when the numbering is scattered (some scanners, decimators and file converters) almost
+every gather misses, and on a million vertices a product measured ~10x slower. For those meshes the
+simultaneous smoothers work in reverse Cuthill-McKee order (SciPy's csgraph), which puts neighbours
+close together, and hand the result back in the caller's order. The simultaneous update gives the
+same positions in any order (up to the rounding of each neighbour sum); the sequential smoothers
+are defined by the vertex order and are never renumbered.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+MIN_VERTICES = 200_000  # below this the positions stay in cache whatever the order
+SCATTERED_GAP = 32_768  # index distance (rows) beyond which a neighbour is typically a cache miss
+SAMPLES = 4_096
+
+
+@dataclass(frozen=True)
+class Renumbering:
+    order: np.ndarray  # vertex k of the renumbered mesh is vertex order[k] of the caller's
+    operator: object  # the umbrella operator in the new numbering
+
+
+def median_gap(operator):
+    """Median index distance |i - j| over an even sample of the operator's non-zeros (i, j)."""
+    nnz = operator.indices.size
+    if nnz == 0:
+        return 0
+    picks = np.linspace(0, nnz - 1, min(SAMPLES, nnz)).astype(np.int64)
+    rows = np.searchsorted(operator.indptr, picks, side="right") - 1
+    return int(np.median(np.abs(rows - operator.indices[picks].astype(np.int64))))
+
+
+def is_scattered(operator):
+    return operator.n_vertices >= MIN_VERTICES and median_gap(operator) > SCATTERED_GAP
+
+
+def renumbering(operator):
+    """A cache-friendly renumbering of a scattered mesh (cached on the operator), or None."""
+    if operator._renumbering is None:
+        if not is_scattered(operator):
+            operator._renumbering = False
+        else:
+            pattern = sp.csr_matrix((np.ones(operator.indices.size, dtype=np.int8), operator.indices,
+                                     operator.indptr), shape=(operator.n_vertices,) * 2)
+            order = reverse_cuthill_mckee(pattern, symmetric_mode=True)
+            operator._renumbering = Renumbering(order, operator.renumbered(order))
+    return operator._renumbering or None
