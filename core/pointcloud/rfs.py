@@ -162,19 +162,22 @@ def keep_best_pairs(points, faces, normals=None):
     """Delete faces until no edge has more than two: at an overfull edge the pair with the largest
     dihedral angle stays. Returns the boolean mask of faces kept.
 
-    This is the paper's edge-by-edge rule, done in rounds: each round settles a set of overfull
-    edges that share no face (so their choices cannot conflict), flattest best pair first, exactly
-    as if they were handled one after another; then the counts are updated. Settling all edges
-    at once instead would delete a face that one edge keeps because another edge drops it, and
-    lose about half of the faces. An edge's best pair is recomputed only after it lost a face.
-    Each round works only on the incidences of the edges still overfull (kept sorted by edge), so
-    the long tail of rounds with few such edges costs little.
+    This is the paper's edge-by-edge rule (which leaves the order open), done in rounds: each round
+    settles the overfull edges that are the top priority (flattest best pair first) at both faces
+    of their best pair and delete no face that another of them keeps. Those give the same result
+    in whatever order they are handled one after another (each one's best pair survives the
+    others, so it stays the best of what is left), so a round is a stretch of the sequential rule.
+    Then the counts are updated. Settling all edges at once instead would delete a face that one
+    edge keeps because another edge drops it, and lose about half of the faces. An edge's best
+    pair is recomputed only after it lost a face. Each round works only on the incidences of the
+    edges still overfull (kept sorted by edge), so the long tail of rounds costs little.
     """
     return _prune(points, faces, normals)[0]
 
 
-def _prune(points, faces, normals=None):
-    """keep_best_pairs, also returning the faces' Incidence."""
+def _prune(points, faces, normals=None, settled=None):
+    """keep_best_pairs, also returning the faces' Incidence. ``settled`` (optional, one int per
+    edge of the Incidence, preset to -1) receives the round in which each overfull edge settled."""
     n_faces = faces.shape[0]
     inc = Incidence(faces, max(points.shape[0], 1))
     if normals is None:
@@ -196,6 +199,7 @@ def _prune(points, faces, normals=None):
     full = np.repeat(inc.edge_count > 2, inc.edge_count)
     order = inc.order[full]
     edge = np.repeat(np.arange(n_edges), inc.edge_count)[full]
+    rounds = 0
     while order.size:
         # Runs of equal edge: the live overfull edges and their incidences.
         run = np.flatnonzero(np.concatenate(([True], edge[1:] != edge[:-1])))
@@ -216,17 +220,27 @@ def _prune(points, faces, normals=None):
         # Priority: flatter best pair first, ties by edge number; distinct, so each face has one top edge.
         priority = np.repeat(_priority(best_cos[over], over, n_edges), run_count)
         face = order // 3
+        pair = (order == first[edge]) | (order == second[edge])
         np.maximum.at(top, face, priority)
-        # An edge settles when it is the top priority at every one of its faces.
-        beaten = top[face] != priority
+        # Candidates: edges that are the top priority at both faces of their best pair, so no
+        # edge before them in the flattest-first order can take those faces away ...
+        beaten = pair & (top[face] != priority)
         top[face] = -1
-        blocked = np.repeat(np.add.reduceat(beaten, run) > 0, run_count)
-        losing = ~blocked & (order != first[edge]) & (order != second[edge])
-        dead = face[losing]  # distinct: a face has one top edge, so it loses at most once per round
+        candidate = np.repeat(np.add.reduceat(beaten, run) == 0, run_count)
+        kept = np.zeros(n_faces, dtype=bool)
+        kept[face[candidate & pair]] = True
+        # ... and that delete no face another candidate keeps. These settle together: none deletes
+        # a face another keeps, so each one's best pair is the same in whatever order they go.
+        clash = candidate & ~pair & kept[face]
+        settle = candidate & ~np.repeat(np.add.reduceat(clash, run) > 0, run_count)
+        if settled is not None:
+            settled[edge[settle]] = rounds
+        rounds += 1
+        dead = face[settle & ~pair]  # may repeat: two settling edges can delete the same face
         alive[dead] = False
         known[inc.edge_of[(3 * dead[:, None] + np.arange(3)).ravel()]] = False
         # Drop the incidences of the dead faces and of the settled edges (now exactly two faces).
-        survive = alive[face] & blocked
+        survive = alive[face] & ~settle
         order, edge = order[survive], edge[survive]
     return alive, inc
 

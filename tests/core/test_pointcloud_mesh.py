@@ -285,3 +285,38 @@ def test_results_do_not_depend_on_the_thread_count(monkeypatch):
     monkeypatch.setenv("HC_SMOOTH_THREADS", "2")
     assert len(threads.blocks(10_000)) == min(2, threads.thread_count())
     assert np.array_equal(one, core.smooth_point_cloud(points, rounds=2))
+
+
+def test_pruning_rounds_equal_the_edge_by_edge_rule_in_any_order_within_a_round():
+    # Reference: the paper's rule one edge at a time, in the order of the rounds (shuffled within
+    # each round), with the best pair found by brute force from dihedral_cos.
+    from core.pointcloud.geometry import dihedral_cos, face_quality, unique_faces
+    from core.pointcloud.rfs import _prune, corona_faces
+
+    index, tree, graph = build_sdg(noisy_sphere(1500, 0.01, seed=6), spacing_factor=3.0)
+    points = index.points
+    faces = unique_faces(corona_faces(points, graph.edges), len(points))
+    faces = faces[face_quality(points, faces) >= 0.3]
+    inc = Incidence(faces, len(points))
+    settled = np.full(inc.edges.shape[0], -1)
+    alive, _ = _prune(points, faces, settled=settled)
+    assert settled.max() >= 2  # several rounds happened
+    members = [inc.order[s:s + c] // 3 for s, c in zip(inc.edge_start, inc.edge_count)]
+    rng = np.random.default_rng(0)
+    reference = np.ones(len(faces), dtype=bool)
+    for r in range(settled.max() + 1):
+        for e in rng.permutation(np.flatnonzero(settled == r)):
+            live = [f for f in members[e] if reference[f]]
+            if len(live) <= 2:
+                continue
+            u, v = inc.edges[e]
+            third = [int(np.setdiff1d(faces[f], [u, v])[0]) for f in live]
+            pairs = [(i, j) for i in range(len(live)) for j in range(i + 1, len(live))]
+            cos = [dihedral_cos(points, np.array([u]), np.array([v]), np.array([third[i]]), np.array([third[j]]))[0]
+                   for i, j in pairs]
+            i, j = pairs[int(np.argmin(np.nan_to_num(cos, nan=np.inf)))]
+            for k, f in enumerate(live):
+                if k not in (i, j):
+                    reference[f] = False
+    assert np.array_equal(alive, reference)
+    assert Incidence(faces[alive], len(points)).edge_count.max() <= 2
