@@ -219,6 +219,13 @@ def machine_line():
 # --- One mesh size -------------------------------------------------------------------------------------
 
 
+def _unshuffle(result, noisy, scattered):
+    """Bring a result on the renumbered mesh back to the original numbering (for the quality columns)."""
+    back = np.empty(len(noisy), dtype=np.int64)
+    back[np.lexsort(noisy.T[::-1])] = np.lexsort(scattered.T[::-1])
+    return result[back]
+
+
 def bench_size(n_target, args, peers, out):
     vertices, faces = meshes.torus(n_target, ratio=RATIO, minor_radius=MINOR)
     noisy = meshes.add_noise(vertices, fraction=0.01, seed=args.seed)
@@ -251,6 +258,22 @@ def bench_size(n_target, args, peers, out):
             continue
         seconds, cpu, result = timed(lambda: run(noisy, faces), repeats)
         rows.append((name, description, seconds, cpu, result))
+
+    if not args.shuffle:
+        # Scanners and converters may number vertices at random: the same mesh renumbered, core and
+        # trimesh (the core then works in reverse Cuthill-McKee order, core.locality).
+        scattered, scattered_faces = meshes.shuffled(noisy, faces, seed=args.seed)
+        scattered_edges = meshes.edges_from_faces(scattered_faces).astype(np.int32)
+        for dtype in (np.float32, np.float64):
+            start = scattered.astype(dtype)
+            seconds, cpu, result = timed(lambda: core.hc_smooth(start, scattered_edges, **hc), repeats)
+            rows.append(("core.hc_smooth", f"simultaneous, {np.dtype(dtype).name}, random vertex order", seconds,
+                         cpu, _unshuffle(result, noisy, scattered)))
+        description, run = peers.get("trimesh filter_humphrey", (None, None))
+        if run is not None:
+            seconds, cpu, result = timed(lambda: run(scattered, scattered_faces), repeats)
+            rows.append(("trimesh filter_humphrey", "random vertex order", seconds, cpu,
+                         _unshuffle(result, noisy, scattered)))
 
     humphrey = next((row[2] for row in rows if row[0] == "trimesh filter_humphrey"), None)
     out("| method | variant | median time (s) | CPU / wall | speed-up vs filter_humphrey | volume change | "
