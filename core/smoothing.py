@@ -96,7 +96,8 @@ def smooth(
         origin = start if origin is None else origin
     step = _Stepper(operator, fixed_mask, origin, method, mode, alpha, beta, start.dtype)
     del operator  # the step keeps what it needs; one built here is freed (sequential: ~28 B/vertex)
-    current = start.copy()
+    # The renumbered start is already a copy of ours (the step keeps only α o, never o itself).
+    current = start if renumbered is not None else start.copy()
     # The simultaneous step writes into ``spare``; the two swap roles every iteration. (The sequential
     # solve makes its own arrays.)
     spare = np.empty_like(current) if step.sequential is None else None
