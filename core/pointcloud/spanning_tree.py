@@ -23,6 +23,10 @@ What we do instead is Borůvka's algorithm on the complete graph, with the kNN l
   bit, so the minimum over bits is the nearest point of another component. A sample of the askers
   goes first to bound each component, so the rest search small balls. Only exhausted points below
   their component's bound ask.
+* Exact answers are remembered across rounds: a point's nearest foreign point stays so while it is
+  foreign (foreign points only get fewer), and is offered like a kNN edge; once it has merged into
+  the point's component, its distance (like the bound of an empty search) is a floor below which
+  no foreign point of that point can lie, which certifies components and shrinks searches.
 * Ties: each component takes *a* shortest outgoing edge. With ties the picks can close a cycle, and
   every such cycle consists of equally long edges (around it each pick is no longer than the
   previous one), so keeping a spanning forest of the picks (dropping one edge per cycle) keeps the
@@ -149,9 +153,11 @@ def _nearest_foreign_by_growing_k(tree, label_code, ask, bound, k, budget):
 _SAMPLE_STRIDE = 16
 
 
-def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16):
+def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16, return_bound=False):
     """For each point index in ``ask``: the nearest point whose code differs, if closer than
-    ``bound`` (per asking point). Returns (distance, index), inf / -1 where none is closer.
+    ``bound`` (per asking point). Returns (distance, index), inf / -1 where none is closer; with
+    ``return_bound`` also the bound each asker was finally searched below (no point of another
+    code is nearer than that where none was found).
 
     Callers only use the minimum per code, so a point may also report nothing when another point of
     its code already found something at least as near. Few askers (k x askers <= points) grow k on
@@ -162,9 +168,9 @@ def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16)
     3. the rest: one KD-tree per code bit (_query_by_bits), searching only below the bound."""
     best_distance = np.full(ask.size, np.inf)
     best_index = np.full(ask.size, -1, dtype=np.int64)
-    if ask.size == 0:
-        return best_distance, best_index
     bound = np.asarray(bound, dtype=np.float64).copy()
+    if ask.size == 0:
+        return (best_distance, best_index, bound) if return_bound else (best_distance, best_index)
     rest = np.arange(ask.size)
     if tree is not None and k * ask.size <= tree_points.shape[0]:
         # Few askers (the usual case on surfaces): growing-k queries on the one tree we have cost
@@ -203,7 +209,7 @@ def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16)
         rest = rest[left]
     if rest.size:
         best_distance[rest], best_index[rest] = _query_by_bits(tree_points, label_code, ask[rest], bound[rest])
-    return best_distance, best_index
+    return (best_distance, best_index, bound) if return_bound else (best_distance, best_index)
 
 
 def _query_by_bits(tree_points, label_code, ask, bound):
@@ -269,6 +275,13 @@ def boruvka_emst(index, exact_fraction=0.5):
     dst = index.neighbour.ravel()
     weight = index.distance.ravel()
     exhausted = np.zeros(m, dtype=bool)
+    # Exact searches are remembered: a point's nearest foreign point stays its nearest foreign point
+    # while it is foreign (the foreign points only get fewer), and once it has joined the point's
+    # component, every foreign point is at least as far as it was (``floor``, like an empty search
+    # below a bound).
+    cache_distance = np.full(m, np.inf)
+    cache_index = np.full(m, -1, dtype=np.int64)
+    floor = np.zeros(m)
     tree_u, tree_v, tree_w = [], [], []
     while n_components > 1:
         label_src, label_dst = label[src], label[dst]
@@ -280,18 +293,33 @@ def boruvka_emst(index, exact_fraction=0.5):
         src, dst, weight = src[crossing], dst[crossing], weight[crossing]
         label_src, label_dst = label_src[crossing], label_dst[crossing]
 
-        best, pick_u, pick_v = _per_component_pick(n_components, label_src, label_dst, weight, src, dst)
-        inside = np.flatnonzero(exhausted)
+        cached = np.flatnonzero(cache_index >= 0)
+        merged_in = cached[label[cache_index[cached]] == label[cached]]
+        floor[merged_in] = np.maximum(floor[merged_in], cache_distance[merged_in])
+        cache_index[merged_in] = -1
+        cached = np.flatnonzero(cache_index >= 0)  # still foreign: still the exact nearest
+        if cached.size:
+            best, pick_u, pick_v = _per_component_pick(
+                n_components, np.concatenate([label_src, label[cached]]),
+                np.concatenate([label_dst, label[cache_index[cached]]]),
+                np.concatenate([weight, cache_distance[cached]]), np.concatenate([src, cached]),
+                np.concatenate([dst, cache_index[cached]]))
+        else:
+            best, pick_u, pick_v = _per_component_pick(n_components, label_src, label_dst, weight, src, dst)
+        inside = np.flatnonzero(exhausted & (cache_index < 0))  # exhausted, nearest foreign unknown
+        reach = np.maximum(radius[inside], floor[inside])  # no foreign point is nearer
         lower = np.full(n_components, np.inf)
-        np.minimum.at(lower, label[inside], radius[inside])
+        np.minimum.at(lower, label[inside], reach)
         uncertain = lower < best
         if uncertain.sum() > (1.0 - exact_fraction) * n_components or uncertain.all():
-            ask = inside[uncertain[label[inside]] & (radius[inside] < best[label[inside]])]
+            ask = inside[uncertain[label[inside]] & (reach < best[label[inside]])]
             code = np.zeros(n_components, dtype=np.int64)
             code[uncertain] = np.arange(1, int(uncertain.sum()) + 1)
-            found_distance, found = _exact_nearest_foreign(points, code[label], ask, best[label[ask]],
-                                                         tree=index.tree, k=2 * max(k, 1))
+            found_distance, found, searched = _exact_nearest_foreign(
+                points, code[label], ask, best[label[ask]], tree=index.tree, k=2 * max(k, 1), return_bound=True)
             hit = found >= 0
+            cache_distance[ask[hit]], cache_index[ask[hit]] = found_distance[hit], found[hit]
+            floor[ask[~hit]] = np.maximum(floor[ask[~hit]], searched[~hit])
             exact_best, exact_u, exact_v = _per_component_pick(
                 n_components, label[ask[hit]], label[ask[hit]], found_distance[hit], ask[hit], found[hit])
             improve = exact_best < best

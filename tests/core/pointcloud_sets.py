@@ -20,6 +20,17 @@ def scan_lines(rows=8, per_row=300, seed=0):
     ])
 
 
+def sphere_rings(rings=40, per_ring=150, seed=0):
+    """Scan rings on a unit sphere (latitude circles, dense along each ring, rings far apart
+    relative to that): every Borůvka round needs exact searches, and merged rings invalidate the
+    remembered nearest foreign points of many others."""
+    rng = np.random.default_rng(seed)
+    theta = np.linspace(0.1, np.pi - 0.1, rings)[:, None]
+    phi = np.linspace(0.0, 2 * np.pi, per_ring, endpoint=False)[None, :] + rng.random((rings, 1))
+    p = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta) + 0 * phi], axis=-1)
+    return p.reshape(-1, 3) + rng.normal(scale=1e-4, size=(rings * per_ring, 3))
+
+
 def clusters(k=6, size=200, seed=0):
     """Tight clusters far apart."""
     rng = np.random.default_rng(seed)

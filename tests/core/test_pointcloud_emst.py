@@ -11,7 +11,8 @@ from scipy.sparse.csgraph import connected_components
 from core.pointcloud import emst
 from core.pointcloud.spanning_tree import NeighbourIndex, _exact_nearest_foreign, merge_duplicates
 
-from pointcloud_sets import clusters, delaunay_mst_length, grid_ties, scan_lines, uniform, with_duplicates
+from pointcloud_sets import (clusters, delaunay_mst_length, grid_ties, scan_lines, sphere_rings, uniform,
+                             with_duplicates)
 
 
 def assert_is_emst(points, edges):
@@ -27,6 +28,7 @@ def assert_is_emst(points, edges):
 HARD_SETS = {
     "uniform": uniform(1500),
     "scan_lines": scan_lines(),
+    "sphere_rings": sphere_rings(),
     "clusters": clusters(),
     "duplicates": with_duplicates(),
     "grid_ties": grid_ties(),
