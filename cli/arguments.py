@@ -77,8 +77,10 @@ def make_parser():
     smoothing = parser.add_argument_group("smoothing (as the operator's properties)")
     smoothing.add_argument("--method", choices=METHODS, type=str.upper, default="HC",
                            help="HC (default) or a Laplacian variant")
-    smoothing.add_argument("--alpha", type=_unit_interval, default=0.1, help="pull towards the original (0.1)")
-    smoothing.add_argument("--beta", type=_unit_interval, default=0.6, help="HC correction weight (0.6)")
+    smoothing.add_argument("--alpha", type=_unit_interval, default=None,
+                           help="pull towards the original (0.1; point clouds: 0.01)")
+    smoothing.add_argument("--beta", type=_unit_interval, default=None,
+                           help="HC correction weight (0.6; point clouds: 0.55)")
     smoothing.add_argument("--iterations", type=_non_negative_int, default=10, help="iterations (10)")
     smoothing.add_argument("--mode", choices=MODES, type=str.upper, default="SIMULTANEOUS",
                            help="SIMULTANEOUS (default) or SEQUENTIAL")
@@ -118,6 +120,7 @@ class Plan:
     files: list  # [(input path, output path)]
     points: bool = False
     objects: list = field(default_factory=list)
+    given: tuple = ()  # settings given on the command line (the point operator keeps its own defaults else)
 
 
 def parse(argv):
@@ -127,12 +130,14 @@ def parse(argv):
         raise UsageError("give either -o OUTDIR or --in-place (inputs are never overwritten otherwise)")
     if args.invert_group and not args.fixed_group:
         raise UsageError("--invert-group needs --fixed-group NAME")
-    settings = Settings(method=args.method, alpha=args.alpha, beta=args.beta, iterations=args.iterations,
+    given = tuple(name for name in ("alpha", "beta") if getattr(args, name) is not None)
+    settings = Settings(method=args.method, alpha=Settings.alpha if args.alpha is None else args.alpha,
+                        beta=Settings.beta if args.beta is None else args.beta, iterations=args.iterations,
                         mode=args.mode, tolerance=args.tolerance, vertex_group=args.fixed_group,
                         invert_vertex_group=args.invert_group, pin_boundary=args.pin_boundary)
     inputs = expand_inputs(args.inputs)
     files = plan_outputs(inputs, args.output_dir, args.format, args.in_place)
-    return Plan(settings=settings, files=files, points=args.points, objects=args.objects)
+    return Plan(settings=settings, files=files, points=args.points, objects=args.objects, given=given)
 
 
 def expand_inputs(paths):

@@ -148,7 +148,7 @@ def smooth_objects(objects, plan, outcome):
         outcome.vertices += len(job.positions)
         outcome.iterations = max(outcome.iterations, job.iterations_run)
     if clouds:
-        smooth_point_clouds(clouds, settings, outcome)
+        smooth_point_clouds(clouds, settings, outcome, given=plan.given)
     outcome.objects = len(objects)
 
 
@@ -161,12 +161,13 @@ def check_point_operator():
                         "in this HC Smooth installation")
 
 
-def smooth_point_clouds(clouds, settings, outcome):
-    """Through the point-cloud operator, passing the settings it shares with the mesh operators."""
+def smooth_point_clouds(clouds, settings, outcome, given=()):
+    """Through the point-cloud operator, passing the settings it shares with the mesh operators;
+    alpha and beta only when ``given`` on the command line (the point operator's defaults differ)."""
     properties = bpy.ops.object.hc_smooth_points.get_rna_type().properties
     options = {}
     for name in ("method", "alpha", "beta", "iterations", "mode", "tolerance"):
-        if name not in properties:
+        if name not in properties or (name in ("alpha", "beta") and name not in given):
             continue
         value = getattr(settings, name)
         if properties[name].type == "ENUM" and value not in properties[name].enum_items.keys():

@@ -131,18 +131,18 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
     progress_label = "HC Smooth Points"
 
-    alpha: FloatProperty(name="Alpha", default=0.1, min=0.0, max=1.0,
-                         description="Pull towards the original positions")
-    beta: FloatProperty(name="Beta", default=0.6, min=0.0, max=1.0,
+    alpha: FloatProperty(name="Alpha", default=0.01, min=0.0, max=1.0, step=0.1, precision=3,
+                         description="Pull towards the original positions (small: more smoothing; raise it for nearly clean, sparse points)")
+    beta: FloatProperty(name="Beta", default=0.55, min=0.0, max=1.0, precision=3,
                         description="Weight of a point's own difference against its neighbours' (converges above 0.5)")
-    rounds: IntProperty(name="Rounds", default=10, min=0, soft_max=100,
-                        description="HC steps alternating with edge swapping on the RFS mesh")
-    iterations_per_round: IntProperty(name="Steps per Round", default=1, min=1, soft_max=10,
+    rounds: IntProperty(name="Rounds", default=4, min=0, soft_max=50,
+                        description="HC steps alternating with edge swapping on the RFS mesh (more: smoother)")
+    iterations_per_round: IntProperty(name="Steps per Round", default=16, min=1, soft_max=50,
                                       description="HC iterations between two passes of edge swapping")
     neighbours: IntProperty(name="Neighbours", default=16, min=2, soft_max=64,
                             description="How many nearest neighbours each point may connect to")
     spacing_factor: FloatProperty(
-        name="Reach", default=3.0, min=0.1, soft_max=5.0,
+        name="Reach", default=2.5, min=0.1, soft_max=5.0,
         description="Connect neighbours up to this many times the local point spacing "
                     "(larger: wider neighbourhoods, stronger smoothing)")
     gap_factor: FloatProperty(
