@@ -94,13 +94,12 @@ def smooth(
         origin = None if origin is start else origin[order]
         start = start[order]
         origin = start if origin is None else origin
-    step = _Stepper(operator, fixed_mask, origin, method, mode, alpha, beta, start.dtype)
+    step = _step_for(operator, fixed_mask, origin, method, mode, alpha, beta, start.dtype)
     del operator  # the step keeps what it needs; one built here is freed (sequential: ~28 B/vertex)
     # The renumbered start is already a copy of ours (the step keeps only α o, never o itself).
     current = start if renumbered is not None else start.copy()
-    # The simultaneous step writes into ``spare``; the two swap roles every iteration. (The sequential
-    # solve makes its own arrays.)
-    spare = np.empty_like(current) if step.sequential is None else None
+    # A step that writes into ``spare`` swaps it with ``current`` every iteration.
+    spare = np.empty_like(current) if step.writes_out else None
     done = 0
     stopped_early = False
     if not step.movable.any():
@@ -177,42 +176,50 @@ def laplacian_smooth(
     ).positions
 
 
-class _Stepper:
+class _Step:
     """One iteration q -> p of the chosen smoother, with everything reusable prepared once.
 
-    ``step(q, out)`` returns the new positions, written into ``out`` where it can; ``q`` is kept.
+    ``step(q, out)`` returns the new positions, written into ``out`` when ``writes_out``; ``q`` is kept.
     """
 
-    def __init__(self, operator, fixed_mask, origin, method, mode, alpha, beta, dtype):
+    writes_out = False
+
+    def __init__(self, fixed_mask, origin, method, alpha, beta):
         self.movable = ~fixed_mask
         self.fixed_index = np.flatnonzero(fixed_mask)
         self.method, self.alpha, self.beta = method, alpha, beta
         # Weight of the neighbour average in the Laplacian pass (HC's pass is the plain one).
         self.neighbour_weight = 1.0 - alpha if method in ("central", "original") else 1.0
         self.alpha_origin = alpha * origin if method in ("hc", "original") and alpha > 0.0 else None
-        if mode == "sequential":
-            self.sequential = _GaussSeidel(operator, self.movable, self.neighbour_weight, dtype)
-            self.neighbour_mean = self.sequential.neighbour_mean  # spares memory: T itself is not built
-            return
-        self.sequential = None
+
+
+def _step_for(operator, fixed_mask, origin, method, mode, alpha, beta, dtype):
+    kind = _SequentialStep if mode == "sequential" else _SimultaneousStep
+    return kind(operator, fixed_mask, origin, method, alpha, beta, dtype)
+
+
+class _SimultaneousStep(_Step):
+    """Every pass of an iteration runs on row blocks, one per thread (core.parallel)."""
+
+    writes_out = True
+
+    def __init__(self, operator, fixed_mask, origin, method, alpha, beta, dtype):
+        super().__init__(fixed_mask, origin, method, alpha, beta)
         self.blocks = parallel.RowBlocks(operator.indptr, operator.indices, operator.n_vertices)
         # Each block resets its own fixed rows.
-        edges = np.searchsorted(self.fixed_index, [block.rows.start for block in self.blocks.blocks]
-                                + [operator.n_vertices])
-        self.block_fixed = {id(block): self.fixed_index[edges[k]:edges[k + 1]]
+        bounds = np.searchsorted(self.fixed_index, [block.rows.start for block in self.blocks.blocks]
+                                 + [operator.n_vertices])
+        self.block_fixed = {id(block): self.fixed_index[bounds[k]:bounds[k + 1]]
                             for k, block in enumerate(self.blocks.blocks)}
         # The products' values, with the step's constant factors folded in (they cost nothing there).
         if method == "hc":
-            keep = 1.0 - beta
-            self.scaled_mean = operator.weights(dtype, keep)  # (1-β) T
+            self.scaled_mean = operator.weights(dtype, 1.0 - beta)  # (1-β) T
             self.negative_mean = operator.weights(dtype, -1.0)  # -T
         else:
             self.scaled_mean = operator.weights(dtype, self.neighbour_weight)  # w T
-        self.scratch = None  # b of HC, allocated on the first step
+        self.scratch = None  # d of HC, allocated on the first step
 
     def __call__(self, q, out):
-        if self.sequential is not None:
-            return self._sequential_step(q)
         if self.method == "hc":
             self._hc_step(q, out)
         else:
@@ -266,14 +273,22 @@ class _Stepper:
         self.blocks.run(differences)
         self.blocks.run(corrected)
 
-    def _sequential_step(self, q):
-        """Gauss–Seidel Laplacian pass, then (HC) the correction with b built from the new points."""
+
+class _SequentialStep(_Step):
+    """Gauss–Seidel Laplacian pass (a triangular solve), then (HC) the correction with b built from
+    the new points. The solve makes its own arrays, so ``out`` is not used."""
+
+    def __init__(self, operator, fixed_mask, origin, method, alpha, beta, dtype):
+        super().__init__(fixed_mask, origin, method, alpha, beta)
+        self.gauss_seidel = _GaussSeidel(operator, self.movable, self.neighbour_weight, dtype)
+
+    def __call__(self, q, out=None):
         anchor = None  # a s_i: α q_i (central) or α o_i (original)
         if self.method == "central" and self.alpha > 0.0:
             anchor = self.alpha * q
         elif self.method == "original":
             anchor = self.alpha_origin
-        p = self.sequential.solve(q, anchor)  # fixed rows of the system read p_i = q_i exactly
+        p = self.gauss_seidel.solve(q, anchor)  # fixed rows of the system read p_i = q_i exactly
         if self.method != "hc":
             return p
         # b_i = p_i - (α o_i + (1-α) q_i); zero on fixed vertices, which are not in V_var.
@@ -282,8 +297,8 @@ class _Stepper:
         if self.alpha_origin is not None:
             b -= self.alpha_origin
         b[self.fixed_index] = 0.0
-        # p_i -= β b_i + (1-β)/|adj(i)| Σ_j b_j
-        neighbour_mean = self.neighbour_mean(b)
+        # p_i -= β b_i + (1-β)/|adj(i)| Σ_j b_j (T from its two triangles: T itself is never built)
+        neighbour_mean = self.gauss_seidel.neighbour_mean(b)
         neighbour_mean *= 1.0 - self.beta
         p -= neighbour_mean
         b *= self.beta
