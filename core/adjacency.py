@@ -12,6 +12,11 @@ import scipy.sparse as sp
 
 from .validation import check_edges
 
+try:  # the kernels behind coo -> csr and csr -> csc; private, so there is a public fallback
+    from scipy.sparse._sparsetools import coo_tocsr as _coo_tocsr, csr_tocsc as _csr_tocsc
+except ImportError:  # SciPy without them
+    _coo_tocsr = _csr_tocsc = None
+
 
 def _exclusive_cumsum(counts, dtype):
     out = np.zeros(counts.size + 1, dtype=dtype)
@@ -126,12 +131,28 @@ def umbrella_operator(edges, n_vertices):
 
 
 def _from_pairs(rows, columns, n):
-    """Umbrella from directed pairs holding both directions of every edge. SciPy's coo -> csr places
-    them by counting (O(nnz), no global sort) and merges duplicates, leaving rows sorted and unique."""
+    """Umbrella from directed pairs holding both directions of every edge: rows sorted and unique."""
     index = rows.dtype
-    pattern = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, columns)), shape=(n, n)).tocsr()
+    if _coo_tocsr is not None and index == np.int32:
+        pattern = _counting_placement(rows, columns, n)
+    else:  # SciPy's public coo -> csr (placement by counting, then a sort of every row)
+        pattern = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, columns)), shape=(n, n)).tocsr()
     del rows, columns
-    pattern.sum_duplicates()  # a no-op when tocsr already did it (SciPy version dependent)
+    pattern.sum_duplicates()  # one linear check when rows are sorted and unique already
     indptr = pattern.indptr.astype(index, copy=False)
     indices = pattern.indices.astype(index, copy=False)
     return Umbrella(n_vertices=n, degree=np.diff(indptr), indptr=indptr, indices=indices)
+
+
+def _counting_placement(rows, columns, n):
+    """CSR with sorted rows by two counting passes (SciPy's kernels, O(nnz), no sort): place the pairs
+    by column, which lists each column's rows in increasing order, then transpose by counting."""
+    nnz = rows.size
+    ones = np.ones(nnz, dtype=np.int8)
+    by_column = (np.empty(n + 1, np.int32), np.empty(nnz, np.int32), np.empty(nnz, np.int8))
+    _coo_tocsr(n, n, nnz, columns, rows, ones, *by_column)
+    del ones
+    by_row = (np.empty(n + 1, np.int32), np.empty(nnz, np.int32), np.empty(nnz, np.int8))
+    _csr_tocsc(n, n, *by_column, *by_row)
+    indptr, indices, data = by_row
+    return sp.csr_matrix((data, indices, indptr), shape=(n, n))

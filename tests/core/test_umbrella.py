@@ -37,3 +37,16 @@ def test_many_duplicates_of_one_edge_count_once():
     np.testing.assert_array_equal(operator.upper_indptr, [0, 2, 3, 3, 3])
     np.testing.assert_array_equal(operator.upper_indices, [1, 2, 2])
     assert operator.n_edges == 3
+
+
+def test_public_construction_path_gives_the_same_pattern(monkeypatch):
+    # The counting placement uses SciPy's private kernels; without them the public coo -> csr is used.
+    from core import adjacency
+
+    edges = np.random.default_rng(4).integers(0, 300, size=(2000, 2))  # duplicates and self-loops
+    fast = core.umbrella_operator(edges, 310)
+    monkeypatch.setattr(adjacency, "_coo_tocsr", None)
+    public = core.umbrella_operator(edges, 310)
+    for name in ("indptr", "indices", "degree", "upper_indptr", "upper_indices"):
+        np.testing.assert_array_equal(getattr(fast, name), getattr(public, name))
+    assert fast.matrix().has_canonical_format
