@@ -193,6 +193,23 @@ class _Step:
         self.alpha_origin = alpha * origin if method in ("hc", "original") and alpha > 0.0 else None
 
 
+def _as_rows(array):
+    """A C-contiguous (n, 3) array as n single items (3 floats each): gathering and scattering whole
+    rows then moves one item per row instead of three (about twice as fast for the fixed rows)."""
+    return array.view(np.dtype((np.void, array.strides[0]))).reshape(-1)
+
+
+def _copy_rows(destination, source, index):
+    """destination[index] = source[index], row by row."""
+    if index.size:
+        np.put(_as_rows(destination), index, np.take(_as_rows(source), index))
+
+
+def _zero_rows(array, index):
+    if index.size:
+        _as_rows(array)[index] = np.zeros(1, dtype=_as_rows(array).dtype)[0]
+
+
 def _step_for(operator, fixed_mask, origin, method, mode, alpha, beta, dtype):
     kind = _SequentialStep if mode == "sequential" else _SimultaneousStep
     return kind(operator, fixed_mask, origin, method, alpha, beta, dtype)
@@ -238,7 +255,7 @@ class _SimultaneousStep(_Step):
             else:
                 p[rows] = 0.0
             block.add_product(q, p, self.scaled_mean)
-            p[fixed] = q[fixed]
+            _copy_rows(p, q, fixed)
 
         self.blocks.run(block_step)
 
@@ -262,13 +279,13 @@ class _SimultaneousStep(_Step):
                 s += self.alpha_origin[rows]
             np.multiply(s, -keep, out=d[rows])
             block.add_product(q, d, self.scaled_mean)
-            d[fixed] = 0.0
+            _zero_rows(d, fixed)
 
         def corrected(block):  # p = s + d - T d
             rows, fixed = block.rows, self.block_fixed[id(block)]
             p[rows] += d[rows]
             block.add_product(d, p, self.negative_mean)
-            p[fixed] = q[fixed]
+            _copy_rows(p, q, fixed)
 
         self.blocks.run(differences)
         self.blocks.run(corrected)
@@ -296,14 +313,14 @@ class _SequentialStep(_Step):
         np.subtract(p, b, out=b)
         if self.alpha_origin is not None:
             b -= self.alpha_origin
-        b[self.fixed_index] = 0.0
+        _zero_rows(b, self.fixed_index)
         # p_i -= β b_i + (1-β)/|adj(i)| Σ_j b_j (T from its two triangles: T itself is never built)
         neighbour_mean = self.gauss_seidel.neighbour_mean(b)
         neighbour_mean *= 1.0 - self.beta
         p -= neighbour_mean
         b *= self.beta
         p -= b
-        p[self.fixed_index] = q[self.fixed_index]
+        _copy_rows(p, q, self.fixed_index)
         return p
 
 
@@ -352,5 +369,5 @@ class _GaussSeidel:
         rhs = self.upper_blocks.product(q, self.upper.data)
         if anchor is not None:
             rhs += anchor
-        rhs[self.fixed_index] = q[self.fixed_index]
+        _copy_rows(rhs, q, self.fixed_index)
         return self.solve_lower(rhs)
