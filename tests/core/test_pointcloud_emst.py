@@ -128,3 +128,24 @@ def test_emst_bad_input(bad, message):
 def test_emst_bad_neighbours():
     with pytest.raises(ValueError, match="neighbours"):
         emst(uniform(10), neighbours=0)
+
+
+@pytest.mark.parametrize("name", ["scan_lines", "sphere_rings", "clusters", "grid_ties"])
+def test_emst_exact_with_dual_tree_searches_everywhere(name, monkeypatch):
+    # The bit search lists the pairs below the bound by one dual-tree traversal for large groups of
+    # askers; force it for every group, and force the one-query fallback on too many pairs.
+    from core.pointcloud import spanning_tree
+
+    monkeypatch.setattr(spanning_tree, "_DUAL_TREE_ASKERS", 1)
+    points = HARD_SETS[name]
+    assert_is_emst(points, emst(points, neighbours=3))
+    calls = []
+    original = spanning_tree._pairs_below
+
+    def crowded(asker_tree, target_tree, upper, limit, n_askers):
+        calls.append(n_askers)
+        return None if len(calls) % 2 else original(asker_tree, target_tree, upper, limit, n_askers)
+
+    monkeypatch.setattr(spanning_tree, "_pairs_below", crowded)
+    assert_is_emst(points, emst(points, neighbours=3))
+    assert calls
