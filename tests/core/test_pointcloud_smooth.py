@@ -37,7 +37,7 @@ def test_report_mesh_refers_to_input_points(sphere, smoothed):
     _, report = smoothed
     assert isinstance(report, PointCloudReport)
     assert report.mesh.faces.max() < len(sphere) and report.mesh.edges.max() < len(sphere)
-    assert len(report.swaps) == 10 and report.swaps[0] > 0
+    assert len(report.swaps) == 9 and report.swaps[0] > 0  # between consecutive rounds
     assert set(report.seconds) >= {"emst", "sdg", "rfs", "hc", "swap"}
 
 
