@@ -21,8 +21,9 @@ except ImportError:  # pragma: no cover - depends on the SciPy build
 
 
 def triangular_solver(lower_unit):
-    """Return solve(b) -> x with ``lower_unit`` @ x = b, for a CSC lower-triangular matrix whose diagonal
-    is stored and equal to 1. ``b`` is (n,) or (n, k) of the matrix dtype and may be overwritten."""
+    """Return solve(b) -> x with ``lower_unit`` @ x = b for every row of planar ``b`` ((k, n) or (n,),
+    C-contiguous, of the matrix dtype; it may be overwritten), for a CSC lower-triangular matrix whose
+    diagonal is stored and equal to 1. x is planar too."""
     matrix = sp.csc_matrix(lower_unit)
     matrix.sort_indices()
     n = matrix.shape[0]
@@ -33,30 +34,31 @@ def triangular_solver(lower_unit):
     empty_indptr = np.zeros(n + 1, dtype=np.intc)
 
     def fallback(b):
-        return spsolve_triangular(matrix, b, lower=True, unit_diagonal=True, overwrite_b=True)
+        x = spsolve_triangular(matrix, b.T, lower=True, unit_diagonal=True, overwrite_b=True)
+        return np.ascontiguousarray(np.asarray(x).T)
 
-    def kernel(b):
+    def kernel(rows):
+        """Solve for planar rows (k, n): SuperLU wants them as the columns of a Fortran (n, k) array,
+        which is the same memory, and hands back the same layout."""
         x, info = _gstrs("N", n, matrix.nnz, matrix.data, indices, indptr,
-                         n, 0, empty_data, empty_indices, empty_indptr, np.asfortranarray(b))
+                         n, 0, empty_data, empty_indices, empty_indptr, np.asfortranarray(rows.T))
         if info:
             raise ValueError(f"SuperLU gstrs returned {info}")
-        return x
+        return x.T
 
     def fast(b):
-        # SuperLU solves column by column and releases the GIL, so the columns (x, y, z) are spread
-        # over threads; each column's solve is unchanged, so the result is too. It comes back
-        # row-major, as the sparse products want it.
-        groups = _column_groups(b, matrix.nnz)
+        # SuperLU solves one vector at a time and releases the GIL, so the coordinates are spread
+        # over threads; each coordinate's solve is unchanged, so the result is too.
+        planar = b.reshape(-1, n)
+        groups = _row_groups(planar.shape[0], matrix.nnz)
         try:
-            if len(groups) == 1:
-                return np.ascontiguousarray(kernel(b))
-            out = np.empty(b.shape, dtype=b.dtype)
+            out = np.empty_like(planar)
 
-            def solve_group(columns):
-                out[:, columns] = kernel(b[:, columns])
+            def solve_group(rows):
+                out[rows] = kernel(planar[rows])
 
-            parallel._run_all([lambda columns=columns: solve_group(columns) for columns in groups])
-            return out
+            parallel._run_all([lambda rows=rows: solve_group(rows) for rows in groups])
+            return out.reshape(b.shape)
         except (TypeError, ValueError):  # the private kernel changed or failed: the public path from now on
             solver.fast = False
             return fallback(b)
@@ -68,10 +70,10 @@ def triangular_solver(lower_unit):
     return solver
 
 
-def _column_groups(b, nnz):
-    """Slices of the columns of ``b`` for the threads (one group for a vector or a small system)."""
-    if b.ndim == 1 or b.shape[1] == 1 or nnz < parallel.MIN_WORK:
+def _row_groups(count, nnz):
+    """Slices of the ``count`` vectors for the threads (one group for one vector or a small system)."""
+    if count == 1 or nnz < parallel.MIN_WORK:
         return [slice(None)]
-    workers = min(parallel.thread_count(), b.shape[1])
-    bounds = np.linspace(0, b.shape[1], workers + 1).round().astype(int)
+    workers = min(parallel.thread_count(), count)
+    bounds = np.linspace(0, count, workers + 1).round().astype(int)
     return [slice(int(start), int(stop)) for start, stop in zip(bounds[:-1], bounds[1:]) if stop > start]

@@ -48,16 +48,17 @@ def test_thread_cap_from_the_environment(monkeypatch):
     assert parallel.thread_count() >= 1
 
 
+@pytest.mark.parametrize("mode", ["simultaneous", "sequential"])
 @pytest.mark.parametrize("method", ["hc", "central", "plain"])
-def test_public_product_path_when_the_private_kernel_is_missing(monkeypatch, method):
-    # SciPy's csr_matvecs is private: without it the blocks multiply through the public API.
+def test_public_product_path_when_the_private_kernel_is_missing(monkeypatch, method, mode):
+    # SciPy's csr_matvec is private: without it the blocks multiply through the public API.
     rng = np.random.default_rng(8)
     side = 12
     edges = grid_edges(side)
     positions = rng.normal(size=(side * side, 3))
-    kwargs = dict(method=method, alpha=0.3, beta=0.6, iterations=4, fixed=[0, 5, 77])
+    kwargs = dict(method=method, alpha=0.3, beta=0.6, iterations=4, fixed=[0, 5, 77], mode=mode)
     fast = core.smooth(positions, edges, **kwargs).positions
-    monkeypatch.setattr(parallel, "_csr_matvecs", None)
+    monkeypatch.setattr(parallel, "_csr_matvec", None)
     public = core.smooth(positions, edges, **kwargs).positions
     np.testing.assert_allclose(public, fast, rtol=0, atol=1e-13)
     assert np.array_equal(public[[0, 5, 77]], positions[[0, 5, 77]])
