@@ -135,9 +135,9 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
                          description="Pull towards the original positions (small: more smoothing; raise it for nearly clean, sparse points)")
     beta: FloatProperty(name="Beta", default=0.55, min=0.0, max=1.0, precision=3,
                         description="Weight of a point's own difference against its neighbours' (converges above 0.5)")
-    rounds: IntProperty(name="Rounds", default=4, min=0, soft_max=50,
+    rounds: IntProperty(name="Rounds", default=3, min=0, soft_max=50,
                         description="HC steps alternating with edge swapping on the RFS mesh (more: smoother)")
-    iterations_per_round: IntProperty(name="Steps per Round", default=16, min=1, soft_max=50,
+    iterations_per_round: IntProperty(name="Steps per Round", default=22, min=1, soft_max=50,
                                       description="HC iterations between two passes of edge swapping")
     neighbours: IntProperty(name="Neighbours", default=16, min=2, soft_max=64,
                             description="How many nearest neighbours each point may connect to")

@@ -51,8 +51,8 @@ def smooth_point_cloud(
     *,
     alpha=0.01,
     beta=0.55,
-    rounds=4,
-    iterations_per_round=16,
+    rounds=3,
+    iterations_per_round=22,
     fixed=None,
     neighbours=16,
     spacing_factor=2.5,
@@ -72,15 +72,16 @@ def smooth_point_cloud(
     progress(done, total) is called after each round; returning False raises ``Cancelled``.
     return_mesh: also return a ``PointCloudReport`` holding the final RFS mesh.
 
-    The defaults (4 rounds of 16 HC steps, swap passes in between; a weak pull to the originals,
+    The defaults (3 rounds of 22 HC steps, swap passes in between; a weak pull to the originals,
     alpha 0.01, and a light correction, beta 0.55; neighbours up to 2.5 local spacings) were
-    chosen with bench/bench_points.py: with noise of 0.5-2 % of the object's size they remove more
-    noise than CGAL's jet smoothing (k = 24) on sphere, torus, cube and an open patch at 20k
-    points and on all but the patch at 100k, while the size changes by less than 0.2 %, and run
-    100k points in about 4 s on two cores (bench/README.md). On sparse, nearly clean samples they
-    smooth too much (curved surfaces flatten between samples): raise alpha or lower rounds there.
-    Swapping after every HC step, as in the paper, changes the result by about 1 % at 16x the
-    swapping cost; without swapping it leaves 0-2 % more noise. More rounds smooth more.
+    chosen with bench/bench_points.py: with noise of 0.5-1 % of the object's size they remove more
+    noise than CGAL's jet smoothing (k = 24) on sphere, torus and cube at 20k and 100k points (and
+    on an open patch at 20k), at 2 % at 20k points, while the size changes by less than 0.2 %; they
+    run 100k points in about 4 s on two cores (bench/README.md). Heavier noise relative to the
+    sample spacing wants more rounds. On sparse, nearly clean samples they smooth too much (curved
+    surfaces flatten between samples): raise alpha or lower rounds there. Swapping after every HC
+    step, as in the paper, changes the result by about 1 % at 22x the swapping cost; without
+    swapping it leaves 0-2 % more noise.
     The input is never modified. Exact duplicates move together; points the RFS mesh leaves without
     a face (isolated or unusable neighbourhoods) stay where they are.
     """
@@ -102,7 +103,7 @@ class PointCloudSmoother:
     yields (stage, rounds done) after each stage and round; afterwards ``result`` and ``report``
     are set. Abandoning the generator leaves the input untouched."""
 
-    def __init__(self, points, *, alpha=0.01, beta=0.55, rounds=4, iterations_per_round=16, fixed=None,
+    def __init__(self, points, *, alpha=0.01, beta=0.55, rounds=3, iterations_per_round=22, fixed=None,
                  neighbours=16, spacing_factor=2.5, gap_factor=3.0, min_quality=0.3, swap=True):
         self.points = check_positions(points, "points")
         self.alpha = check_unit_interval(alpha, "alpha")
