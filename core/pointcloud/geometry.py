@@ -59,7 +59,12 @@ def normals_and_quality(points, faces):
     return normals, quality
 
 
-def incidence_cos(normals, faces, x, y):
+def incidence_starts(faces):
+    """Per incidence 3*f + j the vertex its edge starts from in face f's order: slot j + 1."""
+    return faces[:, [1, 2, 0]].reshape(-1)
+
+
+def incidence_cos(normals, faces, x, y, starts=None):
     """cos of the dihedral angle between the faces of incidences x and y of one edge (incidence
     3*f + j: the edge of face f opposite its slot j), from the faces' unit normals (3, f).
 
@@ -67,11 +72,13 @@ def incidence_cos(normals, faces, x, y):
     edge's direction e, with s = +1 when the face runs along the edge in direction e (its slot
     j+1 holds the edge's start); n_f and n_g are perpendicular to e, so the two vectors' dot is
     s_f s_g (n_f . n_g): +1 when both faces run along the edge the same way. Two faces of a
-    consistently oriented flat mesh run opposite ways: cos -1, the angle pi.
+    consistently oriented flat mesh run opposite ways: cos -1, the angle pi. ``starts``:
+    incidence_starts(faces), when the caller has it.
     """
     fx, fy = x // 3, y // 3
-    flat = faces.reshape(-1)
-    same = flat[3 * fx + (x + 1) % 3] == flat[3 * fy + (y + 1) % 3]
+    if starts is None:
+        starts = incidence_starts(faces)
+    same = starts[x] == starts[y]
     dot = normals[0][fx] * normals[0][fy] + normals[1][fx] * normals[1][fy] + normals[2][fx] * normals[2][fy]
     return np.where(same, dot, -dot)
 

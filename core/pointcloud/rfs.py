@@ -183,9 +183,7 @@ def _prune(points, faces, normals=None, settled=None):
     if normals is None:
         normals = face_normals(points, faces)
     # Whether each incidence's face runs along its edge from the edge's low end (incidence_cos).
-    incidence = np.arange(3 * n_faces)
-    forward = faces.reshape(-1)[incidence - incidence % 3 + (incidence + 1) % 3] == inc.edges[inc.edge_of, 0]
-    del incidence
+    forward = faces[:, [1, 2, 0]].reshape(-1) == inc.edges[inc.edge_of, 0]  # slot j's edge starts at j+1
     n_edges = inc.edge_count.size
     alive = np.ones(n_faces, dtype=bool)
     known = np.zeros(n_edges, dtype=bool)  # best pair cached and still valid

@@ -21,7 +21,7 @@ geometry of the moved points; ``swap_pass`` is one pass on a fresh mesh.
 
 import numpy as np
 
-from .geometry import Incidence, _dot, face_normals, incidence_cos
+from .geometry import Incidence, _dot, face_normals, incidence_cos, incidence_starts
 from .threads import run_blocks
 
 _MIN_GAIN = 1e-9  # radians; ignores swaps that only win by rounding
@@ -84,7 +84,7 @@ class EdgeSwapper:
         # Dihedral angles from face normals (see geometry.incidence_cos): today's faces need one
         # normal each, and every candidate only the normals of its two new faces.
         normals = face_normals(points, faces)
-        start = faces.reshape(-1)[3 * (np.arange(other.size) // 3) + (np.arange(other.size) + 1) % 3]
+        start = incidence_starts(faces)
         gain = np.empty(i1.size)
 
         def evaluate(lo, hi):
@@ -97,14 +97,14 @@ class EdgeSwapper:
             with np.errstate(invalid="ignore", divide="ignore"):
                 new_a /= np.sqrt(_dot(new_a, new_a))[:, None]
                 new_b /= np.sqrt(_dot(new_b, new_b))[:, None]
-            before = np.arccos(np.clip(incidence_cos(normals, faces, i1[part], i2[part]), -1.0, 1.0))
+            before = np.arccos(np.clip(incidence_cos(normals, faces, i1[part], i2[part], start), -1.0, 1.0))
             after = np.arccos(np.clip(_dot(new_a, new_b), -1.0, 1.0))  # both run c -> d
             for incidence, new, new_start in ((f1_oa[part], new_b, b[part]), (f1_ob[part], new_a, a[part]),
                                               (f2_oa[part], new_b, d[part]), (f2_ob[part], new_a, d[part])):
                 beyond = other[incidence]
                 has = beyond >= 0  # an outer edge without a face beyond counts the same before and after
                 far = np.where(has, beyond, incidence)
-                before += np.where(has, np.arccos(np.clip(incidence_cos(normals, faces, incidence, far), -1, 1)), 0.0)
+                before += np.where(has, np.arccos(np.clip(incidence_cos(normals, faces, incidence, far, start), -1, 1)), 0.0)
                 fb = far // 3
                 dot = new[:, 0] * normals[0][fb] + new[:, 1] * normals[1][fb] + new[:, 2] * normals[2][fb]
                 cos = np.where(start[far] == new_start, dot, -dot)
