@@ -235,8 +235,8 @@ class _SimultaneousStep(_Step):
                             for k, block in enumerate(self.blocks.blocks)}
         # The products' values, with the step's constant factors folded in (they cost nothing there).
         if method == "hc":
-            self.scaled_mean = operator.weights(dtype, 1.0 - beta)  # (1-β) T
             self.negative_mean = operator.weights(dtype, -1.0)  # -T
+            self.scaled_mean = np.multiply(self.negative_mean, beta - 1.0)  # (1-β) T, spares a repeat
         else:
             self.scaled_mean = operator.weights(dtype, self.neighbour_weight)  # w T
         self.scratch = None  # d of HC, allocated on the first step
