@@ -133,8 +133,9 @@ def umbrella_operator(edges, n_vertices):
 def _from_pairs(rows, columns, n):
     """Umbrella from directed pairs holding both directions of every edge: rows sorted and unique."""
     index = rows.dtype
-    if _coo_tocsr is not None and index == np.int32:
-        pattern = _counting_placement(rows, columns, n)
+    placed = pairs_in_order(rows, columns, n, np.ones(rows.size, dtype=np.int8))
+    if placed is not None:
+        pattern = sp.csr_matrix(placed[::-1], shape=(n, n))
     else:  # SciPy's public coo -> csr (placement by counting, then a sort of every row)
         pattern = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, columns)), shape=(n, n)).tocsr()
     del rows, columns
@@ -144,15 +145,20 @@ def _from_pairs(rows, columns, n):
     return Umbrella(n_vertices=n, degree=np.diff(indptr), indptr=indptr, indices=indices)
 
 
-def _counting_placement(rows, columns, n):
-    """CSR with sorted rows by two counting passes (SciPy's kernels, O(nnz), no sort): place the pairs
-    by column, which lists each column's rows in increasing order, then transpose by counting."""
-    nnz = rows.size
-    ones = np.ones(nnz, dtype=np.int8)
-    by_column = (np.empty(n + 1, np.int32), np.empty(nnz, np.int32), np.empty(nnz, np.int8))
-    _coo_tocsr(n, n, nnz, columns, rows, ones, *by_column)
-    del ones
-    by_row = (np.empty(n + 1, np.int32), np.empty(nnz, np.int32), np.empty(nnz, np.int8))
+def pairs_in_order(rows, columns, n, data):
+    """(indptr, columns, data) of the pairs (rows, columns) in [0, n)^2 sorted by row, then column,
+    then input position (a stable sort by row * n + column), as CSR arrays; None where SciPy's
+    kernels are missing or the indices are not int32.
+
+    Two counting passes (SciPy's coo -> csr and csr -> csc kernels, O(pairs), no comparison sort):
+    placing the pairs by column keeps each column's entries in input order, and transposing by
+    counting then lists every row's entries by column, ties in that order.
+    """
+    if _coo_tocsr is None or rows.dtype != np.int32 or columns.dtype != np.int32:
+        return None
+    count = rows.size
+    by_column = (np.empty(n + 1, np.int32), np.empty(count, np.int32), np.empty(count, data.dtype))
+    _coo_tocsr(n, n, count, columns, rows, data, *by_column)
+    by_row = (np.empty(n + 1, np.int32), np.empty(count, np.int32), np.empty(count, data.dtype))
     _csr_tocsc(n, n, *by_column, *by_row)
-    indptr, indices, data = by_row
-    return sp.csr_matrix((data, indices, indptr), shape=(n, n))
+    return by_row

@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from ..adjacency import pairs_in_order
 from .sdg import unique_sorted
 from .threads import run_blocks
 
@@ -152,6 +153,17 @@ def unique_faces(faces, n):
     return np.unique(f, axis=0)
 
 
+def _stable_order(low, high, keys, n):
+    """np.argsort(keys, kind="stable") for keys = low * n + high, by two counting passes when the
+    indices fit (several times faster on tens of millions of incidences than a comparison sort)."""
+    if n < 2 ** 31 and keys.size < 2 ** 31:
+        placed = pairs_in_order(low.astype(np.int32), high.astype(np.int32), n,
+                                np.arange(keys.size, dtype=np.int64))
+        if placed is not None:
+            return placed[2]
+    return np.argsort(keys, kind="stable")
+
+
 class Incidence:
     """Face-edge incidences of a triangle list, grouped by edge.
 
@@ -169,7 +181,7 @@ class Incidence:
         second = f[:, [2, 0, 1]].ravel()
         low, high = np.minimum(first, second), np.maximum(first, second)
         keys = low * n + high
-        self.order = np.argsort(keys, kind="stable")
+        self.order = _stable_order(low, high, keys, n)
         sorted_keys = keys[self.order]
         new = np.concatenate(([True], sorted_keys[1:] != sorted_keys[:-1])) if keys.size else np.zeros(0, bool)
         self.edge_start = np.flatnonzero(new)

@@ -320,3 +320,20 @@ def test_pruning_rounds_equal_the_edge_by_edge_rule_in_any_order_within_a_round(
                     reference[f] = False
     assert np.array_equal(alive, reference)
     assert Incidence(faces[alive], len(points)).edge_count.max() <= 2
+
+
+def test_incidence_order_by_counting_equals_a_stable_sort(monkeypatch):
+    # The incidences are grouped by edge with SciPy's counting kernels; the result must be exactly
+    # the stable argsort of the edge keys (ties: incidence order), also on the public fallback.
+    from core import adjacency
+    from core.pointcloud import geometry
+
+    faces = np.random.default_rng(2).integers(0, 40, size=(500, 3))
+    faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])]
+    counted = geometry.Incidence(faces, 40)
+    first = faces[:, [1, 2, 0]].ravel()
+    second = faces[:, [2, 0, 1]].ravel()
+    keys = np.minimum(first, second) * 40 + np.maximum(first, second)
+    np.testing.assert_array_equal(counted.order, np.argsort(keys, kind="stable"))
+    monkeypatch.setattr(adjacency, "_coo_tocsr", None)
+    np.testing.assert_array_equal(geometry.Incidence(faces, 40).order, counted.order)
