@@ -103,22 +103,36 @@ class RowBlocks:
         return out
 
 
+CHUNK_NONZEROS = 1 << 19  # a chunk's pattern and values stay in cache for all the coordinates
+
+
 class _Block:
     def __init__(self, indptr, indices, n_columns, start, stop):
         self.rows = slice(start, stop)
         self._first, self._last = int(indptr[start]), int(indptr[stop])
-        # Views of the pattern (no copy); only the block's indptr is rebased.
-        self._indptr = indptr[start:stop + 1] - self._first
-        self._indices = indices[self._first:self._last]
-        self._shape = (stop - start, n_columns)
+        self._n_columns = n_columns
+        # Chunks of rows with about CHUNK_NONZEROS non-zeros each: the product runs chunk by chunk,
+        # every coordinate of a chunk before the next, so the chunk's slice of the matrix is read
+        # from memory once instead of once per coordinate (float64: ~1.5x faster on 1M vertices).
+        # Views of the pattern (no copy); only each chunk's indptr is rebased.
+        count = max(1, -(-(self._last - self._first) // CHUNK_NONZEROS))
+        bounds = start + _row_blocks(indptr[start:stop + 1] - self._first, count)
+        self._chunks = []
+        for low, high in zip(bounds[:-1], bounds[1:]):
+            first, last = int(indptr[low]), int(indptr[high])
+            self._chunks.append((int(low), int(high), first, last, indptr[low:high + 1] - first,
+                                 indices[first:last]))
 
     def add_product(self, x, out, data):
         """out[..., rows] += A[rows] @ x for planar x and out, C-contiguous, of the dtype of ``data``."""
-        values = data[self._first:self._last]
-        if _csr_matvec is None:  # SciPy without the private kernel
-            part = sp.csr_matrix((values, self._indices, self._indptr), shape=self._shape)
-            out[..., self.rows] += (part @ x.T).T
-            return
-        for x_row, out_row in zip(x.reshape(-1, x.shape[-1]), out.reshape(-1, out.shape[-1])):
-            _csr_matvec(self._shape[0], self._shape[1], self._indptr, self._indices, values, x_row,
-                        out_row[self.rows])
+        x_rows = x.reshape(-1, x.shape[-1])
+        out_rows = out.reshape(-1, out.shape[-1])
+        for low, high, first, last, chunk_indptr, chunk_indices in self._chunks:
+            values = data[first:last]
+            if _csr_matvec is None:  # SciPy without the private kernel
+                part = sp.csr_matrix((values, chunk_indices, chunk_indptr), shape=(high - low, self._n_columns))
+                out_rows[:, low:high] += (part @ x_rows.T).T
+                continue
+            for x_row, out_row in zip(x_rows, out_rows):
+                _csr_matvec(high - low, self._n_columns, chunk_indptr, chunk_indices, values, x_row,
+                            out_row[low:high])

@@ -62,3 +62,27 @@ def test_public_product_path_when_the_private_kernel_is_missing(monkeypatch, met
     public = core.smooth(positions, edges, **kwargs).positions
     np.testing.assert_allclose(public, fast, rtol=0, atol=1e-13)
     assert np.array_equal(public[[0, 5, 77]], positions[[0, 5, 77]])
+
+
+@pytest.mark.parametrize("mode", ["simultaneous", "sequential"])
+def test_chunked_products_change_nothing(monkeypatch, mode):
+    # Products run chunk by chunk (all coordinates of a chunk first); every row is still computed by
+    # the same loop, so the results are bit-identical to one chunk.
+    rng = np.random.default_rng(6)
+    side = 30
+    edges = rng.permutation(grid_edges(side))
+    positions = rng.normal(size=(side * side, 3))
+    kwargs = dict(method="hc", alpha=0.1, beta=0.6, iterations=5, mode=mode, fixed=rng.random(side * side) < 0.2)
+    whole = core.smooth(positions, edges, **kwargs).positions
+    monkeypatch.setattr(parallel, "CHUNK_NONZEROS", 37)
+    monkeypatch.setattr(parallel, "MIN_WORK", 0)
+    monkeypatch.setattr(parallel, "thread_count", lambda: 2)
+    chunked = core.smooth(positions, edges, **kwargs).positions
+    assert np.array_equal(chunked.view(np.uint8), whole.view(np.uint8))
+    blocks = parallel.RowBlocks(*_pattern(edges, side * side))
+    assert sum(len(block._chunks) for block in blocks.blocks) > 10
+
+
+def _pattern(edges, n):
+    operator = core.umbrella_operator(edges, n)
+    return operator.indptr, operator.indices, n
