@@ -42,17 +42,17 @@ def _executor(workers):
         return _pool
 
 
-def _run_all(tasks):
-    """Run the callables, the first on this thread and the rest on the pool; re-raise any error."""
+def run_all(tasks):
+    """Run the callables, the first on this thread and the rest on the pool; return their results in
+    order and re-raise any error."""
     if len(tasks) == 1:
-        tasks[0]()
-        return
+        return [tasks[0]()]
     futures = [_executor(len(tasks) - 1).submit(task) for task in tasks[1:]]
     try:
-        tasks[0]()
+        first = tasks[0]()
     finally:
-        for future in futures:
-            future.result()
+        rest = [future.result() for future in futures]
+    return [first] + rest
 
 
 def _row_blocks(indptr, count):
@@ -93,7 +93,7 @@ class RowBlocks:
         return cls(matrix.indptr, matrix.indices, matrix.shape[1], workers)
 
     def run(self, task):
-        _run_all([lambda block=block: task(block) for block in self.blocks])
+        run_all([lambda block=block: task(block) for block in self.blocks])
 
     def product(self, x, data):
         """A @ x for planar ``x``, (k, n) or (n,), of the dtype of ``data``."""

@@ -57,7 +57,7 @@ def triangular_solver(lower_unit):
             def solve_group(rows):
                 out[rows] = kernel(planar[rows])
 
-            parallel._run_all([lambda rows=rows: solve_group(rows) for rows in groups])
+            parallel.run_all([lambda rows=rows: solve_group(rows) for rows in groups])
             return out.reshape(b.shape)
         except (TypeError, ValueError):  # the private kernel changed or failed: the public path from now on
             solver.fast = False

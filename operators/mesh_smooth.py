@@ -75,17 +75,26 @@ class SmoothProperties:
         layout.prop(self, "iterations")
         layout.prop(self, "mode")
         layout.prop(self, "tolerance")
-        obj = context.active_object
-        row = layout.row(align=True)
-        if obj is not None and obj.type == "MESH":
-            row.prop_search(self, "vertex_group", obj, "vertex_groups", text="Fixed Group")
-        else:
-            row.prop(self, "vertex_group", text="Fixed Group")
-        row.prop(self, "invert_vertex_group", text="", icon="ARROW_LEFTRIGHT")
+        draw_fixed_group(layout, self, context.active_object)
         layout.prop(self, "pin_boundary")
         layout.prop(self, "output")
-        if self.method == "HC" and not core.in_convergence_region(self.alpha, self.beta):
-            layout.label(text="Outside the convergence region (Alpha > 0, Beta > 0.5)", icon="ERROR")
+        if self.method == "HC":
+            draw_convergence_warning(layout, self.alpha, self.beta)
+
+
+def draw_fixed_group(layout, props, obj):
+    """The fixed vertex group field (searchable on a mesh) with its Invert toggle, for the redo panels."""
+    row = layout.row(align=True)
+    if obj is not None and obj.type == "MESH":
+        row.prop_search(props, "vertex_group", obj, "vertex_groups", text="Fixed Group")
+    else:
+        row.prop(props, "vertex_group", text="Fixed Group")
+    row.prop(props, "invert_vertex_group", text="", icon="ARROW_LEFTRIGHT")
+
+
+def draw_convergence_warning(layout, alpha, beta):
+    if not core.in_convergence_region(alpha, beta):
+        layout.label(text="Outside the convergence region (Alpha > 0, Beta > 0.5)", icon="ERROR")
 
 
 class _SmoothOperator(SmoothProperties, ModalProgress):

@@ -15,6 +15,7 @@ from bpy.props import BoolProperty, FloatProperty, IntProperty, StringProperty
 from .. import core
 from ..core.pointcloud import PointCloudSmoother
 from . import mesh_io
+from .mesh_smooth import draw_convergence_warning, draw_fixed_group
 from .modal_progress import ModalProgress
 
 POINT_TYPES = ("MESH", "POINTCLOUD")
@@ -170,16 +171,9 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
         for name in ("alpha", "beta", "rounds", "iterations_per_round", "neighbours", "spacing_factor",
                      "gap_factor", "min_quality", "swap"):
             layout.prop(self, name)
-        obj = context.active_object
-        row = layout.row(align=True)
-        if obj is not None and obj.type == "MESH":
-            row.prop_search(self, "vertex_group", obj, "vertex_groups", text="Fixed Group")
-        else:
-            row.prop(self, "vertex_group", text="Fixed Group")
-        row.prop(self, "invert_vertex_group", text="", icon="ARROW_LEFTRIGHT")
+        draw_fixed_group(layout, self, context.active_object)
         layout.prop(self, "keep_rfs_mesh")
-        if not core.in_convergence_region(self.alpha, self.beta):
-            layout.label(text="Outside the convergence region (Alpha > 0, Beta > 0.5)", icon="ERROR")
+        draw_convergence_warning(layout, self.alpha, self.beta)
 
     def _clouds(self, context):
         objects = [obj for obj in context.selected_objects if obj.type in POINT_TYPES]

@@ -353,3 +353,19 @@ def test_fixed_count_is_recounted_after_a_geometry_update(settings):
     obj.data.update()
     bpy.context.view_layer.update()
     assert fixed_count_label(bpy.context)[0] == [texts.count_line(2, n)]
+
+
+@pytest.mark.parametrize("idname", ["OBJECT_OT_hc_smooth", "OBJECT_OT_hc_smooth_points"])
+def test_redo_panels_draw_the_fixed_group_and_the_convergence_warning(scene, idname):
+    # The operators' draw() (the F9 panel) shares its fixed-group row and convergence label.
+    obj = noisy_sphere()
+    operator_class = getattr(bpy.types, idname)
+    props = types.SimpleNamespace(layout=RecordingLayout(), method="HC", alpha=0.1, beta=0.6)
+    operator_class.draw(props, bpy.context)
+    searched = [args for args, _ in ((e[1], e[2]) for e in props.layout.calls("prop_search"))]
+    assert searched and searched[0][1:3] == ("vertex_group", obj)
+    assert [e[1][1] for e in props.layout.calls("prop")].count("invert_vertex_group") == 1
+    assert not props.layout.labels()  # inside the region: no warning
+    props.layout, props.beta = RecordingLayout(), 0.4
+    operator_class.draw(props, bpy.context)
+    assert any("convergence region" in text for text in props.layout.labels())
