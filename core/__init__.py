@@ -5,7 +5,7 @@ Blender, so everything inside uses relative imports.
 """
 
 from .adjacency import Umbrella, umbrella_operator
-from .convergence import ConvergenceWarning, convergence_message, in_convergence_region
+from .convergence import ConvergenceWarning, DivergenceError, convergence_message, in_convergence_region
 from .metrics import Change, measure_change
 from .smoothing import METHODS, MODES, Cancelled, SmoothResult, hc_smooth, laplacian_smooth, smooth
 
@@ -21,6 +21,7 @@ __all__ = [
     "Cancelled",
     "Change",
     "ConvergenceWarning",
+    "DivergenceError",
     "METHODS",
     "MODES",
     "SmoothResult",

@@ -8,6 +8,11 @@ class ConvergenceWarning(UserWarning):
     """HC was asked to run with (alpha, beta) outside the region where Theorem 5.2 proves convergence."""
 
 
+class DivergenceError(ValueError):
+    """A run blew up (non-finite coordinates, or a bounding box many times the input's): nothing is
+    returned, so no caller can write the garbage. Only possible outside the convergence region."""
+
+
 def in_convergence_region(alpha, beta):
     """Theorem 5.2: the HC algorithm converges for alpha > 0 and beta > 0.5."""
     return alpha > 0.0 and beta > 0.5

@@ -125,9 +125,10 @@ def smooth(
 
 
 def _planar(points, order=None):
-    """A (3, n) C-contiguous copy of (n, 3) ``points`` (rows taken in ``order`` if given)."""
+    """A (3, n) C-contiguous copy of (n, 3) ``points`` (rows taken in ``order`` if given). Always a
+    copy: for Fortran-ordered input ``points.T`` is already contiguous, and the steps write into it."""
     if order is None:
-        return np.ascontiguousarray(points.T)
+        return np.array(points.T, order="C")
     return np.take(points.T, order, axis=1)
 
 
