@@ -7,7 +7,7 @@ Blender, so everything inside uses relative imports.
 from .adjacency import Umbrella, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, in_convergence_region
 from .metrics import Change, measure_change
-from .smoothing import METHODS, MODES, Cancelled, SmoothResult, hc_smooth, laplacian_smooth, smooth
+from .smoothing import METHODS, MODES, Cancelled, Smoothing, SmoothResult, hc_smooth, laplacian_smooth, smooth
 
 
 def smooth_point_cloud(points, **options):
@@ -25,6 +25,7 @@ __all__ = [
     "METHODS",
     "MODES",
     "SmoothResult",
+    "Smoothing",
     "Umbrella",
     "convergence_message",
     "hc_smooth",

@@ -34,6 +34,17 @@ def convergence_message(alpha, beta):
     )
 
 
+def divergence_message(method, alpha, beta, iterations, what):
+    """A sentence for users about a run that blew up (``what`` says how), naming the parameters."""
+    if method == "hc" and not in_convergence_region(alpha, beta):
+        return (
+            f"HC with alpha {alpha:g} and beta {beta:g} blew up after {iterations} iterations ({what}): "
+            "they lie outside the region where HC converges (alpha > 0 and beta > 0.5, paper Theorem 5.2). "
+            "Raise alpha above 0 and beta above 0.5; nothing was changed"
+        )
+    return f"smoothing ({method}) blew up after {iterations} iterations ({what}); nothing was changed"
+
+
 def hc_iteration_matrix(operator, alpha, beta, movable=None):
     """H = -(1-β)T² + (2-α)(1-β)T + (1-α)βE of Theorem 5.2, on the movable vertices (dense, small meshes).
 

@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from . import locality, parallel
 from .adjacency import Umbrella, umbrella_operator
 from .triangular import triangular_solver
-from .convergence import ConvergenceWarning, convergence_message
+from .convergence import ConvergenceWarning, DivergenceError, convergence_message, divergence_message
 from .validation import (
     bbox_diagonal,
     check_choice,
@@ -60,68 +60,139 @@ def smooth(
 
     ``method`` is ``"hc"`` or a Laplacian variant (``"plain"``, ``"central"``, ``"original"``);
     ``alpha`` weights q (central) or o (original, hc); ``beta`` is HC's weight of b_i in d_i.
+    Raises ``DivergenceError`` instead of returning a result that is not finite or has blown up.
     """
-    method = check_choice(method, "method", METHODS)
-    mode = check_choice(mode, "mode", MODES)
-    alpha = check_unit_interval(alpha, "alpha")
-    beta = check_unit_interval(beta, "beta")
-    iterations = check_iterations(iterations)
-    tolerance = check_tolerance(tolerance)
-    start = check_positions(positions)
-    n = start.shape[0]
-    if original is None or original is positions:
-        origin = start
+    run = Smoothing(positions, edges, method=method, alpha=alpha, beta=beta, iterations=iterations, mode=mode,
+                    fixed=fixed, tolerance=tolerance, original=original, operator=operator, stacklevel=4)
+    if progress is None:
+        run.advance()
     else:
-        origin = check_positions(original, "original")
-        if origin.shape != start.shape:
-            raise ValueError(f"original must have the shape of positions {start.shape}, got {origin.shape}")
-        origin = origin.astype(start.dtype, copy=False)
-    if operator is None:
-        operator = umbrella_operator(edges, n)
-    elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
-        raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
-    fixed_mask = check_fixed(fixed, n) | operator.isolated
-    if method == "hc" and iterations > 0:
-        message = convergence_message(alpha, beta)
-        if message:
-            warnings.warn(message, ConvergenceWarning, stacklevel=3)
+        while not run.finished:
+            run.advance(1, check=False)
+            if progress(run.done, run.iterations) is False:
+                raise Cancelled(f"cancelled after {run.done} of {run.iterations} iterations")
+    return run.result()
 
-    threshold = tolerance * bbox_diagonal(start) if tolerance > 0.0 else 0.0
-    renumbered = locality.renumbering(operator) if mode == "simultaneous" and iterations > 0 else None
-    order = renumbered.order if renumbered is not None else None
-    if renumbered is not None:  # scattered vertex order: work in a cache-friendly one
-        operator, fixed_mask = renumbered.operator, fixed_mask[order]
-    # The iterations work on planar copies, one contiguous row per coordinate (see core.parallel).
-    current = _planar(start, order)
-    step = _step_for(operator, fixed_mask, current if origin is start else _planar(origin, order),
-                     method, mode, alpha, beta, start.dtype)  # (the step keeps α o, never o itself)
-    del operator  # the step keeps what it needs; one built here is freed (sequential: ~28 B/vertex)
-    # A step that writes into ``spare`` swaps it with ``current`` every iteration.
-    spare = np.empty_like(current) if step.writes_out else None
-    done = 0
-    stopped_early = False
-    if not step.movable.any():
-        iterations = 0  # nothing can move: every iteration would return its input
-    for done in range(1, iterations + 1):
-        new = step(current, spare)
-        if tolerance > 0.0:
-            move = new - current
-            largest_move = np.sqrt(np.max(np.einsum("ij,ij->j", move, move)))
-            stopped_early = largest_move < threshold
-        if spare is not None:
-            spare = current
-        current = new
-        if progress is not None and progress(done, iterations) is False:
-            raise Cancelled(f"cancelled after {done} of {iterations} iterations")
-        if stopped_early:
-            break
-    del step, spare  # their buffers go before the result is made
-    result = np.empty(start.shape, dtype=start.dtype)
-    if order is None:
-        result[...] = current.T
-    else:
-        result[order] = current.T
-    return SmoothResult(result, done, stopped_early)
+
+# A result whose bounding box is this many times the input's has blown up: smoothing moves points
+# towards their neighbours, and inside the convergence region never comes close to this.
+BLOW_UP_FACTOR = 10.0
+
+
+class Smoothing:
+    """One smoothing run, advanced in slices: ``advance(k)`` runs up to k more iterations, ``result()``
+    hands the positions back. ``smooth`` is ``advance()`` once; a caller that shows progress advances
+    in chunks and gets the same result bit for bit (the tolerance is measured against the input's
+    bounding box whatever the chunk). Arguments as for ``smooth``; everything is checked here."""
+
+    def __init__(self, positions, edges, *, method="hc", alpha=0.0, beta=0.5, iterations, mode="simultaneous",
+                 fixed=None, tolerance=0.0, original=None, operator=None, stacklevel=2):
+        method = check_choice(method, "method", METHODS)
+        mode = check_choice(mode, "mode", MODES)
+        self.method, self.alpha, self.beta = method, check_unit_interval(alpha, "alpha"), check_unit_interval(
+            beta, "beta")
+        self.iterations = check_iterations(iterations)
+        tolerance = check_tolerance(tolerance)
+        start = check_positions(positions)
+        n = start.shape[0]
+        if original is None or original is positions:
+            origin = start
+        else:
+            origin = check_positions(original, "original")
+            if origin.shape != start.shape:
+                raise ValueError(f"original must have the shape of positions {start.shape}, got {origin.shape}")
+            origin = origin.astype(start.dtype, copy=False)
+        if operator is None:
+            operator = umbrella_operator(edges, n)
+        elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
+            raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
+        fixed_mask = check_fixed(fixed, n) | operator.isolated
+        if method == "hc" and self.iterations > 0:
+            message = convergence_message(self.alpha, self.beta)
+            if message:
+                warnings.warn(message, ConvergenceWarning, stacklevel=stacklevel)
+
+        self.shape, self.dtype = start.shape, start.dtype
+        self.threshold = tolerance * bbox_diagonal(start) if tolerance > 0.0 else 0.0
+        # What "blown up" is measured against: the box around the input and the originals.
+        self.reference_box = _box(start) if origin is start else _box(np.concatenate([start, origin]))
+        renumbered = locality.renumbering(operator) if mode == "simultaneous" and self.iterations > 0 else None
+        self.order = renumbered.order if renumbered is not None else None
+        if renumbered is not None:  # scattered vertex order: work in a cache-friendly one
+            operator, fixed_mask = renumbered.operator, fixed_mask[self.order]
+        # The iterations work on planar copies, one contiguous row per coordinate (see core.parallel).
+        self.current = _planar(start, self.order)
+        self.step = _step_for(operator, fixed_mask,
+                              self.current if origin is start else _planar(origin, self.order),
+                              method, mode, self.alpha, self.beta, start.dtype)  # (keeps α o, never o itself)
+        # A step that writes into ``spare`` swaps it with ``current`` every iteration.
+        self.spare = np.empty_like(self.current) if self.step.writes_out else None
+        self.done = 0
+        self.stopped_early = False
+        self.checked = True
+        if not self.step.movable.any():
+            self.iterations = 0  # nothing can move: every iteration would return its input
+
+    @property
+    def finished(self):
+        return self.stopped_early or self.done >= self.iterations
+
+    def advance(self, count=None, check=True):
+        """Run up to ``count`` more iterations (all that remain if None); returns how many ran.
+        ``check``: raise DivergenceError now if the positions have blown up (else ``result()`` does)."""
+        count = self.iterations - self.done if count is None else min(count, self.iterations - self.done)
+        ran = 0
+        with np.errstate(over="ignore", invalid="ignore"):  # a run that blows up is refused by _check
+            while ran < count and not self.stopped_early:
+                new = self.step(self.current, self.spare)
+                if self.threshold > 0.0:
+                    move = new - self.current
+                    self.stopped_early = np.sqrt(np.max(np.einsum("ij,ij->j", move, move))) < self.threshold
+                if self.spare is not None:
+                    self.spare = self.current
+                self.current = new
+                ran += 1
+        self.done += ran
+        self.checked = self.checked and not ran
+        if check:
+            self._check()
+        return ran
+
+    def result(self):
+        """The positions in the input's shape, dtype and vertex order, as a SmoothResult."""
+        self._check()
+        if self.finished:  # the step's buffers go before the result is made
+            self.step = self.spare = None
+        positions = np.empty(self.shape, dtype=self.dtype)
+        if self.order is None:
+            positions[...] = self.current.T
+        else:
+            positions[self.order] = self.current.T
+        return SmoothResult(positions, self.done, self.stopped_early)
+
+    def _check(self):
+        if self.checked:
+            return
+        low, high = self.reference_box
+        new_low, new_high = self.current.min(axis=1), self.current.max(axis=1)
+        size = float(np.linalg.norm(high - low))
+        grown = np.maximum(high, new_high) - np.minimum(low, new_low)
+        if not np.all(np.isfinite(grown)):
+            what = "coordinates became infinite or NaN"
+        elif float(np.linalg.norm(grown)) > BLOW_UP_FACTOR * size:
+            what = f"the bounding box grew {float(np.linalg.norm(grown)) / size:.3g} times"
+        else:
+            self.checked = True
+            return
+        raise DivergenceError(divergence_message(self.method, self.alpha, self.beta, self.done, what))
+
+
+def _box(points):
+    """(low, high) corners of the bounding box of (n, 3) points, in float64."""
+    if points.shape[0] == 0:
+        return np.zeros(3), np.zeros(3)
+    return (np.array([points[:, k].min() for k in range(3)], dtype=np.float64),
+            np.array([points[:, k].max() for k in range(3)], dtype=np.float64))
 
 
 def _planar(points, order=None):

@@ -6,7 +6,7 @@ validated before any mesh is written, so a failure leaves every mesh as it was.
 
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -36,13 +36,18 @@ class Job:
     result: np.ndarray = None
     iterations_run: int = 0
     seconds: float = 0.0
-    extra: dict = field(default_factory=dict)
 
 
 def settings_of(props):
-    """The core arguments from operator (or scene) settings."""
-    return dict(method=CORE_METHOD[props.method], alpha=props.alpha, beta=props.beta,
-                mode=props.mode.lower(), tolerance=props.tolerance)
+    """The core arguments from operator, scene or command-line settings. Numbers are taken in single
+    precision, as Blender's float properties hold them, so every route runs the same numbers."""
+    return dict(method=CORE_METHOD[props.method], alpha=as_property(props.alpha), beta=as_property(props.beta),
+                mode=props.mode.lower(), tolerance=as_property(props.tolerance))
+
+
+def as_property(value):
+    """``value`` as a Blender float property holds it (single precision)."""
+    return float(np.float32(value))
 
 
 def check_editable(obj):
@@ -93,11 +98,11 @@ def make_job(obj, props, extra_fixed=None):
                closed=closed, key_block=key_block)
 
 
-def run(jobs, props, chunk=None, should_stop=None):
+def run(jobs, props, chunk=None):
     """Smooth every job; a generator yielding the fraction done after each chunk of iterations.
 
-    chunk=None runs each job in one call. Chunked runs restart the core from the intermediate
-    positions with the true originals, which continues the same iteration exactly.
+    chunk=None runs each job in one slice. A chunked run advances the same core.Smoothing, so its
+    result is the one-slice result bit for bit.
     """
     settings = settings_of(props)
     total = max(1, props.iterations * len(jobs))
@@ -105,23 +110,18 @@ def run(jobs, props, chunk=None, should_stop=None):
     for job in jobs:
         start = time.perf_counter()
         job.operator = core.umbrella_operator(job.edges, len(job.positions))
-        current, remaining = job.positions, props.iterations
-        step = remaining if not chunk else chunk
-        while True:
-            with warnings.catch_warnings():  # the operators report the convergence region themselves
-                warnings.simplefilter("ignore", core.ConvergenceWarning)
-                result = core.smooth(current, None, operator=job.operator, iterations=min(step, remaining),
-                                     fixed=job.fixed, original=job.positions, **settings)
-            current = result.positions
-            remaining -= result.iterations
-            job.iterations_run += result.iterations
-            done += result.iterations
-            if result.stopped_early or remaining <= 0 or result.iterations == 0:
-                break
-            yield done / total
-        job.result = current
+        with warnings.catch_warnings():  # the operators report the convergence region themselves
+            warnings.simplefilter("ignore", core.ConvergenceWarning)
+            smoothing = core.Smoothing(job.positions, None, operator=job.operator, iterations=props.iterations,
+                                       fixed=job.fixed, **settings)
+        while not smoothing.finished:
+            done += smoothing.advance(chunk)
+            if not smoothing.finished:
+                yield done / total
+        result = smoothing.result()
+        job.result, job.iterations_run = result.positions, result.iterations
         job.seconds = time.perf_counter() - start
-        done += remaining  # iterations skipped by an early stop count as done
+        done += props.iterations - result.iterations  # iterations skipped by an early stop count as done
         yield done / total
 
 
@@ -134,11 +134,31 @@ def write(job, props):
         mesh_io.write_shape_key(key, job.result)
         return
     if job.key_block is not None:
+        keys = job.mesh.shape_keys
+        dependent = dependent_keys(keys, job.key_block) if keys.use_relative else []
+        if dependent:  # as Blender's own tools do: keys relative to the smoothed one move with it
+            displacement = job.result - job.positions
+            for key in dependent:
+                mesh_io.write_shape_key(key, mesh_io.read_shape_key(key) + displacement)
         mesh_io.write_shape_key(job.key_block, job.result)
-        if job.key_block != job.mesh.shape_keys.reference_key:
+        if job.key_block != keys.reference_key:
             job.mesh.update()
             return  # the basis (and so the mesh positions) stay as they were
     mesh_io.write_positions(job.mesh, job.result)
+
+
+def dependent_keys(keys, key_block):
+    """The shape keys whose chain of relative keys leads to ``key_block`` (not the key itself)."""
+    blocks = list(keys.key_blocks)
+    depends = {key_block.name}
+    grew = True
+    while grew:  # breadth-first over the relative keys; cycles cannot loop
+        grew = False
+        for block in blocks:
+            if block.name not in depends and block.relative_key.name in depends:
+                depends.add(block.name)
+                grew = True
+    return [block for block in blocks if block.name in depends and block != key_block]
 
 
 def summary(jobs, props):

@@ -122,10 +122,13 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
             jobs = self.prepare(context)
             for _ in jobs_module.run(jobs, self):
                 pass
-        except (JobError, ValueError) as error:
+        except (JobError, ValueError) as error:  # bad input, or a run that blew up: nothing written
             self.abandon(context)
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
+        except Exception:  # a bug: back to the mode the user was in, then Blender shows the traceback
+            self.abandon(context)
+            raise
         self.finish(context, jobs)
         self._report_done(jobs)
         return {"FINISHED"}
@@ -156,6 +159,9 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
             self.abandon(context)
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
+        except Exception:
+            self.abandon(context)
+            raise
         return self.modal_finish(context)
 
     def modal_finish(self, context):

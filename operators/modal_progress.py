@@ -6,6 +6,8 @@ generator that does a slice of the work per ``next()`` and yields the fraction d
 undone on cancel, ``modal_abandon(context)``.
 """
 
+import traceback
+
 PROGRESS_TICK = 0.01  # seconds between timer events: each advances the work by one slice
 
 
@@ -46,10 +48,15 @@ class ModalProgress:
         except StopIteration:
             self._end_modal(context)
             return self.modal_finish(context)
-        except ValueError as error:
+        except Exception as error:  # every exit removes the timer and the progress and writes nothing
             self._end_modal(context)
             self.modal_abandon(context)
-            self.report({"ERROR"}, str(error))
+            if isinstance(error, ValueError):  # bad settings or a run that blew up: the message says why
+                self.report({"ERROR"}, str(error))
+            else:  # a bug: keep the traceback for the console
+                traceback.print_exc()
+                self.report({"ERROR"}, f"{self.progress_label} failed ({type(error).__name__}: {error}): "
+                                       "nothing was changed")
             return {"CANCELLED"}
         context.window_manager.progress_update(int(fraction * 100))
         if context.workspace is not None:
