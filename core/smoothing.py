@@ -87,10 +87,10 @@ class Smoothing:
 
     def __init__(self, positions, edges, *, method="hc", alpha=0.0, beta=0.5, iterations, mode="simultaneous",
                  fixed=None, tolerance=0.0, original=None, operator=None, stacklevel=2):
-        method = check_choice(method, "method", METHODS)
+        self.method = method = check_choice(method, "method", METHODS)
         mode = check_choice(mode, "mode", MODES)
-        self.method, self.alpha, self.beta = method, check_unit_interval(alpha, "alpha"), check_unit_interval(
-            beta, "beta")
+        self.alpha = check_unit_interval(alpha, "alpha")
+        self.beta = check_unit_interval(beta, "beta")
         self.iterations = check_iterations(iterations)
         tolerance = check_tolerance(tolerance)
         start = check_positions(positions)
@@ -342,38 +342,42 @@ class _SimultaneousStep(_Step):
         self.blocks.run(block_step)
 
     def _hc_step(self, q, p):
-        """Algorithm 1, rearranged so that every pass runs on row blocks, each chunk of rows finished
-        while its neighbour sums are in cache.
+        """Algorithm 1 of the paper, in two passes over row blocks. The paper, per vertex i in V_var:
 
-        With s = α o + (1-α) q the paper's b = T q - s and p = T q - (β b + (1-β) T b); substituting
-        T q = b + s gives p = s + d - T d for d = (1-β) b. d is zero on fixed vertices (they are not
-        in V_var) and p = q there.
+            p_i = (1/|adj(i)|) Σ_{j∈adj(i)} q_j                    (Laplacian pass)
+            b_i = p_i - (α o_i + (1-α) q_i)
+            p_i = p_i - (β b_i + (1-β)/|adj(i)| Σ_{j∈adj(i)} b_j)   (correction pass)
+
+        In matrix form with s = α o + (1-α) q: b = T q - s and p = T q - β b - (1-β) T b. As T q = b + s,
+        p = s + w - T w with w = (1-β) b: the first pass makes s and w (one product, T q), the second
+        adds w - T w (one product, T w). w is 0 on fixed vertices (not in V_var) and p = q there.
+        tests/core/paper_reference.py runs the per-vertex form; the two agree to rounding.
         """
         if self.scratch is None:
             self.scratch = np.empty_like(q)
-        d = self.scratch
+        w = self.scratch
         keep = 1.0 - self.beta
 
-        def differences(rows, sums):  # p = s, d = (1-β) T q - (1-β) s
+        def first(rows, sums):  # sums = Σ_j q_j. p = s, w = (1-β)(T q - s)
             s = np.multiply(q[:, rows], 1.0 - self.alpha, out=p[:, rows])
             if self.alpha_origin is not None:
                 s += self.alpha_origin[:, rows]
-            d_rows = np.multiply(s, -keep, out=d[:, rows])
-            sums *= self.scaled_factor[rows]
-            d_rows += sums
+            w_rows = np.multiply(s, -keep, out=w[:, rows])
+            sums *= self.scaled_factor[rows]  # (1-β)/|adj(i)|
+            w_rows += sums
 
-        def corrected(rows, sums):  # p = s + d - T d
+        def second(rows, sums):  # sums = Σ_j w_j. p = s + w - T w
             p_rows = p[:, rows]
-            p_rows += d[:, rows]
-            sums *= self.mean_factor[rows]
+            p_rows += w[:, rows]
+            sums *= self.mean_factor[rows]  # 1/|adj(i)|
             p_rows -= sums
 
         def first_pass(block):
-            block.neighbour_sums(q, differences)
-            _zero_rows(d, self.block_fixed[id(block)])
+            block.neighbour_sums(q, first)
+            _zero_rows(w, self.block_fixed[id(block)])
 
         def second_pass(block):
-            block.neighbour_sums(d, corrected)
+            block.neighbour_sums(w, second)
             _copy_rows(p, q, self.block_fixed[id(block)])
 
         self.blocks.run(first_pass)
@@ -455,6 +459,7 @@ class _GaussSeidel:
         self.system = sp.csc_matrix((data, indices, indptr), shape=(n, n))
         self.solve_lower = triangular_solver(self.system)
         self.fixed_index = np.flatnonzero(~movable)
+        self.weight = weight
         self.threaded = indptr[-1] >= parallel.MIN_WORK and parallel.thread_count() > 1
 
     def each_coordinate(self, task, count):
@@ -468,8 +473,9 @@ class _GaussSeidel:
 
     def neighbour_mean(self, x):
         """T x for one coordinate row x on movable rows (fixed rows: anything; callers overwrite them),
-        from the two triangles. Valid for the weight 1 of the HC Laplacian pass: then
-        L x = x - (I - L) x."""
+        from the two triangles: L x = x - (I - L) x holds for the weight 1 of the HC Laplacian pass only."""
+        if self.weight != 1.0:
+            raise AssertionError("neighbour_mean needs the system of a weight-1 (plain or HC) Laplacian pass")
         result = self.system @ x
         np.subtract(x, result, out=result)  # L x
 
