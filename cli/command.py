@@ -2,7 +2,8 @@
 
 ``main(argv)`` is the function registered with bpy.utils.register_cli_command; tests call it directly
 with an argument list (the bpy module cannot run `blender -c`). Meshes are smoothed with the shared
-job code of the operators (operators/jobs.py); point clouds with object.hc_smooth_points.
+job code of the mesh operators (operators/jobs.py), point clouds with that of the point operator
+(operators/point_cloud.py): the same functions the operators call, fed from the command line.
 """
 
 import os
@@ -13,10 +14,10 @@ import warnings
 from dataclasses import dataclass, field
 
 import bpy
-import numpy as np
 
 from .. import core
 from ..operators import jobs as jobs_module
+from ..operators import point_cloud
 from . import arguments, files
 from .files import FileError
 
@@ -29,9 +30,11 @@ class Outcome:
     target: str
     objects: int = 0
     vertices: int = 0
-    iterations: int = 0
+    iterations: int = 0  # meshes: the most iterations any mesh ran
+    rounds: list = field(default_factory=list)  # point clouds: (rounds, steps per round) per cloud
     seconds: float = 0.0
     changes: list = field(default_factory=list)  # core.Change per smoothed mesh
+    warnings: list = field(default_factory=list)
     error: str = ""
 
     def change_text(self):
@@ -42,25 +45,52 @@ class Outcome:
                 else f"size {worst.bbox_change:+.3%}")
         return text if len(self.changes) == 1 else f"{text} (largest of {len(self.changes)})"
 
+    def amount_text(self):
+        """How much smoothing ran: '10 iterations', or for point clouds '3 rounds of 15 steps (45 steps)'."""
+        if not self.rounds:
+            return f"{self.iterations} iterations"
+        kinds = sorted(set(self.rounds))
+        if len(kinds) == 1:
+            (rounds, steps), = kinds
+            return f"{rounds} rounds of {steps} steps ({rounds * steps} steps)"
+        totals = [rounds * steps for rounds, steps in kinds]
+        return f"{min(totals)} to {max(totals)} steps in {' / '.join(f'{r}x{s}' for r, s in kinds)}"
+
+    def size_text(self):
+        return f"{self.vertices} {'points' if self.rounds else 'vertices'}"
+
 
 def main(argv):
     """Run the command on ``argv`` (the arguments after `-c hc_smooth`); returns the exit status."""
     try:
         plan = arguments.parse(argv)
+        settings = point_settings(plan) if plan.points else plan.settings
     except SystemExit as done:  # --help printed; argparse exits
         return done.code or 0
     except arguments.UsageError as error:
         print(error, file=sys.stderr)
         return 2
-    message = core.convergence_message(plan.settings.alpha, plan.settings.beta) if plan.settings.method == "HC" else None
+    for note in plan.notes:
+        print(f"hc_smooth: note: {note}")
+    if plan.points:
+        message = point_cloud.convergence_note(settings)
+    else:
+        message = core.convergence_message(settings.alpha, settings.beta) if settings.method == "HC" else None
     if message:
         print(f"hc_smooth: warning: {message}")
-    outcomes = []
+    outcomes, cleaned = [], set()
     total = len(plan.files)
     for number, (source, target) in enumerate(plan.files, 1):
-        outcome = process(source, target, plan)
+        folder = os.path.dirname(target)
+        if folder not in cleaned and os.path.isdir(folder):
+            cleaned.add(folder)
+            for name in files.remove_stale_temporaries(folder):
+                print(f"hc_smooth: note: removed {os.path.join(folder, name)}, left by an interrupted run")
+        outcome = process(source, target, plan, settings)
         outcomes.append(outcome)
         print(f"[{number}/{total}] {progress_line(outcome)}", flush=True)
+        for text in outcome.warnings:
+            print(f"  warning: {text}", flush=True)
     print(summary_table(outcomes), flush=True)
     failed = [outcome for outcome in outcomes if outcome.error]
     if failed:
@@ -69,17 +99,26 @@ def main(argv):
     return 0
 
 
-def process(source, target, plan):
+def point_settings(plan):
+    """The point operator's settings with what the command line gave; refuses an inconsistent set."""
+    settings = point_cloud.PointSettings(**plan.point_options)
+    if settings.spacing_factor > settings.gap_factor:
+        raise arguments.UsageError(f"--reach ({settings.spacing_factor:g}) must not exceed --gap "
+                                   f"({settings.gap_factor:g}): a neighbour within reach would be cut off as a gap")
+    return settings
+
+
+def process(source, target, plan, settings):
     """Smooth one input file into ``target``; every failure becomes ``Outcome.error`` (no output written)."""
     outcome = Outcome(source=source, target=target)
     start = time.perf_counter()
     try:
         os.makedirs(os.path.dirname(target), exist_ok=True)
         if os.path.splitext(source)[1].lower() == arguments.BLEND:
-            smooth_blend_file(source, target, plan, outcome)
+            smooth_blend_file(source, target, plan, settings, outcome)
         else:
-            smooth_mesh_file(source, target, plan, outcome)
-    except (FileError, jobs_module.JobError, ValueError, OSError) as error:
+            smooth_mesh_file(source, target, plan, settings, outcome)
+    except (FileError, jobs_module.JobError, point_cloud.CloudError, ValueError, OSError) as error:
         outcome.error = str(error)
     except Exception as error:  # a bug: report it with its traceback and go on with the other files
         traceback.print_exc()
@@ -88,17 +127,22 @@ def process(source, target, plan):
     return outcome
 
 
-def smooth_mesh_file(source, target, plan, outcome):
+def smooth_mesh_file(source, target, plan, settings, outcome):
     bpy.ops.wm.read_homefile(use_empty=True)  # each file starts from an empty scene
     objects = files.import_file(source)
     meshes = [obj for obj in objects if obj.type == "MESH"]
     if not meshes:
         raise FileError("no mesh in this file")
-    smooth_objects(meshes, plan, outcome)
+    smooth_objects(meshes, plan, settings, outcome)
     files.export_file(meshes, target)
 
 
-def smooth_blend_file(source, target, plan, outcome):
+def is_point_cloud(obj):
+    return obj.type == "POINTCLOUD" or (obj.type == "MESH" and bool(len(obj.data.vertices))
+                                        and not len(obj.data.edges))
+
+
+def smooth_blend_file(source, target, plan, settings, outcome):
     if not os.path.isfile(source):
         raise FileError("no such file")
     try:
@@ -113,30 +157,45 @@ def smooth_blend_file(source, target, plan, outcome):
                 raise FileError(f"no object '{name}' in this file")
             objects.append(obj)
     else:
-        objects = [obj for obj in bpy.data.objects if obj.type == "MESH" and obj.library is None]
+        local = [obj for obj in bpy.data.objects if obj.library is None and obj.type in ("MESH", "POINTCLOUD")]
+        objects = [obj for obj in local if is_point_cloud(obj) == plan.points]  # --points: the clouds, else the meshes
+        others = [obj.name for obj in local if obj not in objects]
         if not objects:
-            raise FileError("no local mesh objects in this file")
-    smooth_objects(objects, plan, outcome)
+            raise FileError("no local point clouds (meshes without edges, point cloud objects) in this file"
+                            + (" (it has meshes: smooth them without --points)" if others else "")
+                            if plan.points else "no local mesh objects in this file"
+                            + (" (it has point clouds: pass --points)" if others else ""))
+        if others:
+            outcome.warnings.append(f"left as they are: {', '.join(sorted(others))} ("
+                                    + ("meshes: smooth them without --points)" if plan.points
+                                       else "point clouds: smooth them with --points)"))
+    smooth_objects(objects, plan, settings, outcome)
     files.save_blend_copy(target)
 
 
-def smooth_objects(objects, plan, outcome):
-    """Smooth mesh objects (a mesh shared by several objects once); every mesh is read before any is written."""
-    settings = plan.settings
+def smooth_objects(objects, plan, settings, outcome):
+    """Smooth the objects as meshes, or as point clouds with --points; everything is read before anything is written."""
+    if plan.points:
+        smooth_point_clouds(objects, settings, outcome)
+    else:
+        smooth_meshes(objects, settings, outcome)
+    outcome.objects = len(objects)
+
+
+def smooth_meshes(objects, settings, outcome):
+    """A mesh shared by several objects is smoothed once."""
     for obj in objects:
         if obj.type != "MESH":
-            raise FileError(f"'{obj.name}' is a {obj.type.lower()} object, not a mesh")
-    clouds = [obj for obj in objects if len(obj.data.vertices) and not len(obj.data.edges)]
-    if clouds and not plan.points:
-        raise FileError(f"'{clouds[0].name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
+            raise FileError(f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object, not a mesh"
+                            + (" (pass --points to smooth it)" if obj.type == "POINTCLOUD" else ""))
+        if is_point_cloud(obj):
+            raise FileError(f"'{obj.name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
     seen, jobs = set(), []
     for obj in objects:
-        if obj in clouds or obj.data.as_pointer() in seen:
+        if obj.data.as_pointer() in seen:
             continue
         seen.add(obj.data.as_pointer())
         jobs.append(jobs_module.make_job(obj, settings))
-    if clouds:
-        check_point_operator()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)  # said once, at the start
         for _ in jobs_module.run(jobs, settings):
@@ -144,77 +203,42 @@ def smooth_objects(objects, plan, outcome):
     for job in jobs:
         jobs_module.write(job, settings)
         outcome.changes.append(core.measure_change(job.positions, job.result, faces=job.faces,
-                                                        closed=job.closed))
+                                                   closed=job.closed))
         outcome.vertices += len(job.positions)
         outcome.iterations = max(outcome.iterations, job.iterations_run)
-    if clouds:
-        smooth_point_clouds(clouds, settings, outcome, given=plan.given)
-    outcome.objects = len(objects)
 
 
-POINT_OPERATOR = "OBJECT_OT_hc_smooth_points"
-
-
-def check_point_operator():
-    if not hasattr(bpy.types, POINT_OPERATOR):
-        raise FileError("point clouds need the operator object.hc_smooth_points, which is not registered "
-                        "in this HC Smooth installation")
-
-
-def smooth_point_clouds(clouds, settings, outcome, given=()):
-    """Through the point-cloud operator, passing the settings it shares with the mesh operators;
-    alpha and beta only when ``given`` on the command line (the point operator's defaults differ).
-    By default the operator chooses its steps and alpha from the estimated noise; an alpha given on
-    the command line switches that off, so the run uses that alpha and the operator's fixed steps."""
-    properties = bpy.ops.object.hc_smooth_points.get_rna_type().properties
-    options = {}
-    for name in ("method", "alpha", "beta", "iterations", "mode", "tolerance"):
-        if name not in properties or (name in ("alpha", "beta") and name not in given):
-            continue
-        value = getattr(settings, name)
-        if properties[name].type == "ENUM" and value not in properties[name].enum_items.keys():
-            continue  # the point operator has its own method names: keep its default
-        options[name] = value
-    if "alpha" in options and "auto_amount" in properties:
-        options["auto_amount"] = False
-    before = [read_positions(obj.data) for obj in clouds]
-    for obj in bpy.context.scene.objects:
-        obj.select_set(obj in clouds)
-    with bpy.context.temp_override(active_object=clouds[0], object=clouds[0], selected_objects=clouds,
-                                   selected_editable_objects=clouds):
-        try:
-            result = bpy.ops.object.hc_smooth_points(**options)
-        except RuntimeError as error:
-            raise FileError(str(error).strip()) from None
-    if result != {"FINISHED"}:
-        raise FileError("object.hc_smooth_points did not finish")
-    for obj, positions in zip(clouds, before):
-        outcome.changes.append(core.measure_change(positions, read_positions(obj.data)))
-        outcome.vertices += len(positions)
-    outcome.iterations = max(outcome.iterations, options.get("iterations", 0))
-
-
-def read_positions(mesh):
-    buffer = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
-    mesh.attributes["position"].data.foreach_get("vector", buffer)
-    return buffer.reshape(-1, 3)
+def smooth_point_clouds(objects, settings, outcome):
+    """With the point operator's own functions (read, run, write), ``settings`` a point_cloud.PointSettings."""
+    for obj in objects:
+        if obj.type == "MESH" and (len(obj.data.edges) or len(obj.data.polygons)):
+            raise FileError(f"'{obj.name}' has edges: it is a mesh, not a point cloud (smooth it without --points)")
+    clouds = point_cloud.read_clouds(objects, settings)
+    for _ in point_cloud.run(clouds, settings):
+        pass
+    point_cloud.write(clouds, settings, bpy.context)
+    for cloud in clouds:
+        outcome.changes.append(core.measure_change(cloud.positions, cloud.result))
+        outcome.vertices += len(cloud.positions)
+        outcome.rounds.append((cloud.report.rounds, cloud.report.iterations_per_round))
+    outcome.warnings.extend(text for text in (point_cloud.stuck_warning(clouds),) if text)
 
 
 def progress_line(outcome):
     if outcome.error:
         return f"{outcome.source}: FAILED: {outcome.error}"
-    return (f"{outcome.source} -> {outcome.target}: {outcome.vertices} vertices, {outcome.iterations} iterations, "
+    return (f"{outcome.source} -> {outcome.target}: {outcome.size_text()}, {outcome.amount_text()}, "
             f"{outcome.seconds:.2f} s, {outcome.change_text()}")
 
 
 def summary_table(outcomes):
-    header = ("file", "vertices", "iterations", "time", "change", "result")
+    header = ("file", "vertices", "smoothing", "time", "change", "result")
     rows = [header]
     for outcome in outcomes:
         if outcome.error:
             rows.append((outcome.source, "-", "-", f"{outcome.seconds:.2f} s", "-", "FAILED: " + outcome.error))
         else:
-            rows.append((outcome.source, str(outcome.vertices), str(outcome.iterations), f"{outcome.seconds:.2f} s",
+            rows.append((outcome.source, str(outcome.vertices), outcome.amount_text(), f"{outcome.seconds:.2f} s",
                          outcome.change_text(), outcome.target))
     widths = [max(len(row[i]) for row in rows) for i in range(len(header) - 1)]
     lines = ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)) + "  " + row[-1] for row in rows]

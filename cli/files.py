@@ -6,6 +6,7 @@ valid) output, and the target folder's relative paths (OBJ materials, .blend tex
 """
 
 import os
+import re
 
 import bpy
 
@@ -50,6 +51,47 @@ def temporary_path(target):
     folder, base = os.path.split(target)
     stem, ext = os.path.splitext(base)
     return os.path.join(folder, f".{stem}.hc_smooth-{os.getpid()}{ext}")
+
+
+# temporary_path's names, with the exporter's .mtl, the .tmp of _rename_material_library and Blender's
+# own save temporary (name@); the pid is what tells whether the run that wrote it is still going.
+TEMPORARY = re.compile(r"^\..+\.hc_smooth-([1-9][0-9]*)\.(?:ply|obj|stl|mtl|blend)(?:\.tmp|@)?$", re.IGNORECASE)
+
+
+def _running(pid):
+    """False only when no process ``pid`` exists; anything uncertain counts as running."""
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)  # signal 0: nothing is sent, only whether the process exists is checked
+    except ProcessLookupError:
+        return False
+    except (OSError, OverflowError):  # PermissionError: it exists, under another user
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder):
+    """Remove our temporaries in ``folder`` whose process no longer runs (a killed run); returns their names.
+
+    A file whose process may still be running (another run writing into the same folder) is kept."""
+    if os.name != "posix":  # elsewhere os.kill(pid, 0) would terminate the process rather than test it
+        return []
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:  # an unreadable folder: writing into it will say what is wrong
+        return []
+    for entry in entries:
+        match = TEMPORARY.match(entry.name)
+        if match is None or not entry.is_file(follow_symlinks=False) or _running(int(match.group(1))):
+            continue
+        try:
+            os.remove(entry.path)
+        except OSError:  # gone already (another run cleaned up first) or not ours to remove: leave it
+            continue
+        removed.append(entry.name)
+    return sorted(removed)
 
 
 def export_file(objects, target):

@@ -3,10 +3,12 @@ their RFS mesh (paper section 7, core.smooth_point_cloud).
 
 Thin like the mesh operators: read every selected cloud, validate, smooth, and only then write, so a
 failure leaves everything as it was. execute() depends only on the properties and the objects, so the
-redo panel (F9) can re-run it.
+redo panel (F9) can re-run it. The steps are plain functions of a ``PointSettings`` (read_clouds, run,
+write, messages) that the operator and the command line (cli/command.py) both call.
 """
 
 import warnings
+from dataclasses import dataclass, fields
 
 import bpy
 import numpy as np
@@ -26,6 +28,30 @@ class CloudError(Exception):
     """A message for the user; nothing has been written."""
 
 
+@dataclass
+class PointSettings:
+    """The point-cloud settings: the operator's properties (their defaults are these) or the command line's."""
+
+    auto_amount: bool = True
+    alpha: float = 0.01
+    beta: float = 0.55
+    rounds: int = 3
+    iterations_per_round: int = 22
+    neighbours: int = 16
+    spacing_factor: float = 2.5
+    gap_factor: float = 3.0
+    min_quality: float = 0.3
+    swap: bool = True
+    vertex_group: str = ""
+    invert_vertex_group: bool = False
+    keep_rfs_mesh: bool = False
+
+    @classmethod
+    def of(cls, props):
+        """A snapshot of an operator's properties (a modal run must not see later edits)."""
+        return cls(**{f.name: getattr(props, f.name) for f in fields(cls)})
+
+
 def _attribute_mask(data, name, count):
     """Point-domain boolean/float/int attribute as a mask (value != 0), or None if there is none."""
     attribute = data.attributes.get(name)
@@ -40,10 +66,24 @@ def _attribute_mask(data, name, count):
     return values != 0
 
 
+def _too_few_points(name, positions):
+    """Why ``positions`` cannot be smoothed (fewer than three distinct points: no RFS face), or None."""
+    n = len(positions)
+    if n == 1:
+        return f"'{name}' is a single point: nothing to smooth"
+    differs = np.any(positions != positions[0], axis=1)
+    if not differs.any():
+        return f"All {n} points of '{name}' coincide: nothing to smooth"
+    other = np.all(positions == positions[int(np.argmax(differs))], axis=1)
+    if np.all(other | ~differs):  # every point is the first one or that other one
+        return f"The {n} points of '{name}' lie at only 2 distinct positions: nothing to smooth"
+    return None
+
+
 class Cloud:
     """One object to smooth: where its points come from and go to."""
 
-    def __init__(self, obj, props):
+    def __init__(self, obj, settings):
         if obj.type not in POINT_TYPES:
             raise CloudError(f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object: "
                              "select a mesh of loose vertices or a point cloud")
@@ -71,26 +111,29 @@ class Cloud:
         if bad.size:
             raise CloudError(f"'{obj.data.name}' has {bad.size} points with NaN or infinite coordinates "
                              f"(first: point {int(bad[0])}): fix or delete them first")
+        too_few = _too_few_points(obj.data.name, positions)
+        if too_few:
+            raise CloudError(too_few)
         self.positions = positions
-        self.fixed = self._fixed(props)
+        self.fixed = self._fixed(settings)
         self.result = None
         self.report = None
 
-    def _fixed(self, props):
+    def _fixed(self, settings):
         n = len(self.positions)
-        if not props.vertex_group:
+        if not settings.vertex_group:
             return None
         if self.obj.type == "MESH":
-            group = self.obj.vertex_groups.get(props.vertex_group)
+            group = self.obj.vertex_groups.get(settings.vertex_group)
             if group is None:
-                raise CloudError(f"Object '{self.obj.name}' has no vertex group '{props.vertex_group}'")
+                raise CloudError(f"Object '{self.obj.name}' has no vertex group '{settings.vertex_group}'")
             members = mesh_io.vertex_group_members(self.obj, group.index)
         else:  # point clouds have no vertex groups: a point attribute of that name plays the part
-            members = _attribute_mask(self.data, props.vertex_group, n)
+            members = _attribute_mask(self.data, settings.vertex_group, n)
             if members is None:
-                raise CloudError(f"Point cloud '{self.data.name}' has no point attribute '{props.vertex_group}' "
+                raise CloudError(f"Point cloud '{self.data.name}' has no point attribute '{settings.vertex_group}' "
                                  "(boolean, integer or float) to use as the fixed group")
-        return ~members if props.invert_vertex_group else members
+        return ~members if settings.invert_vertex_group else members
 
     def write(self):
         if self.obj.type == "POINTCLOUD":
@@ -125,6 +168,108 @@ class Cloud:
         return obj
 
 
+def read_clouds(objects, settings):
+    """Read and check every object (an object data shared by several objects once); raises CloudError. Reads only."""
+    if settings.spacing_factor > settings.gap_factor:
+        raise CloudError(f"Reach ({settings.spacing_factor:g}) must not exceed Gap ({settings.gap_factor:g}): "
+                         "a neighbour within reach would be cut off as a gap")
+    seen, clouds = set(), []
+    for obj in objects:
+        if obj.type in POINT_TYPES and obj.data.as_pointer() in seen:
+            continue
+        clouds.append(Cloud(obj, settings))
+        seen.add(obj.data.as_pointer())
+    return clouds
+
+
+def make_smoother(cloud, settings):
+    """The core's stepwise run for one cloud; raises ValueError for settings the core refuses."""
+    return PointCloudSmoother(
+        cloud.positions, alpha="auto" if settings.auto_amount else settings.alpha, beta=settings.beta,
+        rounds=settings.rounds,
+        iterations_per_round="auto" if settings.auto_amount else settings.iterations_per_round,
+        fixed=cloud.fixed, neighbours=settings.neighbours, spacing_factor=settings.spacing_factor,
+        gap_factor=settings.gap_factor, min_quality=settings.min_quality, swap=settings.swap)
+
+
+def run(clouds, settings):
+    """Every cloud's stages in turn; yields the fraction done and sets each cloud's result. Writes nothing."""
+    steps_per_cloud = settings.rounds + 4  # four build stages, then the rounds
+    total = steps_per_cloud * len(clouds)
+    for number, cloud in enumerate(clouds):
+        smoother = make_smoother(cloud, settings)
+        with warnings.catch_warnings():  # the convergence region is reported once, at the end
+            warnings.simplefilter("ignore", core.ConvergenceWarning)
+            for step, _ in enumerate(smoother.steps(), start=1):
+                yield (number * steps_per_cloud + step) / total
+        cloud.result, cloud.report = smoother.result, smoother.report
+
+
+def write(clouds, settings, context):
+    """Write every result (and the RFS meshes if asked for); call only once ``run`` has finished."""
+    for cloud in clouds:
+        cloud.write()
+        if settings.keep_rfs_mesh:
+            cloud.add_rfs_object(context)
+
+
+def lowest_alpha(settings):
+    """The smallest alpha a run with these settings can use, before it has estimated the noise."""
+    # getattr: the redo panel's draw() also runs on stand-ins that hold only some of the properties.
+    automatic = getattr(settings, "auto_amount", True)
+    # With the automatic amount, alpha is 0.66 / steps >= matched_alpha(MAX_STEPS) > 0: only beta can leave the region.
+    return matched_alpha(MAX_STEPS) if automatic else settings.alpha
+
+
+def convergence_note(settings):
+    """The convergence-region warning for these settings (before a run), or None."""
+    return core.convergence_message(lowest_alpha(settings), settings.beta)
+
+
+def amount(report):
+    """What ran: '3 rounds of 15 steps'."""
+    return f"{report.rounds} rounds of {report.iterations_per_round} steps"
+
+
+def stuck_warning(clouds):
+    """The warning for runs where most points found no RFS face (and so could not move), or None."""
+    still = sum(c.report.isolated for c in clouds)
+    distinct = sum(c.report.n_distinct for c in clouds)
+    if still <= distinct / 2:
+        return None
+    counted = "points" if distinct == sum(len(c.positions) for c in clouds) else "distinct points"
+    # Typically scan lines much farther apart than the points along them: the graph keeps to the
+    # lines and no faces form, so the points cannot move.
+    return (f"{still} of {distinct} {counted} have no RFS faces and did not move: the points are much farther "
+            "apart in one direction (scan lines?). Raise Reach, Gap and Neighbours to connect them")
+
+
+def summary(clouds, settings):
+    points = sum(len(c.positions) for c in clouds)
+    seconds = sum(sum(c.report.seconds.values()) for c in clouds)
+    still = sum(c.report.isolated for c in clouds)
+    names = f"{len(clouds)} objects" if len(clouds) > 1 else f"'{clouds[0].data.name}'"
+
+    def described(report):
+        automatic = report.noise is not None and settings.auto_amount
+        noise = f"noise {report.noise.ratio:.2f}x spacing: " if automatic else ""
+        return f"{noise}{amount(report)}, alpha {report.alpha:.3g}"
+
+    return (f"HC Smooth Points on {names}: {points} points, "
+            + "; ".join(described(c.report) for c in clouds) + f", {seconds:.2f} s"
+            + (f", {still} points without RFS faces stayed put" if still else ""))
+
+
+def messages(clouds, settings):
+    """[(level, text)] to report after a finished run: the summary, then any warnings."""
+    found = [("INFO", summary(clouds, settings))]
+    for level, text in (("WARNING", stuck_warning(clouds)),
+                        ("WARNING", core.convergence_message(min(c.report.alpha for c in clouds), settings.beta))):
+        if text:
+            found.append((level, text))
+    return found
+
+
 class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
     """Smooth point clouds (meshes of loose vertices, point cloud objects) without shrinking them: HC steps on a temporary RFS mesh, alternating with edge swapping"""
 
@@ -134,40 +279,42 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
     progress_label = "HC Smooth Points"
 
     auto_amount: BoolProperty(
-        name="Automatic Amount", default=True,
+        name="Automatic Amount", default=PointSettings.auto_amount,
         description="Choose Steps per Round and Alpha from the noise estimated relative to the point spacing "
                     "(noisier: more steps and a weaker pull; nearly clean, sparse points: a few steps). "
                     "Off: use the values set below")
-    alpha: FloatProperty(name="Alpha", default=0.01, min=0.0, max=1.0, step=0.1, precision=3,
+    alpha: FloatProperty(name="Alpha", default=PointSettings.alpha, min=0.0, max=1.0, step=0.1, precision=3,
                          description="Pull towards the original positions (small: more smoothing; raise it for nearly "
                                      "clean, sparse points). Used when Automatic Amount is off")
-    beta: FloatProperty(name="Beta", default=0.55, min=0.0, max=1.0, precision=3,
+    beta: FloatProperty(name="Beta", default=PointSettings.beta, min=0.0, max=1.0, precision=3,
                         description="Weight of a point's own difference against its neighbours' (converges above 0.5)")
-    rounds: IntProperty(name="Rounds", default=3, min=0, soft_max=50,
+    rounds: IntProperty(name="Rounds", default=PointSettings.rounds, min=0, soft_max=50,
                         description="Runs of Steps per Round HC steps, with edge swapping of the RFS mesh in "
                                     "between (with Automatic Amount the chosen steps are spread over the rounds)")
-    iterations_per_round: IntProperty(name="Steps per Round", default=22, min=1, soft_max=100,
+    iterations_per_round: IntProperty(name="Steps per Round", default=PointSettings.iterations_per_round, min=1,
+                                      soft_max=100,
                                       description="HC iterations between two passes of edge swapping. Used when "
                                                   "Automatic Amount is off")
-    neighbours: IntProperty(name="Neighbours", default=16, min=2, soft_max=64,
+    neighbours: IntProperty(name="Neighbours", default=PointSettings.neighbours, min=2, soft_max=64,
                             description="How many nearest neighbours each point may connect to")
     spacing_factor: FloatProperty(
-        name="Reach", default=2.5, min=0.1, soft_max=5.0,
+        name="Reach", default=PointSettings.spacing_factor, min=0.1, soft_max=5.0,
         description="Connect neighbours up to this many times the local point spacing "
                     "(larger: wider neighbourhoods, stronger smoothing)")
     gap_factor: FloatProperty(
-        name="Gap", default=3.0, min=0.1, soft_max=10.0,
+        name="Gap", default=PointSettings.gap_factor, min=0.1, soft_max=10.0,
         description="Never connect across a gap wider than this many local spacings: separate parts stay "
                     "separate (must be at least Reach)")
-    min_quality: FloatProperty(name="Face Quality", default=0.3, min=0.0, max=1.0,
+    min_quality: FloatProperty(name="Face Quality", default=PointSettings.min_quality, min=0.0, max=1.0,
                                description="Drop RFS faces below this Bank-Smith quality (1 = equilateral)")
-    swap: BoolProperty(name="Edge Swapping", default=True,
+    swap: BoolProperty(name="Edge Swapping", default=PointSettings.swap,
                        description="Swap edges of the RFS mesh between HC steps (paper section 7)")
-    vertex_group: StringProperty(name="Vertex Group",
+    vertex_group: StringProperty(name="Vertex Group", default=PointSettings.vertex_group,
                                  description="Points in this vertex group (weight above 0) stay fixed; for "
                                              "point cloud objects, a point attribute of that name")
-    invert_vertex_group: BoolProperty(name="Invert", description="Fix every point outside the group instead")
-    keep_rfs_mesh: BoolProperty(name="Keep RFS Mesh",
+    invert_vertex_group: BoolProperty(name="Invert", default=PointSettings.invert_vertex_group,
+                                      description="Fix every point outside the group instead")
+    keep_rfs_mesh: BoolProperty(name="Keep RFS Mesh", default=PointSettings.keep_rfs_mesh,
                                 description="Add the final RFS mesh as a new wireframe object to inspect it")
 
     @classmethod
@@ -188,100 +335,49 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
             layout.prop(self, name)
         draw_fixed_group(layout, self, context.active_object)
         layout.prop(self, "keep_rfs_mesh")
-        # With the automatic amount, alpha is 0.66 / steps >= matched_alpha(MAX_STEPS) > 0: only beta can leave the region.
-        draw_convergence_warning(layout, matched_alpha(MAX_STEPS) if automatic else self.alpha, self.beta)
+        draw_convergence_warning(layout, lowest_alpha(self), self.beta)
 
-    def _clouds(self, context):
+    def _clouds(self, context, settings):
         objects = [obj for obj in context.selected_objects if obj.type in POINT_TYPES]
         if not objects:
             others = ", ".join(sorted({obj.type.lower() for obj in context.selected_objects}))
             raise CloudError("Select a mesh of loose vertices or a point cloud object"
                              + (f" (selected: {others})" if others else ""))
-        seen, clouds = set(), []
-        for obj in objects:
-            if obj.data.as_pointer() not in seen:
-                seen.add(obj.data.as_pointer())
-                clouds.append(Cloud(obj, self))
-        return clouds
+        return read_clouds(objects, settings)
 
-    def _smoother(self, cloud):
-        return PointCloudSmoother(
-            cloud.positions, alpha="auto" if self.auto_amount else self.alpha, beta=self.beta, rounds=self.rounds,
-            iterations_per_round="auto" if self.auto_amount else self.iterations_per_round, fixed=cloud.fixed,
-            neighbours=self.neighbours,
-            spacing_factor=self.spacing_factor, gap_factor=self.gap_factor, min_quality=self.min_quality,
-            swap=self.swap)
-
-    def _runner(self, clouds):
-        """Every cloud's stages in turn; yields the fraction done. Writes nothing."""
-        steps_per_cloud = self.rounds + 4  # four build stages, then the rounds
-        total = steps_per_cloud * len(clouds)
-        for number, cloud in enumerate(clouds):
-            run = self._smoother(cloud)
-            with warnings.catch_warnings():  # the convergence region is reported once, at the end
-                warnings.simplefilter("ignore", core.ConvergenceWarning)
-                for step, _ in enumerate(run.steps(), start=1):
-                    yield (number * steps_per_cloud + step) / total
-            cloud.result, cloud.report = run.result, run.report
-
-    def _finish(self, context, clouds):
-        for cloud in clouds:
-            cloud.write()
-            if self.keep_rfs_mesh:
-                cloud.add_rfs_object(context)
-        self.report({"INFO"}, self._summary(clouds))
-        still = sum(c.report.isolated for c in clouds)
-        points = sum(c.report.n_distinct for c in clouds)
-        if still > points / 2:
-            # Typically scan lines much farther apart than the points along them: the graph keeps to
-            # the lines and no faces form, so the points cannot move.
-            self.report({"WARNING"}, f"{still} of {points} points have no RFS faces and did not move: the points "
-                                     "are much farther apart in one direction (scan lines?). Raise Reach, Gap "
-                                     "and Neighbours to connect them")
-        message = core.convergence_message(min(c.report.alpha for c in clouds), self.beta)
-        if message:
-            self.report({"WARNING"}, message)
+    def _finish(self, context, clouds, settings):
+        write(clouds, settings, context)
+        for level, text in messages(clouds, settings):
+            self.report({level}, text)
         return {"FINISHED"}
 
     def execute(self, context):
+        settings = PointSettings.of(self)
         try:
-            clouds = self._clouds(context)
-            for _ in self._runner(clouds):
+            clouds = self._clouds(context, settings)
+            for _ in run(clouds, settings):
                 pass
         except (CloudError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        return self._finish(context, clouds)
+        return self._finish(context, clouds, settings)
 
     def invoke(self, context, event):
         """Interactively: run step by step from a timer, with progress, and Esc to cancel."""
         if bpy.app.background or context.window is None:
             return self.execute(context)
+        self._settings = PointSettings.of(self)
         try:
-            self._clouds_pending = self._clouds(context)
+            self._clouds_pending = self._clouds(context, self._settings)
             for cloud in self._clouds_pending:  # check the settings before the first timer tick
-                self._smoother(cloud)
+                make_smoother(cloud, self._settings)
         except (CloudError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        return self.start_modal(context, self._runner(self._clouds_pending))
+        return self.start_modal(context, run(self._clouds_pending, self._settings))
 
     def modal_finish(self, context):
-        return self._finish(context, self._clouds_pending)
-
-    def _summary(self, clouds):
-        points = sum(len(c.positions) for c in clouds)
-        seconds = sum(sum(c.report.seconds.values()) for c in clouds)
-        still = sum(c.report.isolated for c in clouds)
-        names = f"{len(clouds)} objects" if len(clouds) > 1 else f"'{clouds[0].data.name}'"
-        return (f"HC Smooth Points on {names}: {points} points, "
-                + "; ".join(self._amount(c.report) for c in clouds) + f", {seconds:.2f} s"
-                + (f", {still} points without RFS faces stayed put" if still else ""))
-
-    def _amount(self, report):
-        noise = f"noise {report.noise.ratio:.2f}x spacing: " if report.noise is not None and self.auto_amount else ""
-        return (f"{noise}{report.rounds} rounds of {report.iterations_per_round} steps, "
-                f"alpha {report.alpha:.3g}")
+        return self._finish(context, self._clouds_pending, self._settings)
 
 
 classes = (OBJECT_OT_hc_smooth_points,)

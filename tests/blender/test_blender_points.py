@@ -127,6 +127,10 @@ def snapshot():
 @pytest.mark.parametrize("case, message", [
     ("edges", "has edges or faces.*object.hc_smooth"),
     ("empty", "no points"),
+    # Fewer than three distinct points cannot form an RFS face: said as such, not as "scan lines?".
+    ("single", "'Single' is a single point: nothing to smooth"),
+    ("coincide", "All 100 points of 'Same' coincide: nothing to smooth"),
+    ("two", "The 100 points of 'Two' lie at only 2 distinct positions: nothing to smooth"),
     ("nan", "NaN or infinite.*point 7"),
     ("group", "no vertex group 'Nope'"),
     ("nothing", "Select a mesh of loose vertices or a point cloud"),
@@ -137,6 +141,12 @@ def test_bad_input_writes_nothing(scene, case, message):
         select_only(make_mesh_object("Wire", [(0, 0, 0), (1, 0, 0), (0, 1, 0)], edges=[(0, 1)]))
     elif case == "empty":
         select_only(make_mesh_object("Nothing", []))
+    elif case == "single":
+        select_only(make_mesh_object("Single", [(0.5, 0.5, 0.5)]))
+    elif case == "coincide":
+        select_only(make_mesh_object("Same", [(1, 2, 3)] * 100))
+    elif case == "two":
+        select_only(make_mesh_object("Two", [(1, 2, 3), (1, 2, 4)] * 50))
     elif case == "nan":
         points = noisy_sphere_points(100)
         points[7] = np.nan
@@ -147,8 +157,9 @@ def test_bad_input_writes_nothing(scene, case, message):
     else:
         select_only()
     before = snapshot()
-    with pytest.raises(RuntimeError, match=message):
+    with pytest.raises(RuntimeError, match=message) as raised:
         bpy.ops.object.hc_smooth_points(**properties)
+    assert "scan lines" not in str(raised.value)
     assert snapshot() == before
 
 
@@ -182,20 +193,38 @@ def test_invoke_in_background_runs_execute(scene):
     assert np.any(positions_of(obj.data) != before)
 
 
-@pytest.mark.parametrize("given", [(), ("alpha",)])
-def test_command_line_points_use_the_automatic_amount_unless_alpha_is_given(addon, scene, given):
-    # blender -b -c hc_smooth --points: the operator's automatic amount; --alpha switches it off.
+@pytest.mark.parametrize("given, amount", [([], {}), (["--alpha", "0.05"], {"alpha": 0.05, "iterations_per_round": 22}),
+                                           (["--steps-per-round", "4"], {"alpha": 0.01, "iterations_per_round": 4})])
+def test_command_line_points_use_the_automatic_amount_unless_alpha_or_steps_are_given(addon, scene, tmp_path, given,
+                                                                                      amount):
+    # blender -b -c hc_smooth --points runs the operator's functions: its automatic amount unless --alpha or
+    # --steps-per-round is given, which (as the operator's toggle) uses both manual values.
     command, arguments = sys.modules[ADDON + ".cli.command"], sys.modules[ADDON + ".cli.arguments"]
     obj = cloud_object()
     before = positions_of(obj.data)
+    plan = arguments.parse(["cloud.ply", "-o", str(tmp_path), "--points", *given])
     outcome = command.Outcome(source="cloud", target="cloud")
-    command.smooth_point_clouds([obj], arguments.Settings(alpha=0.05), outcome, given=given)
-    beta = float(np.float32(0.55))
-    if given:
-        expected = core.smooth_point_cloud(before, alpha=float(np.float32(0.05)), beta=beta, iterations_per_round=22)
-    else:
-        expected = core.smooth_point_cloud(before, beta=beta)
-    assert np.array_equal(positions_of(obj.data), expected)
+    command.smooth_point_clouds([obj], command.point_settings(plan), outcome)
+    assert np.array_equal(positions_of(obj.data), core.smooth_point_cloud(before, **amount))
+    _, report = core.smooth_point_cloud(before, return_mesh=True, **amount)
+    assert outcome.rounds == [(report.rounds, report.iterations_per_round)]
+
+
+def test_operator_and_functions_give_the_same_result(scene):
+    # The operator is a thin shell over read_clouds/run/write with its properties as PointSettings.
+    point_cloud = sys.modules[ADDON + ".operators.point_cloud"]
+    obj = cloud_object()
+    before = positions_of(obj.data)
+    assert bpy.ops.object.hc_smooth_points(rounds=2, beta=0.625) == {"FINISHED"}
+    through_operator = positions_of(obj.data)
+    obj.data.vertices.foreach_set("co", before.ravel())
+    settings = point_cloud.PointSettings(rounds=2, beta=0.625)  # exact in float32, as the operator stores it
+    clouds = point_cloud.read_clouds([obj], settings)
+    for _ in point_cloud.run(clouds, settings):
+        assert np.array_equal(positions_of(obj.data), before)  # nothing is written while it runs
+    point_cloud.write(clouds, settings, bpy.context)
+    assert np.array_equal(positions_of(obj.data), through_operator)
+    assert not np.array_equal(through_operator, before)
 
 
 def scan_lines(lines=12, per_line=300, gap=0.2, seed=0):

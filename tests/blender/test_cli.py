@@ -3,6 +3,7 @@
 
 import hashlib
 import os
+import subprocess
 import sys
 
 import bpy
@@ -68,9 +69,22 @@ def test_registered_with_blenders_command_registry(cli, monkeypatch):
 def test_help(cli, capsys):
     assert cli.main(["--help"]) == 0
     text = capsys.readouterr().out
-    for option in ("--output-dir", "--in-place", "--format", "--method", "--alpha", "--beta", "--iterations",
-                   "--mode", "--fixed-group", "--invert-group", "--pin-boundary", "--points", "--object"):
+    for option in ("--output-dir", "--in-place", "--format", "--overwrite", "--method", "--alpha", "--beta",
+                   "--iterations", "--mode", "--fixed-group", "--invert-group", "--pin-boundary", "--points",
+                   "--object", "--rounds", "--steps-per-round", "--neighbours", "--reach", "--gap"):
         assert option in text
+    assert "Existing files are never replaced" in text and "keeps the input" in text
+
+
+def test_help_states_the_point_operators_defaults(addon):
+    # --help cannot import the operator (no bpy while parsing): its copy of the defaults must agree.
+    arguments = sys.modules[ADDON + ".cli.arguments"]
+    settings = sys.modules[ADDON + ".operators.point_cloud"].PointSettings()
+    assert arguments.POINT_DEFAULTS == {name: getattr(settings, arguments.POINT_FIELDS[name])
+                                        for name in arguments.POINT_DEFAULTS}
+    properties = bpy.ops.object.hc_smooth_points.get_rna_type().properties
+    for name in ("alpha", "beta", "rounds", "iterations_per_round", "neighbours", "spacing_factor", "gap_factor"):
+        assert properties[name].default == pytest.approx(getattr(settings, name), rel=1e-6)
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -81,6 +95,24 @@ def test_help(cli, capsys):
     (["a.ply", "-o", "out", "--invert-group"], "--invert-group needs --fixed-group"),
     (["a.ply", "-o", "out", "--method", "taubin"], "invalid choice"),
     (["x/a.ply", "y/a.ply", "-o", "out"], "would both be written"),
+    # Numbers that are not finite pass no range check by comparison: refused by name, before any file is read.
+    (["a.ply", "-o", "out", "--tolerance", "inf"], "inf is not a finite number"),
+    (["a.ply", "-o", "out", "--tolerance", "nan"], "nan is not a finite number"),
+    (["a.ply", "-o", "out", "--alpha", "nan"], "nan is not a finite number"),
+    (["a.ply", "-o", "out", "--beta=-inf"], "-inf is not a finite number"),
+    (["a.ply", "-o", "out", "--points", "--reach", "inf"], "inf is not a finite number"),
+    (["a.ply", "-o", "out", "--points", "--gap", "0"], "0 is not above 0"),
+    (["a.ply", "-o", "out", "--points", "--steps-per-round", "0"], "0 is below 1"),
+    (["a.ply", "-o", "out", "--points", "--reach", "4"], "--reach (4) must not exceed --gap (3)"),
+    # --object picks objects inside .blend files; with none among the inputs it would do nothing.
+    (["a.ply", "b.obj", "-o", "out", "--object", "Scan"], "no input is a .blend file"),
+    # Mesh-only options mean nothing to the point smoother, and point options nothing to meshes.
+    (["a.ply", "-o", "out", "--points", "--iterations", "20"], "--iterations does not apply to point clouds"),
+    (["a.ply", "-o", "out", "--points", "--mode", "sequential", "--tolerance", "0.1", "--method", "laplacian",
+      "--pin-boundary"], "--mode, --tolerance, --method, --pin-boundary do not apply to point clouds (--points): "
+                         "they take --alpha, --beta, --rounds"),
+    (["a.ply", "-o", "out", "--rounds", "2", "--reach", "2"], "--rounds, --reach apply to point clouds only: "
+                                                                "add --points"),
 ])
 def test_usage_errors(cli, capsys, tmp_path, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)
@@ -159,7 +191,7 @@ def test_export_failure_keeps_the_previous_output(cli, capsys, tmp_path, monkeyp
         raise OSError("disk full (simulated)")
 
     monkeypatch.setattr(cli.files, "_rename_material_library", disk_full)  # after the exporter wrote its files
-    assert cli.main([str(source), "-o", str(out)]) == 1
+    assert cli.main([str(source), "-o", str(out), "--overwrite"]) == 1
     assert "FAILED: disk full (simulated)" in capsys.readouterr().out
     assert (out / "scan.obj").read_text() == "previous result\n"
     assert sorted(os.listdir(out)) == ["scan.obj"]  # no temporary .obj/.mtl left behind
@@ -210,21 +242,257 @@ def test_blend_unknown_object_and_group(cli, capsys, tmp_path):
     assert os.listdir(out) == []
 
 
-def test_point_cloud_needs_points_flag(cli, capsys, tmp_path):
+def export_points(path, points, group=None):
+    """A loose-vertex mesh written to ``path`` (PLY, or .blend with vertex group "Keep" on the indices ``group``)."""
     bpy.ops.wm.read_homefile(use_empty=True)
-    points = np.random.default_rng(0).normal(size=(300, 3))
-    obj = make_mesh_object("Points", points / np.linalg.norm(points, axis=1, keepdims=True))
+    obj = make_mesh_object("Points", points)
+    if group is not None:
+        obj.vertex_groups.new(name="Keep").add([int(i) for i in group], 1.0, "REPLACE")
     select_only(obj)
-    source = tmp_path / "points.ply"
-    bpy.ops.wm.ply_export(filepath=str(source), export_selected_objects=True)
+    if str(path).endswith(".blend"):
+        bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    else:
+        bpy.ops.wm.ply_export(filepath=str(path), export_selected_objects=True)
+    return path
+
+
+def sphere_points(n=1000, sigma=0.01, seed=0):
+    rng = np.random.default_rng(seed)
+    points = rng.normal(size=(n, 3))
+    points /= np.linalg.norm(points, axis=1, keepdims=True)
+    return (points + rng.normal(scale=sigma, size=points.shape)).astype(np.float32)
+
+
+def blend_positions(path, name="Points"):
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    return positions_of(bpy.data.objects[name].data)
+
+
+def test_point_cloud_needs_points_flag(cli, capsys, tmp_path):
+    source = export_points(tmp_path / "points.ply", sphere_points(300))
     out = tmp_path / "out"
     assert cli.main([str(source), "-o", str(out)]) == 1
     assert "no edges: it is a point cloud (pass --points" in capsys.readouterr().out
-    status = cli.main([str(source), "-o", str(out), "--points"])
-    if hasattr(bpy.types, "OBJECT_OT_hc_smooth_points"):
-        assert status == 0
-        assert os.listdir(out) == ["points.ply"]
-    else:  # the point-cloud operator is not part of this build yet: a clear failure, no output
-        assert status == 1
-        assert "object.hc_smooth_points, which is not registered" in capsys.readouterr().out
-        assert os.listdir(out) == []
+    assert cli.main([str(source), "-o", str(out), "--points"]) == 0
+    assert os.listdir(out) == ["points.ply"]
+    # The other way round: a mesh is not smoothed as a point cloud.
+    mesh = export_noisy_sphere(tmp_path / "mesh.ply")
+    assert cli.main([str(mesh), "-o", str(out), "--points"]) == 1
+    assert "has edges: it is a mesh, not a point cloud (smooth it without --points)" in capsys.readouterr().out
+    assert os.listdir(out) == ["points.ply"]
+
+
+def test_points_take_the_point_options_and_report_the_real_amount(cli, capsys, tmp_path):
+    source = export_points(tmp_path / "points.ply", sphere_points())
+    before, _ = import_positions(source)
+    out = tmp_path / "out"
+    argv = [str(source), "-o", str(out), "--points", "--alpha", "0.05", "--beta", "0.6", "--rounds", "2",
+            "--steps-per-round", "5", "--neighbours", "12", "--reach", "2", "--gap", "4"]
+    assert cli.main(argv) == 0
+    text = capsys.readouterr().out
+    assert "1000 points, 2 rounds of 5 steps (10 steps)" in text
+    assert "0 iterations" not in text
+    (row,) = [line for line in text.splitlines() if line.startswith(str(source)) and "->" not in line]
+    assert "2 rounds of 5 steps" in row  # the summary table
+    after, _ = import_positions(out / "points.ply")
+    expected = core.smooth_point_cloud(before, alpha=0.05, beta=0.6, rounds=2, iterations_per_round=5,
+                                       neighbours=12, spacing_factor=2.0, gap_factor=4.0)
+    assert not np.allclose(expected, before)
+    assert np.array_equal(after, expected)
+    # Without an amount the run follows the noise, as the operator's Automatic Amount; the line says what ran.
+    assert cli.main([str(source), "-o", str(out), "--points", "--overwrite"]) == 0
+    _, report = core.smooth_point_cloud(before, return_mesh=True)
+    amount = f"{report.rounds} rounds of {report.iterations_per_round} steps"
+    assert amount in capsys.readouterr().out
+    after, _ = import_positions(out / "points.ply")
+    assert np.array_equal(after, core.smooth_point_cloud(before))
+
+
+@pytest.mark.parametrize("invert", [False, True])
+def test_points_keep_the_fixed_group(cli, tmp_path, invert):
+    points = sphere_points()
+    members = np.flatnonzero(points[:, 2] > 0.5)
+    source = export_points(tmp_path / "scan.blend", points, group=members)
+    out = tmp_path / "out"
+    argv = [str(source), "-o", str(out), "--points", "--fixed-group", "Keep"] + (["--invert-group"] if invert else [])
+    assert cli.main(argv) == 0
+    after = blend_positions(out / "scan.blend")
+    fixed = np.zeros(len(points), dtype=bool)
+    fixed[members] = True
+    fixed ^= invert
+    assert np.array_equal(after[fixed], points[fixed])  # to the bit
+    assert np.any(after[~fixed] != points[~fixed], axis=1).mean() > 0.9  # nearly all the others moved
+
+
+def test_points_missing_group_fails_the_file(cli, capsys, tmp_path):
+    source = export_points(tmp_path / "scan.blend", sphere_points(300), group=[0, 1, 2])
+    out = tmp_path / "out"
+    assert cli.main([str(source), "-o", str(out), "--points", "--fixed-group", "Nope"]) == 1
+    assert f"{source}: FAILED: Object 'Points' has no vertex group 'Nope'" in capsys.readouterr().out
+    assert os.listdir(out) == []
+
+
+@pytest.mark.parametrize("points, message", [
+    (np.ones((100, 3), np.float32), "All 100 points of 'points' coincide: nothing to smooth"),
+    (np.zeros((1, 3), np.float32), "'points' is a single point: nothing to smooth"),
+])
+def test_points_with_nothing_to_smooth_fail_without_output(cli, capsys, tmp_path, points, message):
+    source = export_points(tmp_path / "points.ply", points)
+    out = tmp_path / "out"
+    assert cli.main([str(source), "-o", str(out), "--points"]) == 1
+    text = capsys.readouterr().out
+    assert f"{source}: FAILED: {message}" in text and "scan lines" not in text
+    assert os.listdir(out) == []
+
+
+# Data safety: nothing but the input itself under --in-place is ever replaced without --overwrite.
+
+def snapshot(folder):
+    return {name: digest(os.path.join(folder, name)) for name in sorted(os.listdir(folder))}
+
+
+def test_in_place_with_another_format_never_replaces_unrelated_files(cli, capsys, tmp_path):
+    source = export_noisy_sphere(tmp_path / "scan.ply")
+    (tmp_path / "scan.obj").write_text("v 0 0 0\n")  # someone else's files, not this scan's
+    (tmp_path / "scan.mtl").write_text("newmtl Precious\n")
+    before = snapshot(tmp_path)
+    assert cli.main([str(source), "--in-place", "--format", "obj"]) == 2
+    err = capsys.readouterr().err
+    assert f"\n  {tmp_path / 'scan.obj'}\n  {tmp_path / 'scan.mtl'}\n" in err
+    assert "or pass --overwrite" in err
+    assert snapshot(tmp_path) == before
+    # The material library alone is reason enough to stop.
+    os.remove(tmp_path / "scan.obj")
+    before = snapshot(tmp_path)
+    assert cli.main([str(source), "--in-place", "--format", "obj"]) == 2
+    assert f"would be replaced:\n  {tmp_path / 'scan.mtl'}\n" in capsys.readouterr().err
+    assert snapshot(tmp_path) == before
+    # --overwrite replaces them; --in-place with --format writes beside the input and keeps it.
+    assert cli.main([str(source), "--in-place", "--format", "obj", "--overwrite"]) == 0
+    assert digest(source) == before["scan.ply"]
+    assert (tmp_path / "scan.mtl").read_text() != "newmtl Precious\n"
+    smoothed, _ = import_positions(tmp_path / "scan.obj")
+    original, _ = import_positions(source)
+    assert len(smoothed) == len(original) and not np.allclose(smoothed, original, atol=1e-4)
+
+
+def test_output_folder_results_are_not_replaced_without_overwrite(cli, capsys, tmp_path):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    good = export_noisy_sphere(folder / "good.ply")
+    other = export_noisy_sphere(folder / "other.ply", seed=5)
+    (folder / "good.obj").write_text("v 0 0 0\n")
+    (folder / "good.mtl").write_text("newmtl Precious\n")
+    before = snapshot(folder)
+    # other.ply could go ahead, but everything is checked before anything runs.
+    assert cli.main([str(other), str(good), "-o", str(folder), "--format", "obj"]) == 2
+    err = capsys.readouterr().err
+    assert f"\n  {folder / 'good.obj'}\n  {folder / 'good.mtl'}\nchoose another -o OUTDIR, or pass --overwrite" in err
+    assert snapshot(folder) == before
+    # The .mtl of an OBJ result counts even when the OBJ itself is new.
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "good.mtl").write_text("newmtl Precious\n")
+    assert cli.main([str(good), "-o", str(out), "--format", "obj"]) == 2
+    assert f"would be replaced:\n  {out / 'good.mtl'}\n" in capsys.readouterr().err
+    assert snapshot(out) == {"good.mtl": digest(out / "good.mtl")}
+    assert cli.main([str(good), "-o", str(out), "--format", "obj", "--overwrite"]) == 0
+    assert sorted(os.listdir(out)) == ["good.mtl", "good.obj"]
+    assert (out / "good.mtl").read_text() != "newmtl Precious\n"
+
+
+def test_in_place_obj_replaces_only_its_own_material_library(cli, capsys, tmp_path):
+    source = export_noisy_sphere(tmp_path / "scan.obj")
+    assert "mtllib scan.mtl" in source.read_text()
+    original, _ = import_positions(source)
+    assert cli.main([str(source), "--in-place"]) == 0  # scan.mtl is the input's own: part of it
+    smoothed, _ = import_positions(source)
+    assert not np.allclose(smoothed, original, atol=1e-4)
+    assert sorted(os.listdir(tmp_path)) == ["scan.mtl", "scan.obj"]
+    # An OBJ that does not name scan.mtl: the .mtl beside it belongs to something else.
+    source.write_text("".join(line for line in source.read_text().splitlines(True) if not line.startswith("mtllib")))
+    (tmp_path / "scan.mtl").write_text("newmtl Precious\n")
+    before = snapshot(tmp_path)
+    assert cli.main([str(source), "--in-place"]) == 2
+    assert f"would be replaced:\n  {tmp_path / 'scan.mtl'}\nmove them away" in capsys.readouterr().err
+    assert snapshot(tmp_path) == before
+
+
+def test_folder_inputs_skip_hidden_files(cli, capsys, tmp_path):
+    scans = tmp_path / "scans"
+    scans.mkdir()
+    export_noisy_sphere(scans / "scan.ply")
+    (scans / "._scan.ply").write_bytes(b"\x00\x05\x16\x07 macOS metadata")
+    (scans / ".scan.hc_smooth-123.ply").write_bytes(b"ply\nformat ascii 1.0\n")  # a killed run's half-written file
+    out = tmp_path / "out"
+    assert cli.main([str(scans), "-o", str(out)]) == 0
+    assert "1 of 1 files smoothed" in capsys.readouterr().out
+    assert os.listdir(out) == ["scan.ply"]
+
+
+def dead_pid():
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait()
+    return child.pid
+
+
+def test_stale_temporaries_of_killed_runs_are_removed(cli, capsys, tmp_path):
+    source = export_noisy_sphere(tmp_path / "scan.ply")
+    out = tmp_path / "out"
+    out.mkdir()
+    dead, alive = dead_pid(), os.getppid()
+    stale = [f".scan.hc_smooth-{dead}.ply", f".old.hc_smooth-{dead}.obj.tmp", f".old.hc_smooth-{dead}.mtl"]
+    kept = [f".scan.hc_smooth-{os.getpid()}.stl", f".other.hc_smooth-{alive}.ply",  # their runs may be writing
+            ".notes.hc_smooth-abc.ply", ".keep", "mine.ply"]  # not a pid, or not our pattern at all
+    for name in stale + kept:
+        (out / name).write_text("x")
+    assert cli.main([str(source), "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"removed {out / stale[0]}, left by an interrupted run" in text
+    assert sorted(os.listdir(out)) == sorted(kept + ["scan.ply"])
+
+
+@pytest.mark.parametrize("names", [("scan.ply", "scan.ply"), ("scan.ply", "./scan.ply"), ("scans", "scans/scan.ply")])
+def test_an_input_named_twice_is_smoothed_once(cli, capsys, tmp_path, monkeypatch, names):
+    monkeypatch.chdir(tmp_path)
+    if names[0] == "scans":
+        os.mkdir("scans")
+        names = (names[0], os.path.join("scans", "scan.ply"))
+    export_noisy_sphere(tmp_path / os.path.dirname(names[1]) / "scan.ply")
+    assert cli.main([*names, "-o", "out"]) == 0
+    text = capsys.readouterr().out
+    assert "is named more than once" in text and "smoothing it once" in text
+    assert "1 of 1 files smoothed" in text
+    assert os.listdir("out") == ["scan.ply"]
+
+
+@pytest.mark.parametrize("extra", [[], ["--points", "--steps-per-round", "200"]])
+def test_divergent_parameters_fail_the_file_and_write_nothing(cli, capsys, tmp_path, extra):
+    # Outside HC's convergence region (alpha > 0, beta > 0.5) the core raises instead of returning garbage.
+    if extra:
+        source = export_points(tmp_path / "scan.ply", sphere_points())
+    else:
+        source = export_noisy_sphere(tmp_path / "scan.ply")
+    out = tmp_path / "out"
+    argv = [str(source), "-o", str(out), "--alpha", "0", "--beta", "0"] + (extra or ["--iterations", "200"])
+    assert cli.main(argv) == 1
+    (line,) = [line for line in capsys.readouterr().out.splitlines() if line.startswith("[1/1]")]
+    assert f"{source}: FAILED:" in line and "alpha > 0 and beta > 0.5" in line
+    assert os.listdir(out) == []
+
+
+def test_blend_with_meshes_and_point_clouds_smooths_the_kind_asked_for(cli, capsys, tmp_path):
+    points = sphere_points(500)
+    export_points(tmp_path / "unused.ply", points)  # an empty scene holding the cloud "Points"
+    mesh = noisy_sphere(name="Scan", seed=6)
+    mesh_before = positions_of(mesh.data).copy()
+    source = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(source))
+    assert cli.main([str(source), "-o", str(tmp_path / "meshes")]) == 0
+    assert "warning: left as they are: Points (point clouds: smooth them with --points)" in capsys.readouterr().out
+    assert np.array_equal(blend_positions(tmp_path / "meshes" / "scene.blend"), points)
+    assert not np.allclose(positions_of(bpy.data.objects["Scan"].data), mesh_before)
+    assert cli.main([str(source), "-o", str(tmp_path / "clouds"), "--points"]) == 0
+    assert "warning: left as they are: Scan (meshes: smooth them without --points)" in capsys.readouterr().out
+    assert not np.allclose(blend_positions(tmp_path / "clouds" / "scene.blend"), points)
+    assert np.array_equal(positions_of(bpy.data.objects["Scan"].data), mesh_before)
