@@ -18,6 +18,7 @@ import bpy
 from .. import core
 from ..operators import jobs as jobs_module
 from ..operators import point_cloud
+from ..operators.objects import InputError, unique_data
 from . import arguments, files
 from .files import FileError
 
@@ -118,7 +119,7 @@ def process(source, target, plan, settings):
             smooth_blend_file(source, target, plan, settings, outcome)
         else:
             smooth_mesh_file(source, target, plan, settings, outcome)
-    except (FileError, jobs_module.JobError, point_cloud.CloudError, ValueError, OSError) as error:
+    except (FileError, InputError, ValueError, OSError) as error:
         outcome.error = str(error)
     except Exception as error:  # a bug: report it with its traceback and go on with the other files
         traceback.print_exc()
@@ -190,12 +191,7 @@ def smooth_meshes(objects, settings, outcome):
                             + (" (pass --points to smooth it)" if obj.type == "POINTCLOUD" else ""))
         if is_point_cloud(obj):
             raise FileError(f"'{obj.name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
-    seen, jobs = set(), []
-    for obj in objects:
-        if obj.data.as_pointer() in seen:
-            continue
-        seen.add(obj.data.as_pointer())
-        jobs.append(jobs_module.make_job(obj, settings))
+    jobs = [jobs_module.make_job(obj, settings) for obj in unique_data(objects)]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)  # said once, at the start
         for _ in jobs_module.run(jobs, settings):

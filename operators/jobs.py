@@ -11,15 +11,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import core
-from . import mesh_io
+from . import mesh_io, objects
 
 CORE_METHOD = {"HC": "hc", "LAPLACIAN": "plain", "LAPLACIAN_CENTRAL": "central", "LAPLACIAN_ORIGINAL": "original"}
 METHOD_LABEL = {"HC": "HC", "LAPLACIAN": "Laplacian", "LAPLACIAN_CENTRAL": "Laplacian (central)",
                 "LAPLACIAN_ORIGINAL": "Laplacian (original)"}
-
-
-class JobError(Exception):
-    """A message for the user; nothing has been written."""
 
 
 @dataclass
@@ -50,37 +46,19 @@ def as_property(value):
     return float(np.float32(value))
 
 
-def check_editable(obj):
-    for what, datablock in (("Object", obj), ("Mesh", obj.data)):
-        if datablock.library is not None:
-            raise JobError(f"{what} '{datablock.name}' is linked from library '{datablock.library.filepath}' "
-                           "and cannot be edited: make it local first (Object > Relations > Make Local)")
-        if not datablock.is_editable:
-            raise JobError(f"{what} '{datablock.name}' cannot be edited (a library override?): make it local first")
-
-
 def make_job(obj, props, extra_fixed=None):
-    """Read ``obj``'s mesh into a Job, or raise JobError saying what is wrong. Reads only."""
+    """Read ``obj``'s mesh into a Job, or raise InputError saying what is wrong. Reads only."""
     if obj.type != "MESH":
-        raise JobError(f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object, not a mesh")
-    check_editable(obj)
+        raise objects.InputError(f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object, not a mesh")
+    objects.check_editable(obj)
     mesh = obj.data
     n = len(mesh.vertices)
     if n == 0:
-        raise JobError(f"Mesh '{mesh.name}' has no vertices: nothing to smooth")
+        raise objects.InputError(f"Mesh '{mesh.name}' has no vertices: nothing to smooth")
     if len(mesh.edges) == 0:
-        raise JobError(f"Mesh '{mesh.name}' has no edges: it is a point cloud. "
+        raise objects.InputError(f"Mesh '{mesh.name}' has no edges: it is a point cloud. "
                        "Use Object > HC Smooth Points (object.hc_smooth_points) instead")
-    key_block = None
-    if mesh.shape_keys is not None and obj.active_shape_key is not None:
-        key_block = obj.active_shape_key
-        positions = mesh_io.read_shape_key(key_block)
-    else:
-        positions = mesh_io.read_positions(mesh)
-    bad = core.validation.nonfinite_rows(positions)
-    if bad.size:
-        raise JobError(f"Mesh '{mesh.name}' has {bad.size} vertices with NaN or infinite coordinates "
-                       f"(first: vertex {int(bad[0])}): fix or delete them first")
+    positions, key_block = objects.read_positions(obj)
     edges = mesh_io.read_edges(mesh)
     corner_verts, corner_edges = mesh_io.read_corners(mesh)
     closed = mesh_io.is_closed(edges, corner_verts, corner_edges)
@@ -88,7 +66,7 @@ def make_job(obj, props, extra_fixed=None):
     if props.vertex_group:
         group = obj.vertex_groups.get(props.vertex_group)
         if group is None:
-            raise JobError(f"Object '{obj.name}' has no vertex group '{props.vertex_group}'")
+            raise objects.InputError(f"Object '{obj.name}' has no vertex group '{props.vertex_group}'")
         members = mesh_io.vertex_group_members(obj, group.index)
         fixed |= ~members if props.invert_vertex_group else members
     if props.pin_boundary:
@@ -133,32 +111,7 @@ def write(job, props):
         key = job.obj.shape_key_add(name=METHOD_LABEL[props.method] + " Smooth", from_mix=False)
         mesh_io.write_shape_key(key, job.result)
         return
-    if job.key_block is not None:
-        keys = job.mesh.shape_keys
-        dependent = dependent_keys(keys, job.key_block) if keys.use_relative else []
-        if dependent:  # as Blender's own tools do: keys relative to the smoothed one move with it
-            displacement = job.result - job.positions
-            for key in dependent:
-                mesh_io.write_shape_key(key, mesh_io.read_shape_key(key) + displacement)
-        mesh_io.write_shape_key(job.key_block, job.result)
-        if job.key_block != keys.reference_key:
-            job.mesh.update()
-            return  # the basis (and so the mesh positions) stay as they were
-    mesh_io.write_positions(job.mesh, job.result)
-
-
-def dependent_keys(keys, key_block):
-    """The shape keys whose chain of relative keys leads to ``key_block`` (not the key itself)."""
-    blocks = list(keys.key_blocks)
-    depends = {key_block.name}
-    grew = True
-    while grew:  # breadth-first over the relative keys; cycles cannot loop
-        grew = False
-        for block in blocks:
-            if block.name not in depends and block.relative_key.name in depends:
-                depends.add(block.name)
-                grew = True
-    return [block for block in blocks if block.name in depends and block != key_block]
+    objects.write_positions(job.obj, job.key_block, job.positions, job.result)
 
 
 def summary(jobs, props):

@@ -11,7 +11,7 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, St
 from .. import core
 from . import jobs as jobs_module
 from . import mesh_io
-from .jobs import JobError
+from .objects import InputError, unique_data
 from .modal_progress import ModalProgress
 
 METHOD_ITEMS = [
@@ -122,7 +122,7 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
             jobs = self.prepare(context)
             for _ in jobs_module.run(jobs, self):
                 pass
-        except (JobError, ValueError) as error:  # bad input, or a run that blew up: nothing written
+        except (InputError, ValueError) as error:  # bad input, or a run that blew up: nothing written
             self.abandon(context)
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
@@ -141,7 +141,7 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
             return self.execute(context)
         try:
             self._jobs = self.prepare(context)
-        except JobError as error:
+        except InputError as error:
             self.abandon(context)
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
@@ -187,16 +187,8 @@ class OBJECT_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
         objects = [obj for obj in context.selected_objects if obj.type == "MESH"]
         if not objects:
             others = ", ".join(sorted({obj.type.lower() for obj in context.selected_objects}))
-            raise JobError("Select at least one mesh object" + (f" (selected: {others})" if others else ""))
-        active = context.active_object
-        objects.sort(key=lambda obj: obj != active)  # a shared mesh is read through the active object
-        seen, jobs = set(), []
-        for obj in objects:
-            if obj.data.as_pointer() in seen:
-                continue
-            seen.add(obj.data.as_pointer())
-            jobs.append(jobs_module.make_job(obj, self))
-        return jobs
+            raise InputError("Select at least one mesh object" + (f" (selected: {others})" if others else ""))
+        return [jobs_module.make_job(obj, self) for obj in unique_data(objects, first=context.active_object)]
 
 
 class MESH_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
@@ -224,7 +216,7 @@ class MESH_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
                 continue
             jobs.append(jobs_module.make_job(obj, self, extra_fixed=~selected | hidden))
         if not jobs:
-            raise JobError("Select some visible vertices to smooth")
+            raise InputError("Select some visible vertices to smooth")
         return jobs
 
     def finish(self, context, jobs):

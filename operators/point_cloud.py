@@ -17,15 +17,12 @@ from bpy.props import BoolProperty, FloatProperty, IntProperty, StringProperty
 from .. import core
 from ..core.pointcloud import PointCloudSmoother
 from ..core.pointcloud.noise import MAX_STEPS, matched_alpha
-from . import mesh_io
+from . import mesh_io, objects
 from .mesh_smooth import draw_convergence_warning, draw_fixed_group
 from .modal_progress import ModalProgress
+from .objects import InputError, unique_data
 
 POINT_TYPES = ("MESH", "POINTCLOUD")
-
-
-class CloudError(Exception):
-    """A message for the user; nothing has been written."""
 
 
 @dataclass
@@ -85,35 +82,20 @@ class Cloud:
 
     def __init__(self, obj, settings):
         if obj.type not in POINT_TYPES:
-            raise CloudError(f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object: "
+            raise InputError(f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object: "
                              "select a mesh of loose vertices or a point cloud")
-        for what, datablock in (("Object", obj), ("Data", obj.data)):
-            if datablock.library is not None or not datablock.is_editable:
-                raise CloudError(f"{what} '{datablock.name}' is linked or not editable: make it local first "
-                                 "(Object > Relations > Make Local)")
-        self.obj, self.data, self.key_block = obj, obj.data, None
+        objects.check_editable(obj)
+        self.obj, self.data = obj, obj.data
         count = len(obj.data.vertices) if obj.type == "MESH" else len(obj.data.points)
         if count == 0:
-            raise CloudError(f"'{obj.data.name}' has no points: nothing to smooth")
-        if obj.type == "MESH":
-            mesh = obj.data
-            if len(mesh.edges) or len(mesh.polygons):
-                raise CloudError(f"Mesh '{mesh.name}' has edges or faces: HC Smooth Points works on loose "
-                                 "vertices. Use HC Smooth (object.hc_smooth) for meshes")
-            if mesh.shape_keys is not None and obj.active_shape_key is not None:
-                self.key_block = obj.active_shape_key
-                positions = mesh_io.read_shape_key(self.key_block)
-            else:
-                positions = mesh_io.read_positions(mesh)
-        else:
-            positions = mesh_io.read_positions(obj.data)
-        bad = np.flatnonzero(~np.isfinite(positions).all(axis=1))
-        if bad.size:
-            raise CloudError(f"'{obj.data.name}' has {bad.size} points with NaN or infinite coordinates "
-                             f"(first: point {int(bad[0])}): fix or delete them first")
+            raise InputError(f"'{obj.data.name}' has no points: nothing to smooth")
+        if obj.type == "MESH" and (len(obj.data.edges) or len(obj.data.polygons)):
+            raise InputError(f"Mesh '{obj.data.name}' has edges or faces: HC Smooth Points works on loose "
+                             "vertices. Use HC Smooth (object.hc_smooth) for meshes")
+        positions, self.key_block = objects.read_positions(obj, noun=("point", "points"))
         too_few = _too_few_points(obj.data.name, positions)
         if too_few:
-            raise CloudError(too_few)
+            raise InputError(too_few)
         self.positions = positions
         self.fixed = self._fixed(settings)
         self.result = None
@@ -126,26 +108,17 @@ class Cloud:
         if self.obj.type == "MESH":
             group = self.obj.vertex_groups.get(settings.vertex_group)
             if group is None:
-                raise CloudError(f"Object '{self.obj.name}' has no vertex group '{settings.vertex_group}'")
+                raise InputError(f"Object '{self.obj.name}' has no vertex group '{settings.vertex_group}'")
             members = mesh_io.vertex_group_members(self.obj, group.index)
         else:  # point clouds have no vertex groups: a point attribute of that name plays the part
             members = _attribute_mask(self.data, settings.vertex_group, n)
             if members is None:
-                raise CloudError(f"Point cloud '{self.data.name}' has no point attribute '{settings.vertex_group}' "
+                raise InputError(f"Point cloud '{self.data.name}' has no point attribute '{settings.vertex_group}' "
                                  "(boolean, integer or float) to use as the fixed group")
         return ~members if settings.invert_vertex_group else members
 
     def write(self):
-        if self.obj.type == "POINTCLOUD":
-            mesh_io.write_positions(self.data, self.result)
-        elif self.key_block is not None:
-            mesh_io.write_shape_key(self.key_block, self.result)
-            if self.key_block != self.data.shape_keys.reference_key:
-                self.data.update()
-                return
-            mesh_io.write_positions(self.data, self.result)
-        else:
-            mesh_io.write_positions(self.data, self.result)
+        objects.write_positions(self.obj, self.key_block, self.positions, self.result)
 
     def add_rfs_object(self, context):
         """The final RFS mesh at the smoothed positions, as a new object beside the cloud."""
@@ -168,18 +141,12 @@ class Cloud:
         return obj
 
 
-def read_clouds(objects, settings):
-    """Read and check every object (an object data shared by several objects once); raises CloudError. Reads only."""
+def read_clouds(selected, settings):
+    """Read and check every object (an object data shared by several objects once); raises InputError. Reads only."""
     if settings.spacing_factor > settings.gap_factor:
-        raise CloudError(f"Reach ({settings.spacing_factor:g}) must not exceed Gap ({settings.gap_factor:g}): "
+        raise InputError(f"Reach ({settings.spacing_factor:g}) must not exceed Gap ({settings.gap_factor:g}): "
                          "a neighbour within reach would be cut off as a gap")
-    seen, clouds = set(), []
-    for obj in objects:
-        if obj.type in POINT_TYPES and obj.data.as_pointer() in seen:
-            continue
-        clouds.append(Cloud(obj, settings))
-        seen.add(obj.data.as_pointer())
-    return clouds
+    return [Cloud(obj, settings) for obj in unique_data(selected)]
 
 
 def make_smoother(cloud, settings):
@@ -341,7 +308,7 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
         objects = [obj for obj in context.selected_objects if obj.type in POINT_TYPES]
         if not objects:
             others = ", ".join(sorted({obj.type.lower() for obj in context.selected_objects}))
-            raise CloudError("Select a mesh of loose vertices or a point cloud object"
+            raise InputError("Select a mesh of loose vertices or a point cloud object"
                              + (f" (selected: {others})" if others else ""))
         return read_clouds(objects, settings)
 
@@ -357,7 +324,7 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
             clouds = self._clouds(context, settings)
             for _ in run(clouds, settings):
                 pass
-        except (CloudError, ValueError) as error:
+        except (InputError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         return self._finish(context, clouds, settings)
@@ -371,7 +338,7 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
             self._clouds_pending = self._clouds(context, self._settings)
             for cloud in self._clouds_pending:  # check the settings before the first timer tick
                 make_smoother(cloud, self._settings)
-        except (CloudError, ValueError) as error:
+        except (InputError, ValueError) as error:
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         return self.start_modal(context, run(self._clouds_pending, self._settings))

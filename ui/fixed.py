@@ -11,7 +11,7 @@ import bmesh
 import bpy
 import numpy as np
 
-from ..operators import jobs
+from ..operators import jobs, objects
 
 # Meshes up to this size are counted on first draw; larger ones when the user presses the button.
 AUTO_COUNT_LIMIT = 100_000
@@ -36,7 +36,7 @@ def count(obj, settings):
     key = _key(obj, settings)
     try:
         job = jobs.make_job(obj, settings)
-    except jobs.JobError as error:
+    except objects.InputError as error:
         _counts[key] = str(error)
         return _counts[key]
     n = len(job.positions)

@@ -175,3 +175,22 @@ def test_modal_bug_removes_the_timer_and_abandons(capfd):
     ((level, message),) = operator.reports
     assert level == {"ERROR"} and "Broken: a bug" in message and "nothing was changed" in message
     assert "Traceback" in capfd.readouterr().err
+
+
+def test_point_clouds_move_keys_relative_to_the_smoothed_key(scene):
+    rng = np.random.default_rng(7)
+    points = rng.normal(size=(1500, 3))
+    points /= np.linalg.norm(points, axis=1, keepdims=True)
+    points += rng.normal(scale=0.02, size=points.shape)
+    obj = make_mesh_object("Cloud", points)
+    basis = obj.shape_key_add(name="Basis", from_mix=False)
+    lift = obj.shape_key_add(name="Lift", from_mix=False)
+    lift.data.foreach_set("co", (key_positions(basis) + [0, 0, 0.5]).astype(np.float32).ravel())
+    obj.active_shape_key_index = 0
+    select_only(obj)
+    before = {key.name: key_positions(key) for key in (basis, lift)}
+    assert bpy.ops.object.hc_smooth_points() == {"FINISHED"}
+    displacement = key_positions(basis) - before["Basis"]
+    assert np.abs(displacement).max() > 1e-3
+    np.testing.assert_allclose(key_positions(lift) - before["Lift"], displacement, atol=1e-6)
+    assert np.array_equal(positions_of(obj.data), key_positions(basis))
