@@ -26,7 +26,9 @@ def check_positions(positions, name="positions"):
 def nonfinite_rows(array):
     """Indices of the rows holding NaN or inf. A sum is finite unless some entry is not (or it overflows,
     which the exact check below then clears): one fast pass for the common, clean case."""
-    if np.isfinite(array.sum(dtype=np.float64)):
+    with np.errstate(over="ignore", invalid="ignore"):  # huge finite coordinates may overflow the sum
+        total = array.sum(dtype=np.float64)
+    if np.isfinite(total):
         return np.zeros(0, dtype=np.intp)
     return np.flatnonzero(~np.isfinite(array).all(axis=1))
 
@@ -59,7 +61,12 @@ def check_edges(edges, n_vertices):
 
 
 def check_fixed(fixed, n_vertices):
-    """Return a boolean mask of length n from a mask or an index array (None: nothing fixed)."""
+    """Return a boolean mask of length n from a mask or an index array (None: nothing fixed).
+
+    An integer array as long as the vertex count holding only 0s and 1s is refused: it reads as a
+    0/1 mask just as well as the indices 0 and 1. (One vertex is exempt: it has no neighbours and
+    never moves, so both readings give the same result.)
+    """
     if fixed is None:
         return np.zeros(n_vertices, dtype=bool)
     array = np.asarray(fixed)
@@ -71,11 +78,42 @@ def check_fixed(fixed, n_vertices):
         return np.zeros(n_vertices, dtype=bool)
     if array.ndim != 1 or not np.issubdtype(array.dtype, np.integer):
         raise ValueError("fixed must be a boolean mask or a 1-D array of vertex indices")
-    if array.min() < 0 or array.max() >= n_vertices:
+    low, high = array.min(), array.max()
+    if n_vertices >= 2 and array.shape[0] == n_vertices and low >= 0 and high <= 1:
+        raise ValueError(
+            f"fixed is an integer array of length {n_vertices} (the vertex count) holding only 0s and 1s, "
+            "which could be a 0/1 mask or the vertex indices 0 and 1. For a mask pass fixed.astype(bool); "
+            "for indices pass an array shorter than the vertex count, such as np.flatnonzero(mask) "
+            "(on a mesh of 2 vertices, fix both with a boolean mask)"
+        )
+    if low < 0 or high >= n_vertices:
         raise ValueError(f"fixed vertex indices must lie in 0..{n_vertices - 1}")
     mask = np.zeros(n_vertices, dtype=bool)
     mask[array] = True
     return mask
+
+
+def power_of_two_scale(points, name="points"):
+    """A power of two S with max |coordinate| / S in [0.5, 1) (1 when every coordinate is 0), after
+    checking that the coordinates' magnitude fits the dtype: dividing by S is then exact.
+
+    Below the dtype's smallest normal number coordinates lose precision (subnormals); the upper
+    limit leaves a factor 16 of headroom, so that moved points mapped back cannot overflow.
+    """
+    if points.size == 0:
+        return 1.0
+    largest = max(abs(float(points.max())), abs(float(points.min())))
+    if largest == 0.0:
+        return 1.0
+    info = np.finfo(points.dtype)
+    low, high = float(info.tiny), float(info.max) / 16.0
+    if not low <= largest <= high:
+        raise ValueError(
+            f"the scale of the {name}' coordinates is out of range: their largest magnitude is {largest:.3g}, "
+            f"but {points.dtype} {name} need it between {low:.3g} and {high:.3g}; rescale them into that "
+            "range first (e.g. change the unit)"
+        )
+    return float(np.ldexp(1.0, int(np.frexp(largest)[1])))
 
 
 def check_unit_interval(value, name):

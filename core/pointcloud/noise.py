@@ -66,12 +66,14 @@ class NoiseEstimate:
     samples: int  # sample points it is the median over
 
 
-def _quadric_residuals(points, neighbour_rows):
+def _quadric_residuals(points, neighbour_rows, reach):
     """Per row: (RMS residual of the quadric height field fitted to points[neighbour_rows[row]] in
-    their PCA frame, middle / largest PCA eigenvalue). ``neighbour_rows`` (s, K) includes the
-    centre point itself."""
+    their PCA frame, in units of that row's ``reach``; middle / largest PCA eigenvalue).
+    ``neighbour_rows`` (s, K) includes the centre point itself."""
     patch = points[neighbour_rows]  # (s, K, 3)
     patch = patch - patch.mean(axis=1, keepdims=True)
+    # In units of the ball's radius: every column of the fit below is then of order 1 at any scale.
+    patch /= reach[:, None, None]
     covariance = np.einsum("ski,skj->sij", patch, patch)
     spread, frame = np.linalg.eigh(covariance)  # ascending: column 0 is the normal
     local = np.einsum("ski,sij->skj", patch, frame)
@@ -80,11 +82,12 @@ def _quadric_residuals(points, neighbour_rows):
     normal_matrix = np.einsum("ska,skb->sab", design, design)
     right = np.einsum("ska,sk->sa", design, w)
     # A tiny ridge keeps degenerate patches (collinear neighbours) solvable; their residual is ~0.
-    scale = np.trace(normal_matrix, axis1=1, axis2=2)[:, None, None] * 1e-12 + 1e-300
+    # Relative to the trace (at least K, from the constant column), and the columns are alike in size.
+    scale = np.trace(normal_matrix, axis1=1, axis2=2)[:, None, None] * 1e-12
     coefficients = np.linalg.solve(normal_matrix + scale * np.eye(6), right[..., None])[..., 0]
     residual = w - np.einsum("ska,sa->sk", design, coefficients)
     dof = max(neighbour_rows.shape[1] - 6, 1)
-    flatness = spread[:, 1] / np.maximum(spread[:, 2], 1e-300)
+    flatness = spread[:, 1] / spread[:, 2]  # the largest is > 0: the farthest neighbour is at distance 1
     return np.sqrt(np.einsum("sk,sk->s", residual, residual) / dof), flatness
 
 
@@ -99,9 +102,8 @@ def estimate_noise(index):
         samples = int(min(m, max(_MIN_SAMPLES, _SAMPLE_ENTRIES // (k + 1))))
         rows = np.linspace(0, m - 1, samples).round().astype(np.int64)
         distance, found = index.tree.query(index.points[rows], k + 1, workers=-1)  # column 0: the point itself
-        reach = distance[:, -1]
-        residual, flatness = _quadric_residuals(index.points, found)
-        observed = residual / np.maximum(reach, 1e-300)
+        reach = distance[:, -1]  # > 0: the points are distinct
+        observed, flatness = _quadric_residuals(index.points, found, reach)
         t_table, observed_table, fraction_table = _TRUNCATION
         t = np.interp(observed, observed_table, t_table)  # clipped to 0.7 where the model saturates
         sigma = t * reach

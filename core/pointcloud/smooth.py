@@ -8,13 +8,13 @@ so the rounds together behave like one HC run whose mesh adapts between steps.
 
 import numbers
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..adjacency import umbrella_operator
 from ..smoothing import Cancelled, smooth
-from ..validation import check_fixed, check_positions, check_unit_interval
+from ..validation import check_fixed, check_positions, check_unit_interval, power_of_two_scale
 from .noise import NoiseEstimate, estimate_noise, matched_alpha, steps_per_round
 from .rfs import RFSMesh, rfs_mesh
 from .sdg import surface_description_graph
@@ -107,6 +107,9 @@ def smooth_point_cloud(
     different at many times the swapping cost).
     The input is never modified. Exact duplicates move together; points the RFS mesh leaves without
     a face (isolated or unusable neighbourhoods) stay where they are.
+    The unit does not matter: smoothing s * points gives s times the result (to rounding; bit for bit
+    when s is a power of two). Coordinates whose largest magnitude lies outside what the dtype holds
+    at full precision (float64: about 2.2e-308 to 1.1e307) raise ValueError before any work.
     """
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable progress(done, total) or None")
@@ -130,6 +133,9 @@ class PointCloudSmoother:
     def __init__(self, points, *, alpha=AUTO, beta=0.55, rounds=3, iterations_per_round=AUTO, fixed=None,
                  neighbours=16, spacing_factor=2.5, gap_factor=3.0, min_quality=0.3, swap=True):
         self.points = check_positions(points, "points")
+        # Everything runs on points / scale (|coordinates| below 1): a power of two, so the division is
+        # exact, a power-of-two change of unit changes no bit, and no squared distance over- or underflows.
+        self.scale = power_of_two_scale(self.points, "points")
         # "auto" until the noise estimate (after the "neighbours" stage) replaces it with a number.
         self.alpha = _alpha(alpha)
         self.beta = check_unit_interval(beta, "beta")
@@ -160,12 +166,13 @@ class PointCloudSmoother:
             seconds[name] = seconds.get(name, 0.0) + now - clock
             clock = now
 
-        index = NeighbourIndex(start, self.neighbours)  # distinct points, in KD-tree order
+        index = NeighbourIndex(start, self.neighbours, scale=self.scale)  # distinct points / scale, KD-tree order
         m = index.n_points
         rows_fixed = np.zeros(m, dtype=bool)
         np.logical_or.at(rows_fixed, index.representative, fixed_mask)  # a fixed copy pins its duplicates
         lap("neighbours")
-        self.noise = estimate_noise(index)  # a fixed-size sample: ~10-60 ms at any size
+        noise = estimate_noise(index)  # a fixed-size sample: ~10-60 ms at any size
+        self.noise = replace(noise, sigma=noise.sigma * self.scale, spacing=noise.spacing * self.scale)
         if self.iterations_per_round == AUTO:
             self.iterations_per_round = steps_per_round(self.noise.ratio, self.rounds)
         if self.alpha == AUTO:
@@ -202,8 +209,10 @@ class PointCloudSmoother:
                 lap("swap")
             yield "round", done
 
-        result = current[index.representative].astype(start.dtype)
-        result[fixed_mask] = start[fixed_mask]  # bit-identical, whatever the float round trip did
+        result = (current[index.representative] * self.scale).astype(start.dtype)
+        # Fixed and unmoved points bit-identical to the input, whatever the round trip did.
+        still = fixed_mask | ~np.any(current != index.points, axis=1)[index.representative]
+        result[still] = start[still]
         has_face = np.zeros(m, dtype=bool)
         has_face[mesh.faces.ravel()] = True
         self.report = PointCloudReport(

@@ -69,14 +69,19 @@ class NeighbourIndex:
     row here. ``distance``/``neighbour`` (m, k) hold the k nearest other points, nearest first.
     """
 
-    def __init__(self, points, k):
+    def __init__(self, points, k, scale=1.0):
+        # ``points / scale`` (scale a power of two, see validation.power_of_two_scale): exact, and
+        # duplicates are merged after the division, so the rows stay distinct even where it underflows.
+        if scale != 1.0 or points.dtype != np.float64:
+            points = np.divide(points, scale, dtype=np.float64)
         first, representative = merge_duplicates(points)
         order = cKDTree(points[first]).indices if first.size else np.zeros(0, dtype=np.intp)
         self.original = first[order]
         row = np.empty_like(order)
         row[order] = np.arange(order.size)
         self.representative = row[representative]
-        self.points = np.ascontiguousarray(points[self.original], dtype=np.float64)
+        self.points = np.ascontiguousarray(points[self.original])
+        del points  # (the divided copy) before the kNN query's peak
         self.tree = cKDTree(self.points)
         m = self.points.shape[0]
         self.k = int(min(k, max(m - 1, 0)))
@@ -384,11 +389,12 @@ def emst(points, neighbours=12):
     of the kNN cache; the result is exact for any value >= 1, larger values can be faster on
     irregular sampling.
     """
-    from ..validation import check_positions
+    from ..validation import check_positions, power_of_two_scale
 
     points = check_positions(points, "points")
     if isinstance(neighbours, bool) or not isinstance(neighbours, (int, np.integer)) or neighbours < 1:
         raise ValueError(f"neighbours must be a whole number >= 1, got {neighbours!r}")
-    index = NeighbourIndex(points, int(neighbours))
+    # Divided by a power of two (exact): the KD-tree's squared distances stay finite at any scale.
+    index = NeighbourIndex(points, int(neighbours), scale=power_of_two_scale(points, "points"))
     edges, _ = boruvka_emst(index)
     return np.concatenate([index.original[edges], index.duplicate_edges()]).astype(np.int64)

@@ -73,3 +73,40 @@ def test_coincident_points_give_no_nan():
     positions = np.zeros((6, 3))
     result = core.hc_smooth(positions, EDGES, alpha=0.1, beta=0.6, iterations=10, tolerance=1e-3)
     assert np.array_equal(result, positions)
+
+
+INT_MASK = np.array([0, 1, 1, 0, 0, 1])  # a mask of the octahedron's 6 vertices, in int form
+
+
+@pytest.mark.parametrize("fixed", [INT_MASK, INT_MASK.tolist(), np.zeros(6, np.int32), np.ones(6, np.uint8)])
+def test_fixed_that_reads_as_mask_or_indices_is_refused(fixed):
+    with pytest.raises(ValueError, match=r"0s and 1s.*fixed\.astype\(bool\).*np\.flatnonzero"):
+        run(fixed=fixed)
+    with pytest.raises(ValueError, match=r"fixed\.astype\(bool\)"):
+        core.smooth_point_cloud(POSITIONS, fixed=fixed)
+
+
+def test_fixed_as_mask_or_unambiguous_indices_is_accepted():
+    mask = INT_MASK.astype(bool)
+    expected = run(fixed=mask)
+    assert np.array_equal(expected[mask], POSITIONS[mask]) and not np.array_equal(expected, POSITIONS)
+    for indices in (np.flatnonzero(mask), [5, 2, 1, 2], np.array([1, 2, 5, 1, 2, 5, 1])):
+        assert np.array_equal(run(fixed=indices), expected)
+    # As long as the vertex count but with indices above 1: unambiguous.
+    assert np.array_equal(run(fixed=np.arange(6)), POSITIONS)
+
+
+def test_fixed_on_tiny_meshes():
+    two, edge = np.array([[0.0, 0, 0], [1.0, 0, 0]]), np.array([[0, 1]])
+    one_fixed = core.hc_smooth(two, edge, alpha=0.1, beta=0.6, iterations=1, fixed=[1])
+    assert np.array_equal(one_fixed[1], two[1]) and not np.array_equal(one_fixed[0], two[0])
+    # With 2 vertices [0, 1] is both indices (fix both) and a mask (fix vertex 1): refused, and the
+    # message says how to fix both.
+    with pytest.raises(ValueError, match="2 vertices, fix both with a boolean mask"):
+        core.hc_smooth(two, edge, alpha=0.1, beta=0.6, iterations=1, fixed=[0, 1])
+    both = core.hc_smooth(two, edge, alpha=0.1, beta=0.6, iterations=1, fixed=np.ones(2, bool))
+    assert np.array_equal(both, two)
+    # One vertex has no neighbours and never moves: [0] is read as its index, either reading is the same.
+    lone = np.array([[1.0, 2.0, 3.0]])
+    assert np.array_equal(core.hc_smooth(lone, np.zeros((0, 2), int), alpha=0.1, beta=0.6, iterations=1,
+                                         fixed=[0]), lone)
