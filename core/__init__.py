@@ -7,14 +7,8 @@ Blender, so everything inside uses relative imports.
 from .adjacency import Umbrella, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, in_convergence_region
 from .metrics import Change, measure_change
+from .pointcloud import smooth_point_cloud
 from .smoothing import METHODS, MODES, Cancelled, Smoothing, SmoothResult, hc_smooth, laplacian_smooth, smooth
-
-
-def smooth_point_cloud(points, **options):
-    """Smooth a bare point set through its RFS mesh (paper section 7); see core.pointcloud."""
-    from .pointcloud import smooth_point_cloud as run
-
-    return run(points, **options)
 
 
 __all__ = [

@@ -14,12 +14,6 @@ EDIT_OPERATOR = "mesh.hc_smooth"
 POINTS_OPERATOR = "object.hc_smooth_points"
 
 
-def operator_available(idname):
-    """Whether an operator is registered (the point-cloud one ships separately)."""
-    category, name = idname.split(".")
-    return hasattr(bpy.types, f"{category.upper()}_OT_{name}")
-
-
 def smooth_button(layout, context, text=None, icon="MOD_SMOOTH"):
     """The operator button for the current mode, carrying the scene settings; None outside Object/Edit mode."""
     if context.mode == "EDIT_MESH":
@@ -27,9 +21,6 @@ def smooth_button(layout, context, text=None, icon="MOD_SMOOTH"):
     elif context.mode == "OBJECT":
         idname, label = OBJECT_OPERATOR, "Smooth Selected Objects"
     else:
-        return None
-    if not operator_available(idname):
-        layout.label(text=f"Operator {idname} is not registered", icon="ERROR")
         return None
     properties = layout.operator(idname, text=text or label, icon=icon)
     context.scene.hc_smooth.copy_to(properties)
@@ -78,7 +69,7 @@ class VIEW3D_PT_hc_smooth(bpy.types.Panel):
         layout.prop(settings, "output")
         layout.use_property_split = False
         smooth_button(layout.column(), context)
-        if context.mode == "OBJECT" and operator_available(POINTS_OPERATOR):
+        if context.mode == "OBJECT":
             layout.operator(POINTS_OPERATOR, text="Smooth Point Cloud", icon="OUTLINER_DATA_POINTCLOUD")
 
 
