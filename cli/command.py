@@ -198,8 +198,7 @@ def smooth_meshes(objects, settings, outcome):
             pass
     for job in jobs:
         jobs_module.write(job, settings)
-        outcome.changes.append(core.measure_change(job.positions, job.result, faces=job.faces,
-                                                   closed=job.closed))
+        outcome.changes.append(jobs_module.measure(job))
         outcome.vertices += len(job.positions)
         outcome.iterations = max(outcome.iterations, job.iterations_run)
 

@@ -101,7 +101,7 @@ def main():
     hc_seq.hide_render = True  # the picture shows three: noisy, Laplacian, HC
 
     triangles = core.metrics.fan_triangles(faces)
-    if not core.metrics.is_closed(triangles):
+    if not core.topology.closed_from_triangles(triangles):
         print("(Suzanne is not watertight: volumes are the signed volumes of its faces, which still show shrinkage)")
 
     def volume(points):

@@ -24,7 +24,7 @@ class Job:
     mesh: object
     positions: np.ndarray  # float32 (n, 3): the mesh's, or its active shape key's
     edges: np.ndarray
-    faces: object  # (offsets, corner_verts) of a closed mesh, else None (not needed)
+    faces: np.ndarray  # (t, 3) triangles of a closed mesh, else None (not needed)
     fixed: np.ndarray  # bool (n,)
     closed: bool = False  # the faces enclose a volume (consistently oriented, no boundary)
     key_block: object = None  # the active shape key that holds ``positions``, if any
@@ -32,6 +32,7 @@ class Job:
     result: np.ndarray = None
     iterations_run: int = 0
     seconds: float = 0.0
+    change: object = None  # core.Change of the result, measured once for every report
 
 
 def settings_of(props):
@@ -61,7 +62,7 @@ def make_job(obj, props, extra_fixed=None):
     positions, key_block = objects.read_positions(obj)
     edges = mesh_io.read_edges(mesh)
     corner_verts, corner_edges = mesh_io.read_corners(mesh)
-    closed = mesh_io.is_closed(edges, corner_verts, corner_edges)
+    closed = core.topology.closed_from_corners(edges, corner_verts, corner_edges)
     fixed = np.zeros(n, dtype=bool) if extra_fixed is None else extra_fixed.copy()
     if props.vertex_group:
         group = obj.vertex_groups.get(props.vertex_group)
@@ -70,8 +71,9 @@ def make_job(obj, props, extra_fixed=None):
         members = mesh_io.vertex_group_members(obj, group.index)
         fixed |= ~members if props.invert_vertex_group else members
     if props.pin_boundary:
-        fixed |= mesh_io.boundary_vertices(n, edges, corner_edges)
-    faces = mesh_io.read_faces(mesh, corner_verts) if closed else None  # whole faces: only for the volume
+        fixed |= core.topology.boundary_vertices(n, edges, corner_edges)
+    # Triangulated once per mesh, for the volume in the report (only the positions change).
+    faces = core.metrics.fan_triangles(mesh_io.read_faces(mesh, corner_verts)) if closed else None
     return Job(obj=obj, mesh=mesh, positions=positions, edges=edges, faces=faces, fixed=fixed,
                closed=closed, key_block=key_block)
 
@@ -114,12 +116,19 @@ def write(job, props):
     objects.write_positions(job.obj, job.key_block, job.positions, job.result)
 
 
+def measure(job):
+    """What the run changed (volume of a closed mesh, else size), measured once per job."""
+    if job.change is None:
+        job.change = core.measure_change(job.positions, job.result, faces=job.faces, closed=job.closed)
+    return job.change
+
+
 def summary(jobs, props):
     """One line for the status bar: method, iterations, vertices moved, time, volume or size change."""
     moved = 0
     changes = []
     for job in jobs:
-        change = core.measure_change(job.positions, job.result, faces=job.faces, closed=job.closed)
+        change = measure(job)
         moved += change.moved
         if change.volume_change is not None:
             changes.append(f"volume {change.volume_change:+.2%}")

@@ -50,9 +50,9 @@ def test_closedness_from_corner_edges_matches_the_core(scene, make, change, expe
     faces = mesh_io().read_faces(mesh)
     edges = mesh_io().read_edges(mesh)
     corner_verts, corner_edges = mesh_io().read_corners(mesh)
-    np.testing.assert_array_equal(corner_verts, faces[1])
-    assert mesh_io().is_closed(edges, corner_verts, corner_edges) is expected
-    assert core.metrics.is_closed(core.metrics.fan_triangles(faces)) is expected
+    np.testing.assert_array_equal(corner_verts, np.ravel(faces if isinstance(faces, np.ndarray) else faces[1]))
+    assert core.topology.closed_from_corners(edges, corner_verts, corner_edges) is expected
+    assert core.topology.closed_from_triangles(core.metrics.fan_triangles(faces)) is expected
 
 
 @pytest.mark.parametrize("make", [noisy_sphere, noisy_grid,
@@ -60,7 +60,10 @@ def test_closedness_from_corner_edges_matches_the_core(scene, make, change, expe
 def test_boundary_from_corner_edges_matches_the_faces(scene, make):
     # Reference: an edge of exactly one face, counted from the faces' own corner pairs.
     mesh = make().data
-    offsets, corners = mesh_io().read_faces(mesh)
+    faces = mesh_io().read_faces(mesh)
+    if isinstance(faces, np.ndarray):  # all triangles
+        faces = np.arange(0, faces.size + 1, 3), faces.ravel()
+    offsets, corners = faces
     following = np.arange(1, corners.size + 1)
     following[offsets[1:] - 1] = offsets[:-1]
     pairs = np.sort(np.stack([corners, corners[following]], axis=1), axis=1)
@@ -68,6 +71,6 @@ def test_boundary_from_corner_edges_matches_the_faces(scene, make):
     expected = np.zeros(len(mesh.vertices), dtype=bool)
     expected[unique[counts == 1].ravel()] = True
     _verts, corner_edges = mesh_io().read_corners(mesh)
-    got = mesh_io().boundary_vertices(len(mesh.vertices), mesh_io().read_edges(mesh), corner_edges)
+    got = core.topology.boundary_vertices(len(mesh.vertices), mesh_io().read_edges(mesh), corner_edges)
     np.testing.assert_array_equal(got, expected)
     assert got.any() != (make is noisy_sphere)

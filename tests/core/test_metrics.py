@@ -5,7 +5,8 @@ import pytest
 
 import core
 import small_meshes as sm
-from core.metrics import fan_triangles, is_closed
+from core.metrics import fan_triangles
+from core.topology import closed_from_triangles as is_closed
 
 
 def polygons(faces):
@@ -68,3 +69,70 @@ def test_bad_faces_and_shapes():
         core.measure_change(positions, positions, faces=np.array([[0, 1, 9]]))
     with pytest.raises(ValueError, match="offsets"):
         core.measure_change(positions, positions, faces=(np.array([0, 2]), np.array([0, 1])))
+
+
+def test_triangles_come_back_without_a_copy_in_either_layout():
+    positions, faces = sm.octahedron()
+    triangles = np.array(faces, dtype=np.int32)
+    assert fan_triangles(triangles) is triangles
+    same = fan_triangles(polygons(faces))
+    assert np.array_equal(same, triangles) and same.base is not None  # a view of the corner array
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("offset", [0.0, 1e3])
+def test_volume_in_the_arrays_precision_far_from_the_origin(dtype, offset):
+    """Single precision keeps its digits: the terms are measured from the box centre, not the origin."""
+    positions, faces = sm.uv_sphere(40, 80)
+    triangles = fan_triangles(np.array(faces))
+    exact = core.metrics.enclosed_volumes(triangles, positions)[0]
+    moved = (positions + offset).astype(dtype)
+    got, scaled = core.metrics.enclosed_volumes(triangles, moved, (positions * 1.1 + offset).astype(dtype))
+    assert got == pytest.approx(exact, rel=1e-5 if dtype == np.float32 else 1e-12)
+    assert scaled == pytest.approx(exact * 1.1**3, rel=1e-5 if dtype == np.float32 else 1e-12)
+
+
+def test_volume_blocks_and_threads_add_up(monkeypatch):
+    positions, faces = sm.uv_sphere(60, 120)
+    triangles = fan_triangles(np.array(faces))
+    whole = core.metrics.enclosed_volumes(triangles, positions, positions * 2)
+    monkeypatch.setattr(core.metrics, "_VOLUME_BLOCK", 7)  # many blocks, and sets side by side on threads
+    blocks = core.metrics.enclosed_volumes(triangles, positions, positions * 2)
+    np.testing.assert_allclose(blocks, whole, rtol=1e-12)
+    assert whole[1] == pytest.approx(8 * whole[0], rel=1e-12)
+
+
+def blender_layout(faces, extra_edges=()):
+    """edges, corner_verts, corner_edges as Blender stores a mesh of these faces."""
+    pairs = {}
+    corner_verts, corner_edges = [], []
+    for face in faces:
+        for a, b in zip(face, list(face[1:]) + [face[0]]):
+            key = (min(a, b), max(a, b))
+            pairs.setdefault(key, len(pairs))
+            corner_verts.append(a)
+            corner_edges.append(pairs[key])
+    for a, b in extra_edges:
+        pairs.setdefault((a, b), len(pairs))
+    edges = np.array(sorted(pairs, key=pairs.get))
+    return edges, np.array(corner_verts, dtype=np.int32), np.array(corner_edges, dtype=np.int32)
+
+
+def test_closed_from_corners_agrees_with_the_triangles():
+    _, octahedron = sm.octahedron()
+    _, cube = sm.cube_quads()
+    flipped = [octahedron[0][::-1]] + octahedron[1:]
+    three_faces_on_an_edge = octahedron + [[0, 2, 5]]
+    cases = [(octahedron, True), (cube, True), (octahedron[1:], False), (flipped, False),
+             (three_faces_on_an_edge, False)]
+    for faces, expected in cases:
+        edges, corner_verts, corner_edges = blender_layout(faces, extra_edges=[(0, 1)])  # a loose edge
+        assert core.topology.closed_from_corners(edges, corner_verts, corner_edges) is expected, faces
+        assert is_closed(fan_triangles(polygons(faces))) is expected, faces
+
+
+def test_boundary_vertices_are_those_of_one_face_edges():
+    _, faces = sm.grid(4, 3)
+    edges, _, corner_edges = blender_layout(faces)
+    boundary = core.topology.boundary_vertices(12, edges, corner_edges)
+    assert np.array_equal(np.flatnonzero(~boundary), [5, 6])  # the two inner vertices of a 4 x 3 grid

@@ -1,0 +1,48 @@
+"""Which faces close a surface and where it is open: integer work on face corners, no positions.
+
+Blender stores a mesh's faces as corners, each with its vertex and the edge to the next corner of its
+face; core callers pass faces as arrays. Both layouts are answered here in O(corners), without a sort.
+"""
+
+import numpy as np
+import scipy.sparse as sp
+
+
+def faces_per_edge(n_edges, corner_edges):
+    """How many face corners start on each edge (two for an edge inside a surface, one on a border)."""
+    return np.bincount(corner_edges, minlength=n_edges)
+
+
+def closed_from_corners(edges, corner_verts, corner_edges):
+    """Whether the faces form a closed, consistently oriented surface: every edge of a face is in exactly
+    two faces, which run along it in opposite directions (loose edges do not matter)."""
+    if corner_verts.size == 0 or len(edges) == 0:
+        return False
+    # Bin 2e + 1 counts the corners running along edge e from its first vertex, bin 2e the others:
+    # closed and oriented <=> every used edge has one of each.
+    forward = corner_verts == np.take(edges[:, 0], corner_edges)
+    per_direction = np.bincount(2 * corner_edges.astype(np.int64) + forward, minlength=2 * len(edges))
+    return bool(per_direction.max() <= 1 and np.array_equal(per_direction[0::2], per_direction[1::2]))
+
+
+def boundary_vertices(n_vertices, edges, corner_edges):
+    """Vertices on an open boundary: on an edge used by exactly one face (edges without faces don't count)."""
+    mask = np.zeros(n_vertices, dtype=bool)
+    mask[edges[faces_per_edge(len(edges), corner_edges) == 1].ravel()] = True
+    return mask
+
+
+def closed_from_triangles(triangles):
+    """Every directed edge of the (t, 3) triangles is matched by exactly one in the opposite direction."""
+    if triangles.size == 0:
+        return False
+    heads = triangles.ravel()
+    tails = np.roll(triangles, -1, axis=1).ravel()
+    n = int(triangles.max()) + 1
+    # Fan diagonals appear once in each direction inside their own face, so they cancel like real edges.
+    # Directed-edge counts as a sparse matrix D (SciPy's O(nnz) placement, no global sort): closed and
+    # consistently oriented <=> every directed edge once (entries all 1) and D == D^T.
+    counts = sp.coo_matrix((np.ones(heads.size, dtype=np.int32), (heads, tails)), shape=(n, n)).tocsr()
+    if counts.nnz != heads.size:  # a directed edge used twice: duplicate faces or flipped neighbours
+        return False
+    return (counts != counts.T.tocsr()).nnz == 0
