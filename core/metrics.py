@@ -1,12 +1,13 @@
 """What a smoothing run changed: displacement, bounding box and, for closed meshes, enclosed volume."""
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import parallel
 from .topology import closed_from_triangles
-from .validation import bbox_diagonal, check_positions
+from .validation import bbox_diagonal, check_positions, row_lengths
 
 
 @dataclass(frozen=True)
@@ -82,26 +83,37 @@ def enclosed_volume(positions, triangles):
 def enclosed_volumes(triangles, *position_sets):
     """The signed volume of each set of (n, 3) positions on the same triangles: one pass over the
     triangles each, in the positions' own precision, the sets side by side on threads."""
+    volumes, unit = _volumes_in_units(triangles, position_sets)
+    return [volume * unit * unit * unit for volume in volumes]
+
+
+def _volumes_in_units(triangles, position_sets):
+    """(volumes, unit): the volumes measured in a power of two near the size of the first set, so
+    that their terms neither overflow nor underflow (and their ratios hold at any scale)."""
     corners = [np.ascontiguousarray(triangles[:, k]) for k in range(3)]
     # The volume does not change under translation; measured from a point near the surface the terms
     # do not cancel, so single precision keeps its digits even far from the origin.
-    centre = _box_centre(position_sets[0]) if position_sets and len(position_sets[0]) else np.zeros(3)
-    tasks = [lambda points=points: _signed_volume(points, corners, centre) for points in position_sets]
+    first = position_sets[0] if position_sets else np.zeros((0, 3))
+    centre = _box_centre(first) if len(first) else np.zeros(3)
+    size = bbox_diagonal(first)
+    unit = 2.0 ** math.frexp(size)[1] if size > 0.0 and math.isfinite(size) else 1.0
+    tasks = [lambda points=points: _signed_volume(points, corners, centre, unit) for points in position_sets]
     if len(tasks) > 1 and corners[0].size >= _VOLUME_BLOCK * 8 and parallel.thread_count() > 1:
-        return parallel.run_all(tasks)
-    return [task() for task in tasks]
+        return parallel.run_all(tasks), unit
+    return [task() for task in tasks], unit
 
 
 _VOLUME_BLOCK = 1 << 14  # triangles per block: the gathered corners of a block stay in cache
 
 
 def _box_centre(points):
-    return np.array([(float(points[:, k].min()) + float(points[:, k].max())) / 2 for k in range(3)])
+    return np.array([float(points[:, k].min()) / 2 + float(points[:, k].max()) / 2 for k in range(3)])
 
 
-def _signed_volume(points, corners, centre):
-    """Σ a·(b×c) / 6 over the triangles (a, b, c), written out per coordinate, block by block."""
-    x, y, z = (np.subtract(points[:, k], points.dtype.type(centre[k])) for k in range(3))
+def _signed_volume(points, corners, centre, unit):
+    """Σ a·(b×c) / 6 over the triangles (a, b, c) of the points in ``unit``s from ``centre``, written
+    out per coordinate, block by block."""
+    x, y, z = ((points[:, k] - points.dtype.type(centre[k])) / points.dtype.type(unit) for k in range(3))
     a_all, b_all, c_all = corners
     total = 0.0
     for start in range(0, a_all.size, _VOLUME_BLOCK):
@@ -133,10 +145,8 @@ def measure_change(before, after, faces=None, closed=None):
     if before.shape != after.shape:
         raise ValueError(f"before and after must have the same shape, got {before.shape} and {after.shape}")
     # In the arrays' own precision (a report, not a result): no float64 copies of a million rows.
-    step = after - before
-    displacement = np.sqrt(np.einsum("ij,ij->i", step, step))
-    del step
     diag_before, diag_after = bbox_diagonal(before), bbox_diagonal(after)
+    displacement = row_lengths(after - before, max(diag_before, diag_after))
     closed = closed if faces is not None else False
     volume_before = volume_after = volume_change = None
     if faces is not None and closed is not False:  # an open surface has no volume to compare
@@ -145,9 +155,10 @@ def measure_change(before, after, faces=None, closed=None):
             raise ValueError("faces refer to vertices that do not exist")
         closed = closed_from_triangles(triangles) if closed is None else bool(closed)
         if closed:
-            volume_before, volume_after = enclosed_volumes(triangles, before, after)
-            if volume_before != 0.0:
-                volume_change = (volume_after - volume_before) / abs(volume_before)
+            (before_units, after_units), unit = _volumes_in_units(triangles, (before, after))
+            volume_before, volume_after = (units * unit * unit * unit for units in (before_units, after_units))
+            if before_units != 0.0:
+                volume_change = (after_units - before_units) / abs(before_units)
     return Change(
         n_vertices=before.shape[0],
         moved=int(np.count_nonzero(displacement)),

@@ -6,6 +6,7 @@ Every iteration is a few sparse products over all vertices at once; fixed vertic
 without neighbours, section 2) are copied through unchanged, so they stay bit-identical.
 """
 
+import math
 import warnings
 from dataclasses import dataclass
 
@@ -24,6 +25,7 @@ from .validation import (
     check_positions,
     check_tolerance,
     check_unit_interval,
+    squares_are_safe,
 )
 
 METHODS = ("hc", "plain", "central", "original")
@@ -114,6 +116,8 @@ class Smoothing:
 
         self.shape, self.dtype = start.shape, start.dtype
         self.threshold = tolerance * bbox_diagonal(start) if tolerance > 0.0 else 0.0
+        self.plain_squares = squares_are_safe(self.threshold, start.dtype) and squares_are_safe(
+            bbox_diagonal(start), start.dtype)
         # What "blown up" is measured against: the box around the input and the originals.
         self.reference_box = _box(start) if origin is start else _box(np.concatenate([start, origin]))
         renumbered = locality.renumbering(operator) if mode == "simultaneous" and self.iterations > 0 else None
@@ -147,7 +151,10 @@ class Smoothing:
                 new = self.step(self.current, self.spare)
                 if self.threshold > 0.0:
                     move = new - self.current
-                    self.stopped_early = np.sqrt(np.max(np.einsum("ij,ij->j", move, move))) < self.threshold
+                    if not self.plain_squares:  # extreme scales: measure moves in thresholds
+                        move /= move.dtype.type(self.threshold)
+                    largest = np.sqrt(np.max(np.einsum("ij,ij->j", move, move)))
+                    self.stopped_early = largest < (self.threshold if self.plain_squares else 1.0)
                 if self.spare is not None:
                     self.spare = self.current
                 self.current = new
@@ -175,12 +182,12 @@ class Smoothing:
             return
         low, high = self.reference_box
         new_low, new_high = self.current.min(axis=1), self.current.max(axis=1)
-        size = float(np.linalg.norm(high - low))
+        size = math.hypot(*(high - low))
         grown = np.maximum(high, new_high) - np.minimum(low, new_low)
         if not np.all(np.isfinite(grown)):
             what = "coordinates became infinite or NaN"
-        elif float(np.linalg.norm(grown)) > BLOW_UP_FACTOR * size:
-            what = f"the bounding box grew {float(np.linalg.norm(grown)) / size:.3g} times"
+        elif math.hypot(*grown) > BLOW_UP_FACTOR * size:
+            what = f"the bounding box grew {math.hypot(*grown) / size:.3g} times"
         else:
             self.checked = True
             return

@@ -1,5 +1,6 @@
 """Input checks shared by every entry point: each raises ValueError with a message a user can act on."""
 
+import math
 import numbers
 
 import numpy as np
@@ -39,7 +40,24 @@ def bbox_diagonal(points):
     if points.shape[0] == 0:
         return 0.0
     extent = [float(points[:, k].max()) - float(points[:, k].min()) for k in range(points.shape[1])]
-    return float(np.linalg.norm(extent))
+    return math.hypot(*extent)  # scaled: no overflow or underflow at extreme coordinates
+
+
+def squares_are_safe(length, dtype):
+    """Whether lengths up to ``length`` (and down to a millionth of it) square without overflow or
+    underflow in ``dtype``: then plain sums of squares are exact enough, else scale first."""
+    info = np.finfo(dtype)
+    return length == 0.0 or np.sqrt(info.tiny) * 1e6 < length < np.sqrt(info.max) / 1e6
+
+
+def row_lengths(vectors, reference):
+    """Euclidean lengths of the rows of (n, k) ``vectors``; ``reference`` bounds them (a bounding-box
+    diagonal): at scales where squares would overflow or underflow, the rows are scaled first."""
+    if squares_are_safe(reference, vectors.dtype):
+        return np.sqrt(np.einsum("ij,ij->i", vectors, vectors))
+    scale = vectors.dtype.type(reference)
+    scaled = vectors / scale
+    return np.sqrt(np.einsum("ij,ij->i", scaled, scaled)) * scale
 
 
 def check_edges(edges, n_vertices):

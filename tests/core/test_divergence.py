@@ -81,3 +81,13 @@ def test_advance_checks_each_chunk():
     stepped.advance(3)  # 27x at most: within the bounding box allowed
     with pytest.raises(core.DivergenceError, match="after 6 iterations"):
         stepped.advance(3)
+
+
+@pytest.mark.parametrize("mode", core.MODES)
+@pytest.mark.parametrize("scale", [2.0**-520, 2.0**520])  # squares of moves would underflow / overflow
+def test_tolerance_stops_at_the_same_iteration_at_any_scale(mode, scale):
+    options = dict(method="hc", alpha=0.1, beta=0.6, iterations=500, mode=mode, tolerance=1e-5)
+    unit = core.smooth(NOISY, EDGES, **options)
+    far = core.smooth(NOISY * scale, EDGES, **options)
+    assert unit.stopped_early and far.stopped_early and far.iterations == unit.iterations
+    assert np.array_equal(far.positions, unit.positions * scale)  # a power of two: exact

@@ -136,3 +136,17 @@ def test_boundary_vertices_are_those_of_one_face_edges():
     edges, _, corner_edges = blender_layout(faces)
     boundary = core.topology.boundary_vertices(12, edges, corner_edges)
     assert np.array_equal(np.flatnonzero(~boundary), [5, 6])  # the two inner vertices of a 4 x 3 grid
+
+
+@pytest.mark.parametrize("scale", [2.0**-540, 1.0, 2.0**540])
+def test_displacements_at_any_scale(scale):
+    positions, faces = sm.uv_sphere(8, 12)
+    moved = positions.copy()
+    moved[3] += [0.0, 0.0, 0.5]
+    moved[7] += [0.3, 0.4, 0.0]
+    change = core.measure_change(positions * scale, moved * scale, faces=np.array(faces))
+    unit = core.measure_change(positions, moved, faces=np.array(faces))
+    assert change.volume_change == pytest.approx(unit.volume_change, rel=1e-12) and unit.volume_change > 0
+    assert change.moved == 2
+    assert change.max_displacement == pytest.approx(0.5 * scale, rel=1e-12)
+    assert change.mean_displacement == pytest.approx(1.0 / len(positions) * scale, rel=1e-12)
