@@ -9,12 +9,33 @@ import math
 import mmap
 import os
 import re
+import textwrap
 from dataclasses import dataclass, field
+
+from .. import settings_spec
 
 MESH_FORMATS = (".ply", ".obj", ".stl")
 BLEND = ".blend"
-METHODS = ("HC", "LAPLACIAN", "LAPLACIAN_CENTRAL", "LAPLACIAN_ORIGINAL")
-MODES = ("SIMULTANEOUS", "SEQUENTIAL")
+
+# Command-line option (argparse dest) -> setting, from the declarations' flags.
+MESH_OPTIONS = {s.flag.replace("-", "_"): s for s in settings_spec.MESH if s.flag}
+POINT_OPTIONS = {s.flag.replace("-", "_"): s for s in settings_spec.POINTS if s.flag}
+# Command-line name -> PointSettings field.
+POINT_FIELDS = {name: setting.name for name, setting in POINT_OPTIONS.items()}
+POINT_ONLY = tuple(name for name in POINT_OPTIONS if name not in MESH_OPTIONS)
+# Mesh-only options, and the value each may keep with --points because it describes what runs anyway.
+MESH_ONLY = {"iterations": None, "mode": "SIMULTANEOUS", "tolerance": 0.0, "method": "HC", "pin_boundary": False}
+
+
+def _option(name):
+    return "--" + name.replace("_", "-")
+
+
+def _listed(names):
+    """'--a, --b and --c'"""
+    options = [_option(name) for name in names]
+    return ", ".join(options[:-1]) + " and " + options[-1]
+
 
 DESCRIPTION = """\
 Smooth scanned meshes without shrinking them (HC algorithm, Vollmer, Mencl, Mueller 1999).
@@ -28,11 +49,11 @@ Existing files are never replaced, except the input itself with --in-place (same
 and, with --overwrite, existing results (and their .mtl for OBJ). --in-place with --format writes a
 new file beside the input and keeps the input. Everything is checked before anything runs.
 
---points smooths point clouds (meshes without edges) with the Object > HC Smooth Points code. They
-take --alpha, --beta, --rounds, --steps-per-round, --neighbours, --reach, --gap, --fixed-group and
---invert-group; the mesh-only options (--iterations, --mode, --tolerance, --method, --pin-boundary)
-are refused with --points, and the point options without it.
 """
+DESCRIPTION += textwrap.fill(
+    f"--points smooths point clouds (meshes without edges) with the Object > HC Smooth Points code. They take "
+    f"{_listed(POINT_OPTIONS)}; the mesh-only options ({', '.join(map(_option, MESH_ONLY))}) are refused with "
+    "--points, and the point options without it.", width=100, break_on_hyphens=False) + "\n"
 
 EPILOG = """\
 exit status: 0 when every file was smoothed, 1 when any file failed (the reason is printed),
@@ -45,18 +66,6 @@ examples:
   blender -b -c hc_smooth points.ply --points --rounds 4 -o out/
   ls scans/*.ply | xargs -P 4 -n 1 blender -b -c hc_smooth -o smoothed/    (one process per file)
 """
-
-# The point operator's defaults (operators/point_cloud.PointSettings, which needs bpy), for --help;
-# tests/blender/test_cli.py checks they agree.
-POINT_DEFAULTS = {"rounds": 3, "steps_per_round": 22, "neighbours": 16, "reach": 2.5, "gap": 3.0}
-# Command-line name -> PointSettings field.
-POINT_FIELDS = {"alpha": "alpha", "beta": "beta", "rounds": "rounds", "steps_per_round": "iterations_per_round",
-                "neighbours": "neighbours", "reach": "spacing_factor", "gap": "gap_factor",
-                "fixed_group": "vertex_group", "invert_group": "invert_vertex_group"}
-POINT_ONLY = ("rounds", "steps_per_round", "neighbours", "reach", "gap")
-# Mesh-only options, and the value each may keep with --points because it describes what runs anyway.
-MESH_ONLY = {"iterations": None, "mode": "SIMULTANEOUS", "tolerance": 0.0, "method": "HC", "pin_boundary": False}
-
 
 class UsageError(Exception):
     """A bad command line: nothing has been read or written."""
@@ -74,35 +83,50 @@ def _number(text):
     return value
 
 
-def _unit_interval(text):
-    value = _number(text)
-    if not 0.0 <= value <= 1.0:
-        raise argparse.ArgumentTypeError(f"{text} is outside [0, 1]")
-    return value
+def _checked(setting):
+    """The argparse type of a number setting: its declared limits, refused with a message saying which."""
+    low, high = setting.min, setting.max
 
-
-def _non_negative_float(text):
-    value = _number(text)
-    if value < 0.0:
-        raise argparse.ArgumentTypeError(f"{text} is negative")
-    return value
-
-
-def _positive_float(text):
-    value = _number(text)
-    if value <= 0.0:
-        raise argparse.ArgumentTypeError(f"{text} is not above 0")
-    return value
-
-
-def _whole(low):
     def parse(text):
-        value = int(text)
-        if value < low:
-            raise argparse.ArgumentTypeError(f"{text} is negative" if low == 0 else f"{text} is below {low}")
+        value = int(text) if setting.kind == "int" else _number(text)
+        if low is not None and high is not None and not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{text} is outside [{low:g}, {high:g}]")
+        if low is not None and value < low:
+            raise argparse.ArgumentTypeError(f"{text} is negative" if low == 0 else f"{text} is below {low:g}")
+        if high is not None and value > high:
+            raise argparse.ArgumentTypeError(f"{text} is above {high:g}")
         return value
-    parse.__name__ = "whole number"  # argparse names the type in its "invalid ... value" message
+    parse.__name__ = "whole number" if setting.kind == "int" else "number"  # argparse: "invalid ... value"
     return parse
+
+
+def _default_text(setting):
+    value = f"{setting.default:g}" if setting.kind == "float" else str(setting.default)
+    return setting.cli_default.format(default=value) if setting.cli_default else value
+
+
+def setting_help(setting, point=None, mesh_only=False):
+    """The declared help with the declared default (and the point operator's, for a shared option)."""
+    defaults = [_default_text(setting)] if setting.kind not in ("bool", "string") else []
+    if point is not None and defaults and (point.default != setting.default or point.cli_default):
+        defaults.append("point clouds: " + _default_text(point))
+    return (setting.help + (f" ({'; '.join(defaults)})" if defaults else "")
+            + ("; meshes only" if mesh_only else ""))
+
+
+def add_setting(group, setting, text):
+    """An option for a declared setting, with help ``text``. Values default to None ("not given"), so the
+    operator's default applies and --points can tell which options were given."""
+    options = {"help": text}
+    if setting.kind == "bool":
+        options["action"] = "store_true"
+    elif setting.kind == "string":
+        options.update(default=setting.default, metavar=setting.metavar)
+    elif setting.kind == "enum":
+        options.update(choices=setting.identifiers, type=str.upper, default=None)
+    else:
+        options.update(type=_checked(setting), default=None, metavar=setting.metavar)
+    group.add_argument(_option(setting.flag), **options)
 
 
 def make_parser():
@@ -120,24 +144,8 @@ def make_parser():
                        help="replace results that already exist (and the .mtl beside an OBJ result); without it "
                             "an existing file that is not the input of --in-place stops the run before it starts")
     smoothing = parser.add_argument_group("smoothing (as the operators' properties)")
-    smoothing.add_argument("--method", choices=METHODS, type=str.upper, default=None,
-                           help="HC (default) or a Laplacian variant; meshes only")
-    smoothing.add_argument("--alpha", type=_unit_interval, default=None,
-                           help="pull towards the original (0.1; point clouds: chosen from the noise unless given, "
-                                "then --steps-per-round applies)")
-    smoothing.add_argument("--beta", type=_unit_interval, default=None,
-                           help="HC correction weight (0.6; point clouds: 0.55)")
-    smoothing.add_argument("--iterations", type=_whole(0), default=None, help="iterations (10); meshes only")
-    smoothing.add_argument("--mode", choices=MODES, type=str.upper, default=None,
-                           help="SIMULTANEOUS (default) or SEQUENTIAL; meshes only")
-    smoothing.add_argument("--tolerance", type=_non_negative_float, default=None,
-                           help="stop early below this move (fraction of the bounding-box diagonal; 0); meshes only")
-    smoothing.add_argument("--fixed-group", metavar="NAME", default="",
-                           help="vertices (points) in this vertex group stay fixed (.blend, OBJ groups)")
-    smoothing.add_argument("--invert-group", action="store_true",
-                           help="fix everything outside --fixed-group instead (smooth only the group)")
-    smoothing.add_argument("--pin-boundary", action="store_true",
-                           help="keep open-boundary vertices fixed; meshes only")
+    for name, setting in MESH_OPTIONS.items():
+        add_setting(smoothing, setting, setting_help(setting, POINT_OPTIONS.get(name), name not in POINT_OPTIONS))
     smoothing.add_argument("--object", dest="objects", action="append", default=[], metavar="NAME",
                            help=".blend inputs: smooth this object (repeatable; default: every mesh object, with "
                                 "--points every point cloud)")
@@ -145,35 +153,14 @@ def make_parser():
     points.add_argument("--points", action="store_true",
                         help="smooth point clouds (meshes without edges; .blend: also point cloud objects) "
                              "instead of meshes")
-    points.add_argument("--rounds", type=_whole(0), default=None,
-                        help=f"runs of HC steps with edge swapping between them ({POINT_DEFAULTS['rounds']})")
-    points.add_argument("--steps-per-round", type=_whole(1), default=None, metavar="N",
-                        help="HC steps per round (chosen from the noise unless given, then "
-                             f"{POINT_DEFAULTS['steps_per_round']} and --alpha apply)")
-    points.add_argument("--neighbours", type=_whole(2), default=None, metavar="N",
-                        help=f"nearest neighbours a point may connect to ({POINT_DEFAULTS['neighbours']})")
-    points.add_argument("--reach", type=_positive_float, default=None, metavar="R",
-                        help=f"connect neighbours up to R local spacings ({POINT_DEFAULTS['reach']})")
-    points.add_argument("--gap", type=_positive_float, default=None, metavar="G",
-                        help=f"never connect across a gap of G local spacings ({POINT_DEFAULTS['gap']}; "
-                             "at least --reach)")
+    for name in POINT_ONLY:
+        add_setting(points, POINT_OPTIONS[name], setting_help(POINT_OPTIONS[name]))
     return parser
 
 
-@dataclass
-class Settings:
-    """The operator properties jobs.make_job/run/write read, filled from the command line."""
-
-    method: str = "HC"
-    alpha: float = 0.1
-    beta: float = 0.6
-    iterations: int = 10
-    mode: str = "SIMULTANEOUS"
-    tolerance: float = 0.0
-    vertex_group: str = ""
-    invert_vertex_group: bool = False
-    pin_boundary: bool = False
-    output: str = "MESH"
+Settings = settings_spec.settings_class(
+    "Settings", settings_spec.MESH,
+    "The operator properties jobs.make_job/run/write read, filled from the command line.")
 
 
 @dataclass
@@ -184,10 +171,6 @@ class Plan:
     point_options: dict = field(default_factory=dict)  # PointSettings fields given on the command line
     objects: list = field(default_factory=list)
     notes: list = field(default_factory=list)  # said before the run (an input named twice)
-
-
-def _option(name):
-    return "--" + name.replace("_", "-")
 
 
 def parse(argv):
@@ -204,19 +187,14 @@ def parse(argv):
                    if getattr(args, name) not in (None, keeps)]
         if refused:
             raise UsageError(f"{', '.join(refused)} {'does' if len(refused) == 1 else 'do'} not apply to point "
-                             "clouds (--points): they take --alpha, --beta, --rounds, --steps-per-round, "
-                             "--neighbours, --reach, --gap, --fixed-group and --invert-group")
+                             f"clouds (--points): they take {_listed(POINT_OPTIONS)}")
     else:
         given = [_option(name) for name in POINT_ONLY if getattr(args, name) is not None]
         if given:
             raise UsageError(f"{', '.join(given)} {'applies' if len(given) == 1 else 'apply'} to point clouds "
                              "only: add --points")
-    settings = Settings()
-    for name in ("method", "alpha", "beta", "iterations", "mode", "tolerance"):
-        if getattr(args, name) is not None:
-            setattr(settings, name, getattr(args, name))
-    settings.vertex_group, settings.invert_vertex_group = args.fixed_group, args.invert_group
-    settings.pin_boundary = args.pin_boundary
+    settings = Settings(**{setting.name: getattr(args, name) for name, setting in MESH_OPTIONS.items()
+                           if getattr(args, name) is not None})
     point_options = {POINT_FIELDS[name]: getattr(args, name) for name in POINT_FIELDS
                      if getattr(args, name) is not None}
     if "alpha" in point_options or "iterations_per_round" in point_options:

@@ -10,12 +10,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import core
+from .. import core, settings_spec
 from . import mesh_io, objects
 
-CORE_METHOD = {"HC": "hc", "LAPLACIAN": "plain", "LAPLACIAN_CENTRAL": "central", "LAPLACIAN_ORIGINAL": "original"}
-METHOD_LABEL = {"HC": "HC", "LAPLACIAN": "Laplacian", "LAPLACIAN_CENTRAL": "Laplacian (central)",
-                "LAPLACIAN_ORIGINAL": "Laplacian (original)"}
+# The method's enum identifier -> core's name for it, and the short name reports and shape keys use.
+CORE_METHOD = {choice.identifier: choice.core for choice in settings_spec.METHOD.items}
+METHOD_LABEL = {choice.identifier: choice.short for choice in settings_spec.METHOD.items}
 
 
 @dataclass

@@ -6,71 +6,33 @@ a modal timer with progress in the status bar and Esc to cancel (nothing is writ
 """
 
 import bpy
-from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
 
-from .. import core
+from .. import core, settings_spec
 from . import jobs as jobs_module
 from . import mesh_io
 from .objects import InputError, unique_data
 from .modal_progress import ModalProgress
-
-METHOD_ITEMS = [
-    ("HC", "HC", "Laplacian steps pushed back towards the previous and original points: removes noise "
-     "without shrinking (Vollmer, Mencl, Müller 1999, section 4)"),
-    ("LAPLACIAN", "Laplacian", "Every vertex moves to the average of its neighbours; shrinks (section 3.1)"),
-    ("LAPLACIAN_CENTRAL", "Laplacian, Central Point", "Keeps Alpha of the current position (section 3.2)"),
-    ("LAPLACIAN_ORIGINAL", "Laplacian, Original Point", "Keeps Alpha of the original position; always converges "
-     "(section 3.3)"),
-]
-MODE_ITEMS = [
-    ("SIMULTANEOUS", "Simultaneous", "Every vertex is averaged from the positions before the iteration "
-     "(the paper's Algorithm 1)"),
-    ("SEQUENTIAL", "Sequential", "Vertices in index order, each using its already-moved neighbours "
-     "(Gauss–Seidel)"),
-]
-OUTPUT_ITEMS = [
-    ("MESH", "Mesh", "Move the vertices (of the active shape key, if the mesh has shape keys)"),
-    ("SHAPE_KEY", "New Shape Key", "Store the result in a new shape key and leave the mesh as it was"),
-]
+from .properties import alpha_label, annotations, draw_convergence, draw_fixed_group, uses_alpha, uses_beta
 
 # Above this many vertex-iterations, an interactive run becomes modal (progress, Esc cancels).
 MODAL_WORK = 5_000_000
 
 
 class SmoothProperties:
-    """The operator settings, shared by both operators (and mirrored by the scene settings in ui/)."""
+    """The operator settings (settings_spec.MESH), shared by both operators; the scene settings in ui/ are
+    built from the same declarations."""
 
-    method: EnumProperty(name="Method", items=METHOD_ITEMS, default="HC")
-    alpha: FloatProperty(
-        name="Alpha", default=0.1, min=0.0, max=1.0,
-        description="HC and Laplacian (original point): pull towards the original positions. "
-                    "Laplacian (central point): weight of the current position")
-    beta: FloatProperty(
-        name="Beta", default=0.6, min=0.0, max=1.0,
-        description="HC: weight of a vertex's own difference against its neighbours' (converges above 0.5)")
-    iterations: IntProperty(name="Iterations", default=10, min=0, soft_max=200,
-                            description="Number of smoothing iterations")
-    mode: EnumProperty(name="Mode", items=MODE_ITEMS, default="SIMULTANEOUS")
-    tolerance: FloatProperty(
-        name="Tolerance", default=0.0, min=0.0, soft_max=0.01, precision=6,
-        description="Stop early once no vertex moves more than this fraction of the bounding-box "
-                    "diagonal in an iteration (0: always run every iteration)")
-    vertex_group: StringProperty(name="Vertex Group",
-                                 description="Vertices in this group (weight above 0) stay fixed")
-    invert_vertex_group: BoolProperty(name="Invert", description="Fix every vertex outside the group instead: "
-                                      "smooth only the group")
-    pin_boundary: BoolProperty(name="Pin Boundary", description="Keep open-boundary vertices fixed")
-    output: EnumProperty(name="Output", items=OUTPUT_ITEMS, default="MESH")
+    __annotations__ = annotations(settings_spec.MESH)
 
     def draw(self, context):
         layout = self.layout
         layout.use_property_split = True
         layout.prop(self, "method")
         column = layout.column()
-        column.active = self.method != "LAPLACIAN"
-        column.prop(self, "alpha")
+        column.active = uses_alpha(self.method)
+        column.prop(self, "alpha", text=alpha_label(self.method))
         row = layout.row()
-        row.active = self.method == "HC"
+        row.active = uses_beta(self.method)
         row.prop(self, "beta")
         layout.prop(self, "iterations")
         layout.prop(self, "mode")
@@ -78,23 +40,8 @@ class SmoothProperties:
         draw_fixed_group(layout, self, context.active_object)
         layout.prop(self, "pin_boundary")
         layout.prop(self, "output")
-        if self.method == "HC":
-            draw_convergence_warning(layout, self.alpha, self.beta)
-
-
-def draw_fixed_group(layout, props, obj):
-    """The fixed vertex group field (searchable on a mesh) with its Invert toggle, for the redo panels."""
-    row = layout.row(align=True)
-    if obj is not None and obj.type == "MESH":
-        row.prop_search(props, "vertex_group", obj, "vertex_groups", text="Fixed Group")
-    else:
-        row.prop(props, "vertex_group", text="Fixed Group")
-    row.prop(props, "invert_vertex_group", text="", icon="ARROW_LEFTRIGHT")
-
-
-def draw_convergence_warning(layout, alpha, beta):
-    if not core.in_convergence_region(alpha, beta):
-        layout.label(text="Outside the convergence region (Alpha > 0, Beta > 0.5)", icon="ERROR")
+        if self.method == "HC":  # the Laplacian variants shrink by design: no standing warning for them
+            draw_convergence(layout, self.method, self.alpha, self.beta)
 
 
 class _SmoothOperator(SmoothProperties, ModalProgress):

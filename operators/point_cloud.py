@@ -8,45 +8,24 @@ write, messages) that the operator and the command line (cli/command.py) both ca
 """
 
 import warnings
-from dataclasses import dataclass, fields
 
 import bpy
 import numpy as np
-from bpy.props import BoolProperty, FloatProperty, IntProperty, StringProperty
 
-from .. import core
+from .. import core, settings_spec
 from ..core.pointcloud import PointCloudSmoother
 from ..core.pointcloud.noise import MAX_STEPS, matched_alpha
 from . import mesh_io, objects
-from .mesh_smooth import draw_convergence_warning, draw_fixed_group
 from .modal_progress import ModalProgress
 from .objects import InputError, unique_data
+from .properties import annotations, draw_convergence, draw_fixed_group
 
 POINT_TYPES = ("MESH", "POINTCLOUD")
 
-
-@dataclass
-class PointSettings:
-    """The point-cloud settings: the operator's properties (their defaults are these) or the command line's."""
-
-    auto_amount: bool = True
-    alpha: float = 0.01
-    beta: float = 0.55
-    rounds: int = 3
-    iterations_per_round: int = 22
-    neighbours: int = 16
-    spacing_factor: float = 2.5
-    gap_factor: float = 3.0
-    min_quality: float = 0.3
-    swap: bool = True
-    vertex_group: str = ""
-    invert_vertex_group: bool = False
-    keep_rfs_mesh: bool = False
-
-    @classmethod
-    def of(cls, props):
-        """A snapshot of an operator's properties (a modal run must not see later edits)."""
-        return cls(**{f.name: getattr(props, f.name) for f in fields(cls)})
+# The point-cloud settings (settings_spec.POINTS) as plain values: an operator's snapshot or the command line's.
+PointSettings = settings_spec.settings_class(
+    "PointSettings", settings_spec.POINTS,
+    "The point-cloud settings: the operator's properties (their defaults are these) or the command line's.")
 
 
 def _attribute_mask(data, name, count):
@@ -245,44 +224,7 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
     progress_label = "HC Smooth Points"
 
-    auto_amount: BoolProperty(
-        name="Automatic Amount", default=PointSettings.auto_amount,
-        description="Choose Steps per Round and Alpha from the noise estimated relative to the point spacing "
-                    "(noisier: more steps and a weaker pull; nearly clean, sparse points: a few steps). "
-                    "Off: use the values set below")
-    alpha: FloatProperty(name="Alpha", default=PointSettings.alpha, min=0.0, max=1.0, step=0.1, precision=3,
-                         description="Pull towards the original positions (small: more smoothing; raise it for nearly "
-                                     "clean, sparse points). Used when Automatic Amount is off")
-    beta: FloatProperty(name="Beta", default=PointSettings.beta, min=0.0, max=1.0, precision=3,
-                        description="Weight of a point's own difference against its neighbours' (converges above 0.5)")
-    rounds: IntProperty(name="Rounds", default=PointSettings.rounds, min=0, soft_max=50,
-                        description="Runs of Steps per Round HC steps, with edge swapping of the RFS mesh in "
-                                    "between (with Automatic Amount the chosen steps are spread over the rounds)")
-    iterations_per_round: IntProperty(name="Steps per Round", default=PointSettings.iterations_per_round, min=1,
-                                      soft_max=100,
-                                      description="HC iterations between two passes of edge swapping. Used when "
-                                                  "Automatic Amount is off")
-    neighbours: IntProperty(name="Neighbours", default=PointSettings.neighbours, min=2, soft_max=64,
-                            description="How many nearest neighbours each point may connect to")
-    spacing_factor: FloatProperty(
-        name="Reach", default=PointSettings.spacing_factor, min=0.1, soft_max=5.0,
-        description="Connect neighbours up to this many times the local point spacing "
-                    "(larger: wider neighbourhoods, stronger smoothing)")
-    gap_factor: FloatProperty(
-        name="Gap", default=PointSettings.gap_factor, min=0.1, soft_max=10.0,
-        description="Never connect across a gap wider than this many local spacings: separate parts stay "
-                    "separate (must be at least Reach)")
-    min_quality: FloatProperty(name="Face Quality", default=PointSettings.min_quality, min=0.0, max=1.0,
-                               description="Drop RFS faces below this Bank-Smith quality (1 = equilateral)")
-    swap: BoolProperty(name="Edge Swapping", default=PointSettings.swap,
-                       description="Swap edges of the RFS mesh between HC steps (paper section 7)")
-    vertex_group: StringProperty(name="Vertex Group", default=PointSettings.vertex_group,
-                                 description="Points in this vertex group (weight above 0) stay fixed; for "
-                                             "point cloud objects, a point attribute of that name")
-    invert_vertex_group: BoolProperty(name="Invert", default=PointSettings.invert_vertex_group,
-                                      description="Fix every point outside the group instead")
-    keep_rfs_mesh: BoolProperty(name="Keep RFS Mesh", default=PointSettings.keep_rfs_mesh,
-                                description="Add the final RFS mesh as a new wireframe object to inspect it")
+    __annotations__ = annotations(settings_spec.POINTS)
 
     @classmethod
     def poll(cls, context):
@@ -302,7 +244,7 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
             layout.prop(self, name)
         draw_fixed_group(layout, self, context.active_object)
         layout.prop(self, "keep_rfs_mesh")
-        draw_convergence_warning(layout, lowest_alpha(self), self.beta)
+        draw_convergence(layout, "HC", lowest_alpha(self), self.beta)
 
     def _clouds(self, context, settings):
         objects = [obj for obj in context.selected_objects if obj.type in POINT_TYPES]

@@ -6,6 +6,7 @@ F3 does what the panel shows, and F9 (redo) starts from those values.
 
 import bpy
 
+from ..operators import properties
 from . import fixed, texts
 from .preset import HC_SMOOTH_MT_presets
 
@@ -51,20 +52,16 @@ class VIEW3D_PT_hc_smooth(bpy.types.Panel):
         column = layout.column()
         column.prop(settings, "method")
         sub = column.column()
-        sub.active = texts.uses_alpha(settings.method)
-        sub.prop(settings, "alpha", text=texts.alpha_label(settings.method))
+        sub.active = properties.uses_alpha(settings.method)
+        sub.prop(settings, "alpha", text=properties.alpha_label(settings.method))
         sub = column.column()
-        sub.active = texts.uses_beta(settings.method)
+        sub.active = properties.uses_beta(settings.method)
         sub.prop(settings, "beta")
         column.prop(settings, "iterations")
         column.prop(settings, "mode")
         column.prop(settings, "tolerance")
 
-        converges, lines = texts.convergence_status(settings.method, settings.alpha, settings.beta)
-        box = layout.box().column(align=True)
-        for index, line in enumerate(lines):
-            icon = ("CHECKMARK" if converges else "ERROR") if index == 0 else "BLANK1"
-            box.label(text=line, icon=icon)
+        properties.draw_convergence(layout.box(), settings.method, settings.alpha, settings.beta, always=True)
 
         layout.prop(settings, "output")
         layout.use_property_split = False

@@ -1,51 +1,8 @@
-"""What the panel says, as plain functions of the settings (no bpy: testable on their own).
+"""What the Fixed Vertices panel says, as plain functions of the settings (no bpy: testable on their own).
 
-Each function returns short lines for a narrow sidebar; the panel only picks icons and draws them.
+Each function returns short lines for a narrow sidebar; the panel only picks icons and draws them. The
+convergence lines, which the operators' redo panels show as well, are in operators/properties.py.
 """
-
-from .. import core
-
-# Operator property identifiers shared by the scene settings, the panel buttons and the presets.
-METHODS = ("HC", "LAPLACIAN", "LAPLACIAN_CENTRAL", "LAPLACIAN_ORIGINAL")
-MODES = ("SIMULTANEOUS", "SEQUENTIAL")
-OUTPUTS = ("MESH", "SHAPE_KEY")
-
-
-def uses_alpha(method):
-    """Plain Laplacian has no alpha; every other method weights something by it."""
-    return method != "LAPLACIAN"
-
-
-def uses_beta(method):
-    return method == "HC"
-
-
-def alpha_label(method):
-    if method == "LAPLACIAN_CENTRAL":
-        return "Alpha (keep current)"
-    return "Alpha (pull to original)"
-
-
-def convergence_status(method, alpha, beta):
-    """(converges, lines): whether the method settles on a shape that keeps its size, and why.
-
-    HC: Theorem 5.2 (alpha > 0, beta > 0.5). The Laplacian variants (section 5): plain and central
-    shrink towards a point as iterations grow; with the original point and alpha > 0 they converge,
-    but to a shrunken compromise (section 3.3).
-    """
-    if method == "HC":
-        if core.in_convergence_region(alpha, beta):
-            return True, ["Converges: \u03b1 > 0 and \u03b2 > 0.5", "(paper, Theorem 5.2)"]
-        lines = ["Outside the proven region:"]
-        if not alpha > 0.0:
-            lines.append("\u03b1 = 0: no pull to the original")
-        if not beta > 0.5:
-            lines.append(f"\u03b2 = {beta:.3g} is not above 0.5")
-        lines.append("many iterations may drift")
-        return False, lines
-    if method == "LAPLACIAN_ORIGINAL" and alpha > 0.0:
-        return True, ["Converges (\u03b1 > 0), but shrinks", "part of the way (paper 3.3)"]
-    return False, ["Shrinks with every iteration", "(no limit but a point, paper 3.1)"]
 
 
 def fixed_rules(*, edit_mode, vertex_group, invert_vertex_group, pin_boundary):
@@ -68,7 +25,6 @@ def count_line(n_fixed, n_vertices):
     if n_fixed == 0:
         return f"Fixed: none of {n_vertices:,} vertices"
     return f"Fixed: {n_fixed:,} of {n_vertices:,} vertices"
-
 
 
 def edit_count_line(selected, total, more_rules):

@@ -76,15 +76,44 @@ def test_help(cli, capsys):
     assert "Existing files are never replaced" in text and "keeps the input" in text
 
 
-def test_help_states_the_point_operators_defaults(addon):
-    # --help cannot import the operator (no bpy while parsing): its copy of the defaults must agree.
+def declared_options(spec):
+    """{option name: (setting, the argument that makes the option apply)} for every setting with a flag."""
+    options = {s.flag: (s, []) for s in spec.MESH if s.flag}
+    options.update({s.flag: (s, ["--points"]) for s in spec.POINTS if s.flag and s.flag not in options})
+    return options
+
+
+def test_options_are_built_from_the_declarations(addon, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     arguments = sys.modules[ADDON + ".cli.arguments"]
-    settings = sys.modules[ADDON + ".operators.point_cloud"].PointSettings()
-    assert arguments.POINT_DEFAULTS == {name: getattr(settings, arguments.POINT_FIELDS[name])
-                                        for name in arguments.POINT_DEFAULTS}
-    properties = bpy.ops.object.hc_smooth_points.get_rna_type().properties
-    for name in ("alpha", "beta", "rounds", "iterations_per_round", "neighbours", "spacing_factor", "gap_factor"):
-        assert properties[name].default == pytest.approx(getattr(settings, name), rel=1e-6)
+    spec = sys.modules[ADDON + ".settings_spec"]
+    actions = {option: action for action in arguments.make_parser()._actions for option in action.option_strings}
+    points = {s.flag: s for s in spec.POINTS if s.flag}
+    for flag, (setting, extra) in declared_options(spec).items():
+        action = actions["--" + flag]
+        assert action.help.startswith(setting.help), flag
+        if setting.kind in ("float", "int", "enum"):
+            assert action.default is None  # not given: the operator's default applies
+            stated = [setting, points[flag]] if flag in points and points[flag] is not setting else [setting]
+            for declared in stated:  # --help states the declared default (for shared options, both)
+                assert arguments._default_text(declared) in action.help, flag
+        if setting.kind == "enum":
+            assert tuple(action.choices) == setting.identifiers
+        # The declared limits: accepted on the limit, refused beyond it.
+        for bound, beyond in ((setting.min, -1), (setting.max, 1)):
+            if bound is None:
+                continue
+            plan = arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", str(bound)])
+            given = plan.point_options if extra else vars(plan.settings)
+            assert given[setting.name] == bound, flag
+            with pytest.raises(arguments.UsageError):
+                arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", str(bound + beyond)])
+    assert set(arguments.MESH_ONLY) == {name.replace("-", "_") for name in declared_options(spec)
+                                        if name not in points}
+    # The plain settings the command line hands to the job code start from the declared defaults.
+    point_settings = sys.modules[ADDON + ".operators.point_cloud"].PointSettings()
+    for plain, declared in ((arguments.Settings(), spec.MESH), (point_settings, spec.POINTS)):
+        assert vars(plain) == {s.name: s.default for s in declared}
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -101,7 +130,7 @@ def test_help_states_the_point_operators_defaults(addon):
     (["a.ply", "-o", "out", "--alpha", "nan"], "nan is not a finite number"),
     (["a.ply", "-o", "out", "--beta=-inf"], "-inf is not a finite number"),
     (["a.ply", "-o", "out", "--points", "--reach", "inf"], "inf is not a finite number"),
-    (["a.ply", "-o", "out", "--points", "--gap", "0"], "0 is not above 0"),
+    (["a.ply", "-o", "out", "--points", "--gap", "0"], "0 is below 0.1"),  # the operator's Gap minimum
     (["a.ply", "-o", "out", "--points", "--steps-per-round", "0"], "0 is below 1"),
     (["a.ply", "-o", "out", "--points", "--reach", "4"], "--reach (4) must not exceed --gap (3)"),
     # --object picks objects inside .blend files; with none among the inputs it would do nothing.

@@ -68,14 +68,23 @@ def draw(panel_class, context):
     return layout
 
 
-def rna_summary(prop):
-    """What must agree between the scene settings and the operators' properties."""
-    summary = {"type": prop.type, "default": getattr(prop, "default", None)}
-    if prop.type in {"FLOAT", "INT"}:
-        summary.update(hard_min=prop.hard_min, hard_max=prop.hard_max)
-    if prop.type == "ENUM":
-        summary["items"] = [(item.identifier, item.name) for item in prop.enum_items]
-    return summary
+KINDS = {"ENUM": "enum", "FLOAT": "float", "INT": "int", "BOOLEAN": "bool", "STRING": "string"}
+
+
+def assert_built_from(prop, setting):
+    """An RNA property says what its declaration says: texts, kind, default, limits, items."""
+    assert (prop.identifier, prop.name, prop.description) == (setting.name, setting.label, setting.description)
+    assert KINDS[prop.type] == setting.kind, setting.name
+    if setting.kind == "float":  # single precision in Blender: equal once the declaration is rounded as well
+        assert prop.default == np.float32(setting.default), setting.name
+    else:
+        assert prop.default == setting.default, setting.name
+    limits = {"min": "hard_min", "max": "hard_max", "soft_max": "soft_max", "step": "step", "precision": "precision"}
+    for key, rna_key in limits.items():
+        if getattr(setting, key) is not None:
+            assert getattr(prop, rna_key) == np.float32(getattr(setting, key)), (setting.name, key)
+    assert [(item.identifier, item.name, item.description) for item in getattr(prop, "enum_items", ())] == \
+        [(choice.identifier, choice.label, choice.description) for choice in setting.items]
 
 
 @pytest.fixture
@@ -85,13 +94,21 @@ def settings(scene):
 
 # --- registration ---------------------------------------------------------------------------------------
 
-def test_scene_settings_mirror_both_operators(settings):
-    names = ui_module(".settings").OPERATOR_SETTINGS
-    ours = {name: rna_summary(settings.bl_rna.properties[name]) for name in names}
-    for idname in OPERATORS:
-        category, name = idname.split(".")
-        theirs = getattr(getattr(bpy.ops, category), name).get_rna_type().properties
-        assert {name: rna_summary(theirs[name]) for name in names} == ours, idname
+def test_scene_settings_and_operators_are_built_from_the_declarations(settings):
+    spec = importlib.import_module(f"{ADDON}.settings_spec")
+    routes = {"scene.hc_smooth": (settings.bl_rna.properties, spec.MESH),
+              "object.hc_smooth": (bpy.ops.object.hc_smooth.get_rna_type().properties, spec.MESH),
+              "mesh.hc_smooth": (bpy.ops.mesh.hc_smooth.get_rna_type().properties, spec.MESH),
+              "object.hc_smooth_points": (bpy.ops.object.hc_smooth_points.get_rna_type().properties, spec.POINTS)}
+    inherited = {"rna_type", "name"}  # every struct's, and every PropertyGroup's
+    for route, (properties, declared) in routes.items():
+        assert {prop.identifier for prop in properties} - inherited == {s.name for s in declared}, route
+        for setting in declared:
+            assert_built_from(properties[setting.name], setting)
+    # A button copies every scene setting onto the operator, and presets store some of them.
+    scene_settings = ui_module(".settings")
+    assert scene_settings.OPERATOR_SETTINGS == tuple(s.name for s in spec.MESH)
+    assert set(scene_settings.PRESET_SETTINGS) < set(scene_settings.OPERATOR_SETTINGS)
 
 
 def test_panel_menu_entries_and_preset_path_registered(addon):
@@ -177,14 +194,14 @@ def test_panel_shows_the_convergence_region(settings, alpha, beta):
 
 
 def test_convergence_status_follows_the_paper():
-    texts = ui_module(".texts")
+    properties = importlib.import_module(f"{ADDON}.operators.properties")  # the one source of the panels' lines
     for alpha in np.linspace(0, 1, 11):
         for beta in np.linspace(0, 1, 11):
-            converges, lines = texts.convergence_status("HC", alpha, beta)
+            converges, lines = properties.convergence_status("HC", alpha, beta)
             assert converges == (alpha > 0 and beta > 0.5) and lines
-            assert texts.convergence_status("LAPLACIAN_ORIGINAL", alpha, beta)[0] == (alpha > 0)
-            assert not texts.convergence_status("LAPLACIAN", alpha, beta)[0]
-            assert not texts.convergence_status("LAPLACIAN_CENTRAL", alpha, beta)[0]
+            assert properties.convergence_status("LAPLACIAN_ORIGINAL", alpha, beta)[0] == (alpha > 0)
+            assert not properties.convergence_status("LAPLACIAN", alpha, beta)[0]
+            assert not properties.convergence_status("LAPLACIAN_CENTRAL", alpha, beta)[0]
 
 
 # --- fixed vertices -------------------------------------------------------------------------------------
@@ -368,4 +385,8 @@ def test_redo_panels_draw_the_fixed_group_and_the_convergence_warning(scene, idn
     assert not props.layout.labels()  # inside the region: no warning
     props.layout, props.beta = RecordingLayout(), 0.4
     operator_class.draw(props, bpy.context)
-    assert any("convergence region" in text for text in props.layout.labels())
+    # The N-panel's lines (one helper), for the smallest alpha the run can use.
+    alpha = importlib.import_module(f"{ADDON}.operators.point_cloud").lowest_alpha(props) if "points" in idname \
+        else props.alpha
+    _, lines = importlib.import_module(f"{ADDON}.operators.properties").convergence_status("HC", alpha, 0.4)
+    assert props.layout.labels() == lines and "Outside the convergence region:" in lines

@@ -1,0 +1,107 @@
+"""settings_spec: the one declaration of every setting, checked without Blender (it imports like core).
+
+The Blender side (the properties built from it, and the command line's options) is checked in
+tests/blender/test_ui.py and tests/blender/test_cli.py.
+"""
+
+import dataclasses
+import types
+
+import pytest
+
+import settings_spec as spec
+from core.smoothing import METHODS as CORE_METHODS
+from core.smoothing import MODES as CORE_MODES
+
+SMALL_WORDS = {"a", "and", "in", "of", "per", "the", "to"}  # lower case inside a Title Case label
+EVERY = [pytest.param(setting, id=f"{group}.{setting.name}")
+         for group, settings in (("mesh", spec.MESH), ("points", spec.POINTS)) for setting in settings]
+
+
+@pytest.mark.parametrize("settings", [spec.MESH, spec.POINTS], ids=["mesh", "points"])
+def test_identifiers_and_flags_are_unique(settings):
+    names = [setting.name for setting in settings]
+    flags = [setting.flag for setting in settings if setting.flag]
+    assert len(set(names)) == len(names) and len(set(flags)) == len(flags)
+    assert all(name.isidentifier() and name.islower() for name in names)
+
+
+def test_identifiers_users_rely_on():
+    # Users' scripts, presets and the command line name these: they must not change.
+    assert [s.name for s in spec.MESH] == ["method", "alpha", "beta", "iterations", "mode", "tolerance",
+                                           "vertex_group", "invert_vertex_group", "pin_boundary", "output"]
+    assert [s.name for s in spec.POINTS] == ["auto_amount", "alpha", "beta", "rounds", "iterations_per_round",
+                                             "neighbours", "spacing_factor", "gap_factor", "min_quality", "swap",
+                                             "vertex_group", "invert_vertex_group", "keep_rfs_mesh"]
+    assert spec.METHOD.identifiers == ("HC", "LAPLACIAN", "LAPLACIAN_CENTRAL", "LAPLACIAN_ORIGINAL")
+    assert spec.MODE.identifiers == ("SIMULTANEOUS", "SEQUENTIAL")
+    assert spec.OUTPUT.identifiers == ("MESH", "SHAPE_KEY")
+    assert {s.flag: s.name for s in spec.MESH + spec.POINTS if s.flag} == {
+        "method": "method", "alpha": "alpha", "beta": "beta", "iterations": "iterations", "mode": "mode",
+        "tolerance": "tolerance", "fixed-group": "vertex_group", "invert-group": "invert_vertex_group",
+        "pin-boundary": "pin_boundary", "rounds": "rounds", "steps-per-round": "iterations_per_round",
+        "neighbours": "neighbours", "reach": "spacing_factor", "gap": "gap_factor"}
+
+
+@pytest.mark.parametrize("setting", EVERY)
+def test_default_has_the_kind_and_lies_within_the_limits(setting):
+    assert type(setting.default) is spec.KINDS[setting.kind]
+    for low, high in ((setting.min, setting.max), (setting.min, setting.soft_max)):
+        assert low is None or setting.default >= low
+        assert high is None or setting.default <= high
+    if setting.kind == "enum":
+        assert setting.default in setting.identifiers
+    else:
+        assert not setting.items
+    if setting.kind not in ("float", "int"):
+        assert (setting.min, setting.max, setting.soft_max, setting.step, setting.precision) == (None,) * 5
+    if setting.kind == "int":
+        assert (setting.step, setting.precision) == (None, None)
+
+
+@pytest.mark.parametrize("setting", EVERY)
+def test_texts_in_blenders_style(setting):
+    # Tooltips are sentences without a final period; labels are Title Case (as Blender's); command-line help is a phrase.
+    texts = [setting.description] + [choice.description for choice in setting.items]
+    for text in texts:
+        assert text and text[0].isupper() and not text.endswith(".") and text == text.strip(), text
+    for label in [setting.label] + [choice.label for choice in setting.items]:
+        assert all(word[0].isupper() or word in SMALL_WORDS for word in label.split()), label
+    if setting.flag:
+        assert setting.help and not setting.help.endswith(".")
+        assert setting.flag == setting.flag.lower() and "_" not in setting.flag
+    else:
+        assert setting.help is None and setting.metavar is None and setting.cli_default is None
+
+
+def test_enum_items():
+    for setting in (spec.METHOD, spec.MODE, spec.OUTPUT):
+        identifiers = setting.identifiers
+        assert len(set(identifiers)) == len(identifiers) and all(i.isupper() for i in identifiers)
+    # The job code hands core the method's core name (and the mode in lower case): core must know them.
+    assert [choice.core for choice in spec.METHOD.items] == list(CORE_METHODS)
+    assert all(choice.short for choice in spec.METHOD.items)
+    assert tuple(mode.lower() for mode in spec.MODE.identifiers) == CORE_MODES
+
+
+def test_point_alpha_and_beta_differ_from_the_mesh_ones_only_where_declared():
+    # Points smooth with a weaker pull and a beta nearer 0.5 (core.smooth_point_cloud); label, limits and
+    # command-line option are the mesh settings' own.
+    for mesh, point, changed in ((spec.ALPHA, spec.POINT_ALPHA, {"default", "step", "description", "cli_default"}),
+                                 (spec.BETA, spec.POINT_BETA, {"default", "description"})):
+        differ = {f.name for f in dataclasses.fields(spec.Setting) if getattr(mesh, f.name) != getattr(point, f.name)}
+        assert differ == changed
+    assert (spec.POINT_ALPHA.default, spec.POINT_BETA.default) == (0.01, 0.55)
+
+
+@pytest.mark.parametrize("settings", [spec.MESH, spec.POINTS], ids=["mesh", "points"])
+def test_settings_class_holds_the_declared_defaults(settings):
+    made = spec.settings_class("Made", settings, "A test.")
+    values = made()
+    assert [f.name for f in dataclasses.fields(made)] == [s.name for s in settings]
+    assert all(getattr(values, s.name) == s.default for s in settings)
+    # of() copies every field from anything that has them (an operator's properties).
+    source = types.SimpleNamespace(**{s.name: s.default for s in settings}, extra="ignored")
+    source.__dict__[settings[0].name] = "changed"
+    copied = made.of(source)
+    assert getattr(copied, settings[0].name) == "changed" and not hasattr(copied, "extra")
