@@ -1,8 +1,8 @@
 """The uniform umbrella operator T of paper section 5: row i averages the positions of adj(i).
 
 Built once per mesh (counting placement into CSR, duplicates merged within each short row)
-and reused across iterations, runs and dtypes. Only the sparsity pattern is stored; the weights
-1/|adj(i)| are laid over it per dtype.
+and reused across iterations, runs and dtypes. Only the sparsity pattern is stored; the smoothers
+apply the weights 1/|adj(i)| themselves.
 """
 
 from dataclasses import dataclass, field
@@ -34,7 +34,6 @@ class Umbrella:
     degree: np.ndarray  # |adj(i)|
     indptr: np.ndarray
     indices: np.ndarray
-    _matrices: dict = field(default_factory=dict, repr=False)
     _upper: tuple = field(default=None, repr=False)
     _renumbering: object = field(default=None, repr=False)  # core.locality's, once it has looked
 
@@ -63,47 +62,12 @@ class Umbrella:
     def n_edges(self):
         return int(self.indices.size // 2)
 
-    def _row_weights(self, dtype):
-        inverse = np.zeros(self.n_vertices, dtype=dtype)
-        nonzero = self.degree > 0
-        inverse[nonzero] = 1.0 / self.degree[nonzero]
-        return inverse
-
     def renumbered(self, order):
         """The same graph with vertex k of the result being vertex ``order[k]`` of this one."""
         inverse = np.empty(self.n_vertices, dtype=self.indices.dtype)
         inverse[order] = np.arange(self.n_vertices, dtype=self.indices.dtype)
         rows = inverse[np.repeat(np.arange(self.n_vertices, dtype=self.indices.dtype), self.degree)]
         return _from_pairs(rows, inverse[self.indices], self.n_vertices)
-
-    def matrix(self, dtype=np.float64):
-        """T as CSR: t_ij = 1/|adj(i)| for every edge {i, j}; rows of isolated vertices are empty.
-
-        Cached per dtype (it is what every iteration multiplies by); shares the stored pattern.
-        """
-        dtype = np.dtype(dtype)
-        if dtype not in self._matrices:
-            data = np.repeat(self._row_weights(dtype), self.degree)
-            self._matrices[dtype] = _csr(data, self.indices, self.indptr, self.n_vertices)
-        return self._matrices[dtype]
-
-    def triangle(self, part, dtype=np.float64):
-        """Strictly lower (``part="lower"``: j < i) or upper part of T as a new CSR matrix."""
-        if part not in ("lower", "upper"):
-            raise ValueError(f"part must be 'lower' or 'upper', got {part!r}")
-        n = self.n_vertices
-        ones = np.ones(self.upper_indices.size, dtype=dtype)
-        pattern = _csr(ones, self.upper_indices, self.upper_indptr, n)
-        if part == "lower":
-            pattern = pattern.T.tocsr()  # the pattern is symmetric: lower rows are upper columns
-        pattern.data *= np.repeat(self._row_weights(np.dtype(dtype)), np.diff(pattern.indptr))
-        return pattern
-
-
-def _csr(data, indices, indptr, n):
-    matrix = sp.csr_matrix((data, indices, indptr), shape=(n, n), copy=False)
-    matrix.has_sorted_indices = True  # true by construction; spares SciPy a check
-    return matrix
 
 
 def umbrella_operator(edges, n_vertices):

@@ -1,7 +1,4 @@
-"""Convergence of the smoothers (paper section 5)."""
-
-import numpy as np
-import scipy.sparse as sp
+"""Convergence of the smoothers (paper section 5): the proven region and the messages about it."""
 
 
 class ConvergenceWarning(UserWarning):
@@ -43,22 +40,3 @@ def divergence_message(method, alpha, beta, iterations, what):
             "Raise alpha above 0 and beta above 0.5; nothing was changed"
         )
     return f"smoothing ({method}) blew up after {iterations} iterations ({what}); nothing was changed"
-
-
-def hc_iteration_matrix(operator, alpha, beta, movable=None):
-    """H = -(1-β)T² + (2-α)(1-β)T + (1-α)βE of Theorem 5.2, on the movable vertices (dense, small meshes).
-
-    The iteration x(k+1) = H x(k) + const converges for every start iff the spectral radius of H is < 1.
-    """
-    matrix = operator.matrix(np.float64)
-    if movable is None:
-        movable = ~operator.isolated
-    keep = np.flatnonzero(movable)
-    t = matrix[keep][:, keep].toarray()
-    identity = np.eye(keep.size)
-    return -(1 - beta) * t @ t + (2 - alpha) * (1 - beta) * t + (1 - alpha) * beta * identity
-
-
-def spectral_radius(matrix):
-    values = np.linalg.eigvals(matrix.toarray() if sp.issparse(matrix) else matrix)
-    return float(np.abs(values).max()) if values.size else 0.0

@@ -41,13 +41,9 @@ def _quality(double_area, e1, e2):
     return np.nan_to_num(quality, nan=0.0)
 
 
-def face_quality(points, faces):
-    """Bank & Smith quality q = 4*sqrt(3)*A / (l1^2 + l2^2 + l3^2): 1 for equilateral, 0 degenerate."""
-    return normals_and_quality(points, faces)[1]
-
-
 def normals_and_quality(points, faces):
-    """face_normals and face_quality in one pass over the faces."""
+    """face_normals and the faces' Bank & Smith quality q = 4*sqrt(3)*A / (l1^2 + l2^2 + l3^2) (1 for
+    equilateral, 0 degenerate), in one pass over the faces."""
     normals = np.empty((3, faces.shape[0]))
     quality = np.empty(faces.shape[0])
 
@@ -89,60 +85,6 @@ def _dot(x, y):
     return x[..., 0] * y[..., 0] + x[..., 1] * y[..., 1] + x[..., 2] * y[..., 2]
 
 
-def dihedral_cos(points, u, v, s, t):
-    """cos of the dihedral angle at edge (u, v) between triangles (u, v, s) and (u, v, t).
-
-    The angle is measured between the two half-planes: pi when the faces lie flat on opposite sides
-    of the edge, 0 when folded onto each other. NaN for a degenerate face.
-    """
-    origin = points[u]
-    e = points[v] - origin
-    a = points[s] - origin
-    b = points[t] - origin
-    # The angle between the components of a and b perpendicular to e, through
-    # (e x a).(e x b) = |e|^2 (a.b) - (e.a)(e.b) and |e x a|^2 = |e|^2 |a|^2 - (e.a)^2.
-    ee, ea, eb = _dot(e, e), _dot(e, a), _dot(e, b)
-    num = ee * _dot(a, b) - ea * eb
-    den = np.sqrt(np.maximum(ee * _dot(a, a) - ea * ea, 0.0) * np.maximum(ee * _dot(b, b) - eb * eb, 0.0))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        cos = num / den
-    cos[den == 0] = np.nan
-    return np.clip(cos, -1.0, 1.0)
-
-
-def perpendicular(points, u, v, s):
-    """Unit vectors from line (u, v) towards s, perpendicular to it (NaN when degenerate). The
-    dihedral angle at an edge is the angle between two such vectors; they do not depend on which
-    end of the edge is u."""
-    origin = points[u]
-    e = points[v] - origin
-    a = points[s] - origin
-    a -= (_dot(a, e) / _dot(e, e))[..., None] * e
-    with np.errstate(invalid="ignore", divide="ignore"):
-        a /= np.sqrt(_dot(a, a))[..., None]
-    return a
-
-
-def angle_between(x, y):
-    """Angle between unit vectors (NaN stays NaN)."""
-    return np.arccos(np.clip(_dot(x, y), -1.0, 1.0))
-
-
-def dihedral(points, u, v, s, t):
-    """Dihedral angle in radians (see ``dihedral_cos``)."""
-    return np.arccos(dihedral_cos(points, u, v, s, t))
-
-
-def sorted_faces(faces):
-    return np.sort(faces, axis=1)
-
-
-def face_keys(faces, n):
-    """One int64 key per face, independent of vertex order (n^3 must fit in int64)."""
-    f = np.sort(faces, axis=1).astype(np.int64)
-    return (f[:, 0] * n + f[:, 1]) * n + f[:, 2]
-
-
 def triple_keys(x, y, z, n):
     """For faces given as vertex columns x, y, z: the sorted triples (first, middle, last) of those
     without a repeated vertex, as int64 keys (first * n + middle) * n + last when n^3 < 2^62, else
@@ -171,22 +113,6 @@ def faces_of_keys(keys, n):
         return np.unique(keys, axis=0).reshape(-1, 3)
     keys = unique_sorted(keys)
     return np.stack([keys // (n * n), (keys // n) % n, keys % n], axis=1)
-
-
-def unique_faces(faces, n):
-    """Distinct faces (as sorted vertex triples), dropping those with a repeated vertex."""
-    return faces_of_keys(triple_keys(faces[:, 0], faces[:, 1], faces[:, 2], n), n)
-
-
-def _stable_order(low, high, keys, n):
-    """np.argsort(keys, kind="stable") for keys = low * n + high, by two counting passes when the
-    indices fit (several times faster on tens of millions of incidences than a comparison sort)."""
-    if n < 2 ** 31 and keys.size < 2 ** 31:
-        placed = pairs_in_order(low.astype(np.int32), high.astype(np.int32), n,
-                                np.arange(keys.size, dtype=np.int64))
-        if placed is not None:
-            return placed[2]
-    return np.argsort(keys, kind="stable")
 
 
 def group_by_edge(low, high, n):
@@ -232,13 +158,12 @@ class Incidence:
 
     Incidence 3*f + j is the edge of face f opposite its vertex j. ``order`` sorts incidences by
     edge; ``edge_start``/``edge_count`` delimit each distinct edge's run in that order;
-    ``edge_of[i]`` is the edge number of incidence i; ``edges`` are the distinct edges (low, high).
+    ``edge_of[i]`` is the edge number of incidence i; ``edges`` are the distinct edges (low, high)
+    and ``keys`` their int64 keys low * n + high, both sorted.
     """
 
     def __init__(self, faces, n):
         f = faces.astype(np.int64)
-        self.n = n
-        self.faces = f
         # Edge opposite vertex j: (f[(j+1)%3], f[(j+2)%3]).
         narrow = f.astype(np.int32) if n < 2 ** 31 else f  # half the bytes to move before the grouping
         first = narrow[:, [1, 2, 0]].ravel()
@@ -253,7 +178,7 @@ class Incidence:
         else:
             low, high = low.astype(np.int64), high.astype(np.int64)
             keys = low * n + high
-            self.order = _stable_order(low, high, keys, n)
+            self.order = np.argsort(keys, kind="stable")
             sorted_keys = keys[self.order]
             new = np.concatenate(([True], sorted_keys[1:] != sorted_keys[:-1])) if keys.size else np.zeros(0, bool)
             self.edge_start = np.flatnonzero(new)
@@ -263,11 +188,3 @@ class Incidence:
             self.edge_of[self.order] = edge_number
             self.keys = sorted_keys[self.edge_start]
             self.edges = np.stack([self.keys // max(n, 1), self.keys % max(n, 1)], axis=1)
-        self.third = f.ravel()  # vertex opposite each incidence
-
-    def has_edge(self, u, v):
-        """Whether (u, v) is an edge of some face, vectorized."""
-        keys = np.minimum(u, v).astype(np.int64) * self.n + np.maximum(u, v)
-        at = np.searchsorted(self.keys, keys)
-        at = np.minimum(at, max(self.keys.size - 1, 0))
-        return (self.keys.size > 0) & (self.keys[at] == keys) if self.keys.size else np.zeros(keys.shape, bool)

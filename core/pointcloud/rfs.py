@@ -52,21 +52,6 @@ def _normals_from_offsets(offset, row, degree):
     return normal
 
 
-def tangent_frames(points, indptr, indices):
-    """Per vertex an orthonormal (t1, t2, normal): the normal of the PCA plane of the vertex and its
-    neighbours, t1 and t2 any orthonormal pair across it (the angular order of the neighbours
-    around the normal does not depend on which)."""
-    degree = np.diff(indptr)
-    row = np.repeat(np.arange(degree.size), degree)
-    offset = [points[indices, j] - points[row, j] for j in range(3)]
-    normal = _normals_from_offsets(offset, row, degree)
-    # t1: the normal crossed with the coordinate axis it is least aligned with.
-    axis = np.argmin(np.abs(normal), axis=1)
-    t1 = np.cross(normal, np.eye(3)[axis])
-    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
-    return np.stack([t1, np.cross(normal, t1), normal], axis=1)
-
-
 def _corona_block(points, indptr, indices, first, last, max_gap, keys_of=None):
     """corona_faces for the vertices first..last-1 (their rows of the adjacency); with ``keys_of``
     (the number of points), their geometry.triple_keys instead."""
@@ -110,8 +95,8 @@ def tangent_frames_from_normals(normal):
 def corona_faces(points, edges, max_gap=np.pi, keys=False):
     """Candidate faces of every vertex's corona (may repeat across coronas). Each vertex's corona
     is its own business, so blocks of vertices run in parallel threads. ``keys=True``: instead the
-    list of the blocks' geometry.triple_keys (for faces_of_keys: the same faces as unique_faces
-    of the candidates, without the (f, 3) array of candidates)."""
+    list of the blocks' geometry.triple_keys, from which faces_of_keys gives the distinct candidates
+    (as sorted triples) without the (f, 3) array of all candidates."""
     n = points.shape[0]
     umbrella = umbrella_operator(edges, n)
     indptr = umbrella.indptr.astype(np.int64)

@@ -299,12 +299,13 @@ def _per_component_pick(n_components, label_u, label_v, weight, u, v):
     return best, pick_u, pick_v
 
 
-def boruvka_emst(index, exact_fraction=0.5):
-    """EMST edges (rows of ``index.points``) and their lengths, exactly.
+# Exact queries run once more than this fraction of the components are not certified by their kNN
+# lists; until then the certified ones merge first (any value keeps the tree exact, it trades speed).
+_UNCERTAIN_FRACTION = 0.5
 
-    ``exact_fraction``: run the exact queries once fewer than this fraction of the components are
-    certified by their kNN lists (any value keeps the result exact; it only trades speed).
-    """
+
+def boruvka_emst(index):
+    """EMST edges (rows of ``index.points``) and their lengths, exactly."""
     m, k = index.n_points, index.k
     points = index.points
     label = np.arange(m, dtype=np.int64)
@@ -352,7 +353,7 @@ def boruvka_emst(index, exact_fraction=0.5):
         lower = np.full(n_components, np.inf)
         np.minimum.at(lower, label[inside], reach)
         uncertain = lower < best
-        if uncertain.sum() > (1.0 - exact_fraction) * n_components or uncertain.all():
+        if uncertain.sum() > _UNCERTAIN_FRACTION * n_components or uncertain.all():
             ask = inside[uncertain[label[inside]] & (reach < best[label[inside]])]
             code = np.zeros(n_components, dtype=np.int64)
             code[uncertain] = np.arange(1, int(uncertain.sum()) + 1)

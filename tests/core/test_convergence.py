@@ -7,7 +7,7 @@ import scipy.sparse.linalg as spla
 
 import core
 import small_meshes as sm
-from core.convergence import hc_iteration_matrix, spectral_radius
+from oracles import hc_iteration_matrix, spectral_radius, umbrella_matrix
 
 
 def random_connected_graph(n, extra, seed):
@@ -49,7 +49,7 @@ def test_hc_converges_to_the_fixed_point_of_theorem_5_2():
     positions, edges = sm.noisy(positions, 0.1), sm.edges_of(faces)
     alpha, beta = 0.3, 0.7
     operator = core.umbrella_operator(edges, len(positions))
-    t = operator.matrix().toarray()
+    t = umbrella_matrix(operator).toarray()
     e = np.eye(len(positions))
     h = hc_iteration_matrix(operator, alpha, beta)
     constant = (alpha * beta * e + alpha * (1 - beta) * t) @ positions  # no fixed vertices: r = 0
@@ -98,7 +98,7 @@ def test_simultaneous_and_sequential_laplacian_have_the_same_limit():
     limits = {mode: core.laplacian_smooth(positions, edges, iterations=3000, mode=mode, fixed=boundary)
               for mode in core.MODES}
     # The exact limit: (I - T) p = 0 on movable rows, p = o on fixed ones.
-    t = core.umbrella_operator(edges, n).matrix()
+    t = umbrella_matrix(core.umbrella_operator(edges, n))
     movable = ~boundary
     system = sp.identity(n, format="csr") - sp.diags(movable.astype(float)) @ t
     exact = spla.spsolve(system.tocsc(), positions * boundary[:, None])

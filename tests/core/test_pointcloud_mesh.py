@@ -7,17 +7,19 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.sparse.csgraph import connected_components
 
-from core.pointcloud.geometry import Incidence, dihedral, face_quality
+from core.pointcloud.geometry import Incidence
 from core.pointcloud.rfs import keep_best_pairs, rfs_mesh
 from core.pointcloud.sdg import surface_description_graph
 from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
 from core.pointcloud.swap import swap_pass
 
+from oracles import dihedral, dihedral_cos, face_quality, unique_faces
 from pointcloud_sets import noisy_sphere
 
 
 def build_sdg(points, k=16, **options):
-    # Factor 2 gives the paper's proportions (RFS faces ~2n); the default 3 gives wider neighbourhoods.
+    # Factor 2 gives the paper's proportions (RFS faces ~2n); 3 (surface_description_graph's default)
+    # and smooth_point_cloud's 2.5 give wider neighbourhoods.
     options.setdefault("spacing_factor", 2.0)
     index = NeighbourIndex(points, k)
     tree, _ = boruvka_emst(index)
@@ -169,7 +171,8 @@ def interior_dihedral_sum(points, faces):
     inc = Incidence(faces, len(points))
     two = np.flatnonzero(inc.edge_count == 2)
     i1, i2 = inc.order[inc.edge_start[two]], inc.order[inc.edge_start[two] + 1]
-    return np.nansum(dihedral(points, inc.edges[two, 0], inc.edges[two, 1], inc.third[i1], inc.third[i2]))
+    third = faces.ravel()  # the vertex opposite each incidence
+    return np.nansum(dihedral(points, inc.edges[two, 0], inc.edges[two, 1], third[i1], third[i2]))
 
 
 def test_swap_takes_the_flatter_diagonal():
@@ -240,7 +243,7 @@ def test_pair_priorities_order_flattest_first_in_both_encodings():
 # --- geometry from face normals, the swapper's kept state, threads ---------------------------------
 
 def test_incidence_cos_equals_the_dihedral_cos_whatever_the_face_orientation():
-    from core.pointcloud.geometry import dihedral_cos, face_normals, incidence_cos
+    from core.pointcloud.geometry import face_normals, incidence_cos
 
     rng = np.random.default_rng(3)
     points = rng.normal(size=(4 * 300, 3))
@@ -290,12 +293,11 @@ def test_results_do_not_depend_on_the_thread_count(monkeypatch):
 def test_pruning_rounds_equal_the_edge_by_edge_rule_in_any_order_within_a_round():
     # Reference: the paper's rule one edge at a time, in the order of the rounds (shuffled within
     # each round), with the best pair found by brute force from dihedral_cos.
-    from core.pointcloud.geometry import dihedral_cos, face_quality, unique_faces
     from core.pointcloud.rfs import _prune, corona_faces
 
     index, tree, graph = build_sdg(noisy_sphere(1500, 0.01, seed=6), spacing_factor=3.0)
     points = index.points
-    faces = unique_faces(corona_faces(points, graph.edges), len(points))
+    faces = unique_faces(corona_faces(points, graph.edges))
     faces = faces[face_quality(points, faces) >= 0.3]
     inc = Incidence(faces, len(points))
     settled = np.full(inc.edges.shape[0], -1)
@@ -372,7 +374,7 @@ def test_incidence_fields_equal_the_key_sort_fallback(monkeypatch):
         with monkeypatch.context() as m:
             m.setattr(adjacency, "_coo_tocsr", None)
             fallback = geometry.Incidence(faces, n)
-        for name in ("order", "edge_start", "edge_count", "edge_of", "keys", "edges", "third", "faces"):
+        for name in ("order", "edge_start", "edge_count", "edge_of", "keys", "edges"):
             a, b = getattr(counted, name), getattr(fallback, name)
             assert a.dtype == b.dtype, name
             np.testing.assert_array_equal(a, b, err_msg=name)
@@ -422,20 +424,18 @@ def test_best_pairs_equal_argmin_over_all_pairs_with_ties_and_nan(monkeypatch, b
 
 
 @pytest.mark.parametrize("n, count, seed", [(6, 300, 0), (1000, 5000, 1), (4, 0, 2), (3, 1, 3), (2 ** 21, 400, 4)])
-def test_unique_faces_equal_unique_sorted_rows(n, count, seed):
+def test_face_keys_give_the_unique_sorted_rows(n, count, seed):
     # Every vertex order and repeated vertices; n = 2^21 takes the np.unique fallback (n^3 > 2^62).
-    from core.pointcloud.geometry import unique_faces
+    from core.pointcloud.geometry import faces_of_keys, triple_keys
 
     rng = np.random.default_rng(seed)
     faces = rng.integers(0, n, size=(count, 3))
     faces = np.concatenate([faces, faces[:, ::-1], faces[:, [1, 2, 0]]])
-    rows = np.sort(faces, axis=1)
-    rows = rows[(rows[:, 0] != rows[:, 1]) & (rows[:, 1] != rows[:, 2])]
-    expected = np.unique(rows, axis=0).reshape(-1, 3)
-    got = unique_faces(faces, n)
-    assert got.dtype == np.int64
-    np.testing.assert_array_equal(got, expected)
-    np.testing.assert_array_equal(unique_faces(faces.astype(np.int32), n), expected)
+    expected = unique_faces(faces)
+    for columns in (faces.T, faces.astype(np.int32).T):
+        got = faces_of_keys(triple_keys(*columns, n), n)
+        assert got.dtype == np.int64
+        np.testing.assert_array_equal(got, expected)
 
 
 def test_pruning_is_the_same_with_int64_incidence_numbers(monkeypatch):
@@ -452,12 +452,12 @@ def test_pruning_is_the_same_with_int64_incidence_numbers(monkeypatch):
 
 def test_corona_keys_give_the_unique_faces_of_the_candidates(monkeypatch):
     from core.pointcloud import threads
-    from core.pointcloud.geometry import faces_of_keys, unique_faces
+    from core.pointcloud.geometry import faces_of_keys
     from core.pointcloud.rfs import corona_faces
 
     index, tree, graph = build_sdg(noisy_sphere(4000, 0.01, seed=10))
     monkeypatch.setattr(threads, "MIN_BLOCK", 100)  # several blocks when threads are on
     for gap in (np.pi, 2.0):
-        expected = unique_faces(corona_faces(index.points, graph.edges, gap), index.n_points)
+        expected = unique_faces(corona_faces(index.points, graph.edges, gap))
         parts = corona_faces(index.points, graph.edges, gap, keys=True)
         np.testing.assert_array_equal(faces_of_keys(parts, index.n_points), expected)
