@@ -12,7 +12,7 @@ import scipy.sparse as sp
 
 from .validation import check_edges
 
-try:  # the kernels behind coo -> csr and csr -> csc; private, so there is a public fallback
+try:  # the kernels behind coo -> csr and csr -> csc; private, so pairs_in_order has a public fallback
     from scipy.sparse._sparsetools import coo_tocsr as _coo_tocsr, csr_tocsc as _csr_tocsc
 except ImportError:  # SciPy without them
     _coo_tocsr = _csr_tocsc = None
@@ -108,7 +108,8 @@ def _from_pairs(rows, columns, n):
 def pairs_in_order(rows, columns, n, data):
     """(indptr, columns, data) of the pairs (rows, columns) in [0, n)^2 sorted by row, then column,
     then input position (a stable sort by row * n + column), as CSR arrays; None where SciPy's
-    kernels are missing or the indices are not int32.
+    kernels are missing or refuse the call (changed), or the indices are not int32: callers then
+    take a public path to the same result.
 
     Two counting passes (SciPy's coo -> csr and csr -> csc kernels, O(pairs), no comparison sort):
     placing the pairs by column keeps each column's entries in input order, and transposing by
@@ -118,7 +119,10 @@ def pairs_in_order(rows, columns, n, data):
         return None
     count = rows.size
     by_column = (np.empty(n + 1, np.int32), np.empty(count, np.int32), np.empty(count, data.dtype))
-    _coo_tocsr(n, n, count, columns, rows, data, *by_column)
     by_row = (np.empty(n + 1, np.int32), np.empty(count, np.int32), np.empty(count, data.dtype))
-    _csr_tocsc(n, n, *by_column, *by_row)
+    try:
+        _coo_tocsr(n, n, count, columns, rows, data, *by_column)
+        _csr_tocsc(n, n, *by_column, *by_row)
+    except (TypeError, ValueError):  # the private kernels changed their signature
+        return None
     return by_row

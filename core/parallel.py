@@ -23,6 +23,7 @@ except ImportError:  # SciPy without the private kernel
 
 MIN_WORK = 1_000_000  # non-zeros below which one thread is faster
 _pool = None
+_pool_size = 0  # the pool's max_workers, kept here: ThreadPoolExecutor does not expose it
 _pool_lock = threading.Lock()
 
 
@@ -36,10 +37,12 @@ def thread_count():
 
 
 def _executor(workers):
-    global _pool
+    """The shared pool, replaced by a larger one when it has fewer than ``workers`` threads."""
+    global _pool, _pool_size
     with _pool_lock:
-        if _pool is None or _pool._max_workers < workers:
+        if _pool is None or _pool_size < workers:
             _pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="hc_smooth")
+            _pool_size = workers
         return _pool
 
 
@@ -127,15 +130,30 @@ class _Block:
         for low, high, first, last, chunk_indptr, chunk_indices in self._chunks:
             sums = buffer[:, :high - low]
             sums[...] = 0.0
-            if _csr_matvec is None:  # SciPy without the private kernel
+            if not _private_sums(high - low, self._n_columns, chunk_indptr, chunk_indices, ones[:last - first],
+                                 x_rows, sums):
+                # The public product: per row the same sum in the same order, so the same bits.
                 part = sp.csr_matrix((ones[:last - first], chunk_indices, chunk_indptr),
                                      shape=(high - low, self._n_columns))
                 sums += (part @ x_rows.T).T
-            else:
-                for x_row, sum_row in zip(x_rows, sums):
-                    _csr_matvec(high - low, self._n_columns, chunk_indptr, chunk_indices, ones[:last - first],
-                                x_row, sum_row)
             combine(slice(low, high), sums)
+
+
+def _private_sums(n_rows, n_columns, indptr, indices, data, x_rows, sums):
+    """sums[k] += A x_rows[k] by SciPy's private kernel; False (sums zero) where it is missing or
+    refuses the call, and from then on the public path."""
+    global _csr_matvec
+    kernel = _csr_matvec
+    if kernel is None:
+        return False
+    try:
+        for x_row, sum_row in zip(x_rows, sums):
+            kernel(n_rows, n_columns, indptr, indices, data, x_row, sum_row)
+    except (TypeError, ValueError):  # the private kernel changed its signature
+        _csr_matvec = None
+        sums[...] = 0.0
+        return False
+    return True
 
 
 _ones_cache = {}

@@ -49,20 +49,62 @@ def test_thread_cap_from_the_environment(monkeypatch):
     assert parallel.thread_count() >= 1
 
 
+def test_pool_grows_to_the_largest_request(monkeypatch):
+    # run_all hands all tasks but the first to the shared pool; a barrier that every task must reach
+    # before any can finish only passes when the pool has a thread for each of them.
+    import threading
+
+    monkeypatch.setattr(parallel, "_pool", None)
+    monkeypatch.setattr(parallel, "_pool_size", 0)
+    for count in (2, 4, 3):
+        barrier = threading.Barrier(count, timeout=10)
+        names = parallel.run_all([lambda: (barrier.wait(), threading.current_thread().name)[1]] * count)
+        assert len(set(names)) == count
+    assert parallel._executor(1) is parallel._executor(3)  # big enough: kept
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
 @pytest.mark.parametrize("mode", ["simultaneous", "sequential"])
 @pytest.mark.parametrize("method", ["hc", "central", "plain"])
-def test_public_product_path_when_the_private_kernel_is_missing(monkeypatch, method, mode):
-    # SciPy's csr_matvec is private: without it the blocks multiply through the public API.
+def test_public_product_path_when_the_private_kernel_is_missing(monkeypatch, method, mode, dtype):
+    # SciPy's csr_matvec is private: without it the blocks multiply through the public API, which
+    # sums every row in the same order, so the results are bit-identical.
     rng = np.random.default_rng(8)
     side = 12
     edges = grid_edges(side)
-    positions = rng.normal(size=(side * side, 3))
+    positions = rng.normal(size=(side * side, 3)).astype(dtype)
     kwargs = dict(method=method, alpha=0.3, beta=0.6, iterations=4, fixed=[0, 5, 77], mode=mode)
     fast = core.smooth(positions, edges, **kwargs).positions
     monkeypatch.setattr(parallel, "_csr_matvec", None)
     public = core.smooth(positions, edges, **kwargs).positions
-    np.testing.assert_allclose(public, fast, rtol=0, atol=1e-13)
+    assert public.dtype == dtype
+    assert np.array_equal(public.view(np.uint8), fast.view(np.uint8))
     assert np.array_equal(public[[0, 5, 77]], positions[[0, 5, 77]])
+
+
+@pytest.mark.parametrize("mode", ["simultaneous", "sequential"])
+def test_a_changed_private_kernel_switches_to_the_public_product(monkeypatch, mode):
+    # A csr_matvec that refuses our call (a changed signature) is dropped at the first chunk; that
+    # chunk and every later product take the public path, with the same bits.
+    rng = np.random.default_rng(11)
+    side = 20
+    edges = rng.permutation(grid_edges(side))
+    positions = rng.normal(size=(side * side, 3))
+    kwargs = dict(method="hc", alpha=0.2, beta=0.7, iterations=5, mode=mode)
+    monkeypatch.setattr(parallel, "CHUNK_NONZEROS", 100)  # many chunks per product
+    expected = core.smooth(positions, edges, **kwargs).positions
+    calls = []
+
+    def changed(*args):
+        calls.append(len(args))
+        raise TypeError("csr_matvec() takes different arguments now")
+
+    monkeypatch.setattr(parallel, "_csr_matvec", changed)
+    got = core.smooth(positions, edges, **kwargs).positions
+    assert np.array_equal(got.view(np.uint8), expected.view(np.uint8))
+    # Tried once per task that was already running (the sequential passes run one per coordinate),
+    # then the public path for good.
+    assert 1 <= len(calls) <= 3 and parallel._csr_matvec is None
 
 
 @pytest.mark.parametrize("mode", ["simultaneous", "sequential"])

@@ -54,3 +54,24 @@ def test_public_construction_path_gives_the_same_pattern(monkeypatch):
         np.testing.assert_array_equal(getattr(fast, name), getattr(public, name))
     assert umbrella_matrix(fast).has_canonical_format
 
+
+def test_a_changed_private_kernel_falls_back_to_the_public_path(monkeypatch):
+    # If SciPy's private kernels refuse our call (a changed signature), the public path gives the
+    # same pattern, here and for the point-cloud incidences that share pairs_in_order.
+    from core import adjacency
+
+    edges = np.random.default_rng(5).integers(0, 300, size=(2000, 2))
+    fast = core.umbrella_operator(edges, 310)
+    calls = []
+
+    def changed(*args):
+        calls.append(len(args))
+        raise TypeError("coo_tocsr() takes different arguments now")
+
+    monkeypatch.setattr(adjacency, "_coo_tocsr", changed)
+    public = core.umbrella_operator(edges, 310)
+    assert calls  # the private kernel was tried
+    for name in ("indptr", "indices", "degree", "upper_indptr", "upper_indices"):
+        a, b = getattr(fast, name), getattr(public, name)
+        assert a.dtype == b.dtype, name
+        np.testing.assert_array_equal(a, b, err_msg=name)
