@@ -3,11 +3,11 @@
 Every iteration multiplies by the umbrella operator, which gathers the neighbours' positions. When
 neighbours sit close in memory (meshes from grids, subdivision, most exporters) those gathers hit
 the cache; when the numbering is scattered (some scanners, decimators and file converters) almost
-every gather misses, and on a million vertices a product measured ~10x slower. For those meshes the
-simultaneous smoothers work in reverse Cuthill-McKee order (SciPy's csgraph), which puts neighbours
-close together, and hand the result back in the caller's order. The simultaneous update gives the
-same positions in any order (up to the rounding of each neighbour sum); the sequential smoothers
-are defined by the vertex order and are never renumbered.
+every gather misses, and a product gets many times slower (bench/README.md, "Random vertex order").
+For those meshes the simultaneous smoothers work in reverse Cuthill-McKee order (SciPy's csgraph),
+which puts neighbours close together, and hand the result back in the caller's order. The
+simultaneous update gives the same positions in any order (up to the rounding of each neighbour
+sum); the sequential smoothers are defined by the vertex order and are never renumbered.
 """
 
 from dataclasses import dataclass

@@ -72,7 +72,7 @@ class RowBlocks:
 
     Vectors are planar: one contiguous row per coordinate, shape (k, n) (or (n,) for one). SciPy's
     one-vector kernel on each coordinate row is faster than its multi-vector kernel on (n, k)
-    arrays (float32: ~1.7x on a million vertices; float64: the same).
+    arrays (bench/README.md, "What makes the simultaneous mode fast").
 
     ``run(task)`` calls ``task(block)`` for every block at once; ``block.rows`` is its slice of rows
     and ``block.neighbour_sums(x, combine)`` multiplies its rows of the 0/1 pattern by ``x``, leaving
@@ -104,7 +104,7 @@ class _Block:
         self._n_columns = n_columns
         # Chunks of rows with about CHUNK_NONZEROS non-zeros each: the product runs chunk by chunk,
         # every coordinate of a chunk before the next, so the chunk's slice of the matrix is read
-        # from memory once instead of once per coordinate (float64: ~1.5x faster on 1M vertices).
+        # from memory once instead of once per coordinate.
         # Views of the pattern (no copy); only each chunk's indptr is rebased.
         count = max(1, -(-(self._last - self._first) // CHUNK_NONZEROS))
         bounds = start + _row_blocks(indptr[start:stop + 1] - self._first, count)
@@ -122,8 +122,8 @@ class _Block:
         to overwrite) while they are in cache.
 
         Row weights belong in ``combine``: the product then reads no values array, only the chunk's
-        pattern and a short array of ones that stays in cache (float64 HC: ~25 % less time per
-        iteration than reading a weighted matrix, whose values are a third of the traffic)."""
+        pattern and a short array of ones that stays in cache (a weighted matrix's values would be a
+        third of the memory traffic; bench/README.md, "no weighted matrix")."""
         x_rows = x.reshape(-1, x.shape[-1])
         ones = _ones(x.dtype, self._longest_chunk)
         buffer = np.empty((x_rows.shape[0], self._widest_chunk), dtype=x.dtype)

@@ -88,8 +88,8 @@ def _dot(x, y):
 def triple_keys(x, y, z, n):
     """For faces given as vertex columns x, y, z: the sorted triples (first, middle, last) of those
     without a repeated vertex, as int64 keys (first * n + middle) * n + last when n^3 < 2^62, else
-    as an (f, 3) array. The triples are sorted by a min/max network on whole columns (np.sort along
-    rows of three is ~2.5x slower)."""
+    as an (f, 3) array. The triples are sorted by a min/max network on whole columns (faster than
+    np.sort along rows of three)."""
     x, y, z = (np.asarray(c).astype(np.int64, copy=False) for c in (x, y, z))
     low, high = np.minimum(x, y), np.maximum(x, y)
     first, last = np.minimum(low, z), np.maximum(high, z)

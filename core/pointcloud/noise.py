@@ -122,12 +122,11 @@ def estimate_noise(index):
 # After T umbrella steps a point has averaged over about sqrt(T) mesh spacings, and HC's pull alpha to
 # the originals stops the spreading at about 1/sqrt(alpha) spacings. To average the noise away the
 # reach has to grow with the noise over the spacing, r, so T grows as r^2, and alpha = PULL / T
-# keeps the pull from cancelling the extra steps (the old fixed defaults, 66 steps at alpha 0.01, sit
-# on this line). Too much reach on a nearly clean, sparse sample flattens the surface between the
-# samples and rounds sharp edges; too little leaves noise. Measured with bench/bench_points.py and
-# sweeps of T (bench/README.md): the best T on spheres of 1500-5000 points with r = 0.1-0.9 lies
-# between 300 r^2 and 1200 r^2, on the cube's sharp edges (20k points, r = 0.5) at 100-200 r^2. We
-# take the low end, 300 r^2: too few steps leave some noise, too many distort the shape.
+# keeps the pull from cancelling the extra steps. Too much reach on a nearly clean, sparse sample
+# flattens the surface between the samples and rounds sharp edges; too little leaves noise. Sweeps
+# of T with bench/bench_points.py (bench/README.md, "How the amount of smoothing is chosen") put the
+# best T between 300 r^2 and 1200 r^2 on smooth shapes and lower on sharp edges; we take the low end:
+# too few steps leave some noise, too many distort the shape.
 STEPS_PER_RATIO_SQUARED = 300.0
 MIN_STEPS = 3  # one step per round at the default 3 rounds
 MAX_STEPS = 198  # bounds the cost: 3 rounds of 66 steps (reached at r = 0.81)

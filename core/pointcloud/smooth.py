@@ -100,11 +100,11 @@ def smooth_point_cloud(
     about where the steps reach. Nearly clean, sparse samples get a few steps (1500 points on a
     unit sphere with r = 0.1: 3 steps, alpha 0.22), noise of 0.8 spacings or more the full 198 steps
     (alpha 0.0033). A number for either option is used as given (``iterations_per_round`` alone:
-    alpha matched to the total steps; ``alpha`` alone: the steps still follow the noise);
-    ``iterations_per_round=22, alpha=0.01`` is the previous fixed default. beta 0.55 and
-    neighbours up to 2.5 local spacings were chosen with bench/bench_points.py (bench/README.md),
-    as was swapping between rounds rather than after every step as in the paper (about 1 %
-    different at many times the swapping cost).
+    alpha matched to the total steps; ``alpha`` alone: the steps still follow the noise), e.g.
+    ``iterations_per_round=22, alpha=0.01`` for 66 steps over the default 3 rounds. beta 0.55 and
+    neighbours up to 2.5 local spacings were chosen with bench/bench_points.py (bench/README.md), as
+    was swapping between rounds rather than after every step as in the paper (nearly the same
+    result for a fraction of the swapping).
     The input is never modified. Exact duplicates move together; points the RFS mesh leaves without
     a face (isolated or unusable neighbourhoods) stay where they are.
     The unit does not matter: smoothing s * points gives s times the result (to rounding; bit for bit
@@ -171,7 +171,7 @@ class PointCloudSmoother:
         rows_fixed = np.zeros(m, dtype=bool)
         np.logical_or.at(rows_fixed, index.representative, fixed_mask)  # a fixed copy pins its duplicates
         lap("neighbours")
-        noise = estimate_noise(index)  # a fixed-size sample: ~10-60 ms at any size
+        noise = estimate_noise(index)  # a fixed-size sample: the same small cost at any size
         self.noise = replace(noise, sigma=noise.sigma * self.scale, spacing=noise.spacing * self.scale)
         if self.iterations_per_round == AUTO:
             self.iterations_per_round = steps_per_round(self.noise.ratio, self.rounds)

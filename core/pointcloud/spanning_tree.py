@@ -38,9 +38,6 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
-# Work in KD-tree order: neighbouring points sit close in memory, which makes the kNN query on a
-# million points about three times faster.
-
 
 def merge_duplicates(points):
     """Return (first, representative): ``first`` are the indices of the distinct points (the first
@@ -63,7 +60,9 @@ def merge_duplicates(points):
 
 
 class NeighbourIndex:
-    """Distinct points in KD-tree order, their KD-tree and their k nearest neighbours.
+    """Distinct points in KD-tree order, their KD-tree and their k nearest neighbours. (KD-tree
+    order puts neighbouring points close in memory, which makes the kNN query and every later
+    gather of neighbours much faster.)
 
     ``points[j]`` is input point ``original[j]``; ``representative`` maps every input point to its
     row here. ``distance``/``neighbour`` (m, k) hold the k nearest other points, nearest first.
@@ -277,10 +276,9 @@ def _query_by_bits(tree_points, label_code, ask, bound):
 
 
 # Below this many askers left after the sample, growing-k queries on the full tree may beat the bit
-# search (a pilot decides). (A dual-tree traversal per group of askers, tried in the second session,
-# lost to these single queries on two threads once every search after the first is bounded by the
-# best point found so far: scan rings 200x5000 36 -> 18 s, 50x20000 71 -> 25 s, 300 clusters of
-# 500k points 105 -> 43 s; a 1M-point sphere 2.3 -> 2.9 s.)
+# search (a pilot decides). Every search is a single bounded query: once each search after the first
+# is bounded by the best point found so far, a dual-tree traversal per group of askers is slower
+# (bench/README.md, "Exact EMST of scan lines").
 _FEW_ASKERS = 2048
 
 
