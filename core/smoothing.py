@@ -21,6 +21,7 @@ from .validation import (
     bbox_diagonal,
     check_choice,
     check_fixed,
+    check_influence,
     check_iterations,
     check_positions,
     check_tolerance,
@@ -57,6 +58,7 @@ def smooth(
     original=None,
     operator=None,
     progress=None,
+    influence=None,
 ):
     """Run one of the smoothers and report how many iterations ran. See ``hc_smooth`` for the arguments.
 
@@ -65,7 +67,8 @@ def smooth(
     Raises ``DivergenceError`` instead of returning a result that is not finite or has blown up.
     """
     run = Smoothing(positions, edges, method=method, alpha=alpha, beta=beta, iterations=iterations, mode=mode,
-                    fixed=fixed, tolerance=tolerance, original=original, operator=operator, stacklevel=4)
+                    fixed=fixed, tolerance=tolerance, original=original, operator=operator, influence=influence,
+                    stacklevel=4)
     if progress is None:
         run.advance()
     else:
@@ -88,7 +91,7 @@ class Smoothing:
     bounding box whatever the chunk). Arguments as for ``smooth``; everything is checked here."""
 
     def __init__(self, positions, edges, *, method="hc", alpha=0.0, beta=0.5, iterations, mode="simultaneous",
-                 fixed=None, tolerance=0.0, original=None, operator=None, stacklevel=2):
+                 fixed=None, tolerance=0.0, original=None, operator=None, influence=None, stacklevel=2):
         self.method = method = check_choice(method, "method", METHODS)
         mode = check_choice(mode, "mode", MODES)
         self.alpha = check_unit_interval(alpha, "alpha")
@@ -109,6 +112,7 @@ class Smoothing:
         elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
             raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
         fixed_mask = check_fixed(fixed, n) | operator.isolated
+        weights = check_influence(influence, n)
         if method == "hc" and self.iterations > 0:
             message = convergence_message(self.alpha, self.beta)
             if message:
@@ -124,6 +128,12 @@ class Smoothing:
         self.order = renumbered.order if renumbered is not None else None
         if renumbered is not None:  # scattered vertex order: work in a cache-friendly one
             operator, fixed_mask = renumbered.operator, fixed_mask[self.order]
+            weights = weights[self.order] if weights is not None else None
+        # Vertices of partial influence take that fraction of each iteration's move (1: the full step). They
+        # stay in the paper's V_var: the weight scales the move, not the neighbours' differences b.
+        partial = np.flatnonzero((weights < 1.0) & ~fixed_mask) if weights is not None else np.zeros(0, np.intp)
+        self.partial_index = partial
+        self.partial_weight = weights[partial].astype(start.dtype) if partial.size else None
         # The iterations work on planar copies, one contiguous row per coordinate (see core.parallel).
         self.current = _planar(start, self.order)
         self.step = _step_for(operator, fixed_mask,
@@ -149,6 +159,8 @@ class Smoothing:
         with np.errstate(over="ignore", invalid="ignore"):  # a run that blows up is refused by _check
             while ran < count and not self.stopped_early:
                 new = self.step(self.current, self.spare)
+                if self.partial_weight is not None:
+                    _scale_moves(new, self.current, self.partial_index, self.partial_weight)
                 if self.threshold > 0.0:
                     move = new - self.current
                     if not self.plain_squares:  # extreme scales: measure moves in thresholds
@@ -194,6 +206,14 @@ class Smoothing:
         raise DivergenceError(divergence_message(self.method, self.alpha, self.beta, self.done, what))
 
 
+def _scale_moves(new, old, index, weight):
+    """new[:, index] = old + weight (new - old): the weighted vertices take part of the iteration's move.
+    Weight 0 takes old itself (bit-identical, even -0.0), not old + 0."""
+    for to, of in zip(new, old):
+        start = np.take(of, index)
+        np.put(to, index, np.where(weight == 0.0, start, start + weight * (np.take(to, index) - start)))
+
+
 def _box(points):
     """(low, high) corners of the bounding box of (n, 3) points, in float64."""
     if points.shape[0] == 0:
@@ -223,6 +243,7 @@ def hc_smooth(
     original=None,
     operator=None,
     progress=None,
+    influence=None,
 ):
     """The HC algorithm (paper, Algorithm 1); returns the new positions, same shape and dtype.
 
@@ -232,11 +253,15 @@ def hc_smooth(
     the largest move of an iteration is below tolerance × bounding-box diagonal. original: the o of
     the paper when it differs from ``positions``. operator: a prebuilt ``umbrella_operator`` (then
     ``edges`` is not read). progress(done, total) is called after each iteration; False cancels.
+    influence: per-vertex weights in [0, 1] (a painted vertex group): after each iteration a vertex
+    moves by its weight times the paper's move, q_i + w_i (p_i - q_i); 0 stays bit-identical, 1 (or
+    None) is the paper's step.
     Converges for alpha > 0 and beta > 0.5 (Theorem 5.2); elsewhere it runs and warns.
     """
     return smooth(
         positions, edges, method="hc", alpha=alpha, beta=beta, iterations=iterations, mode=mode,
         fixed=fixed, tolerance=tolerance, original=original, operator=operator, progress=progress,
+        influence=influence,
     ).positions
 
 
@@ -253,13 +278,14 @@ def laplacian_smooth(
     original=None,
     operator=None,
     progress=None,
+    influence=None,
 ):
     """Laplacian smoothing: variant "plain" (3.1), "central" (3.2, alpha weights q_i) or "original"
     (3.3, alpha weights o_i). Other arguments as for ``hc_smooth``."""
     variant = check_choice(variant, "variant", METHODS[1:])
     return smooth(
         positions, edges, method=variant, alpha=alpha, iterations=iterations, mode=mode, fixed=fixed,
-        tolerance=tolerance, original=original, operator=operator, progress=progress,
+        tolerance=tolerance, original=original, operator=operator, progress=progress, influence=influence,
     ).positions
 
 

@@ -134,6 +134,22 @@ def power_of_two_scale(points, name="points"):
     return float(np.ldexp(1.0, int(np.frexp(largest)[1])))
 
 
+def check_influence(influence, n_vertices):
+    """Return per-vertex weights in [0, 1] as float64 (None: every vertex takes the full step)."""
+    if influence is None:
+        return None
+    array = np.asarray(influence)
+    if array.shape != (n_vertices,) or not (np.issubdtype(array.dtype, np.floating)
+                                            or np.issubdtype(array.dtype, np.integer)):
+        raise ValueError(f"influence must be {n_vertices} numbers between 0 and 1, one per vertex, "
+                         f"got {array.dtype} of shape {array.shape}")
+    weights = array.astype(np.float64)
+    if not np.all((weights >= 0.0) & (weights <= 1.0)):  # NaN fails both
+        bad = int(np.flatnonzero(~((weights >= 0.0) & (weights <= 1.0)))[0])
+        raise ValueError(f"influence must lie between 0 and 1, got {weights[bad]:g} at vertex {bad}")
+    return weights
+
+
 def check_unit_interval(value, name):
     """Return ``value`` as a float in [0, 1], or raise ValueError."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value):
