@@ -96,14 +96,21 @@ def test_sdg_adapts_to_density():
     assert np.median(length[on_left]) < 0.5 * np.median(length[right[graph.edges].all(axis=1)])
 
 
-def test_sdg_keeps_every_consistent_emst_edge():
-    index, tree, graph = build_sdg(noisy_sphere(1000, 0.01, seed=3))
+@pytest.mark.parametrize("points", [noisy_sphere(1000, 0.01, seed=3),
+                                    np.concatenate([plane(400, seed=1), plane(400, seed=2) + [5.0, 0.0, 0.0]])])
+def test_sdg_keeps_exactly_the_consistent_emst_edges(points):
+    # An EMST edge is in the SDG iff it is consistent (no adaptive edge brings back a cut one: that
+    # would need |pq| <= spacing_factor x min(h) <= gap_factor x max(h)), and the counts the graph
+    # reports are those of its edges.
+    index, tree, graph = build_sdg(points)
     n = index.n_points
     have = set(map(tuple, np.sort(graph.edges, axis=1)))
     u, v = tree.T
-    keep = edge_lengths(index.points, tree) <= 3.0 * np.maximum(graph.spacing[u], graph.spacing[v])
-    assert all(tuple(e) in have for e in np.sort(tree[keep], axis=1))
-    assert keep.sum() == graph.emst_kept and n - 1 - keep.sum() == graph.emst_cut
+    consistent = edge_lengths(index.points, tree) <= 3.0 * np.maximum(graph.spacing[u], graph.spacing[v])
+    present = np.array([tuple(e) in have for e in np.sort(tree, axis=1)])
+    np.testing.assert_array_equal(present, consistent)
+    assert graph.emst_kept == present.sum() and graph.emst_cut == (~present).sum()
+    assert len(tree) == n - 1
 
 
 def test_sdg_rejects_inconsistent_factors():
@@ -283,11 +290,22 @@ def test_results_do_not_depend_on_the_thread_count(monkeypatch):
 
     points = noisy_sphere(30_000, 0.01, seed=5)  # large enough to be split into blocks
     monkeypatch.setattr(threads, "MIN_BLOCK", 1000)
-    monkeypatch.setenv("HC_SMOOTH_THREADS", "1")
+    widest = []
+    original_run_all = threads.run_all
+
+    def recording_run_all(tasks):
+        widest.append(len(tasks))
+        return original_run_all(tasks)
+
+    monkeypatch.setattr(threads, "run_all", recording_run_all)
+    monkeypatch.setattr(threads, "thread_count", lambda: 1)
     one = core.smooth_point_cloud(points, rounds=2)
-    monkeypatch.setenv("HC_SMOOTH_THREADS", "2")
-    assert len(threads.blocks(10_000)) == min(2, threads.thread_count())
-    assert np.array_equal(one, core.smooth_point_cloud(points, rounds=2))
+    assert max(widest) == 1
+    widest.clear()
+    monkeypatch.setattr(threads, "thread_count", lambda: 3)  # on any machine: the pool has the threads
+    three = core.smooth_point_cloud(points, rounds=2)
+    assert max(widest) == 3  # the stages really were split
+    assert np.array_equal(one, three)
 
 
 def test_pruning_rounds_equal_the_edge_by_edge_rule_in_any_order_within_a_round():

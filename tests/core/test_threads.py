@@ -43,10 +43,22 @@ def test_row_blocks_cover_every_row_once():
 
 
 def test_thread_cap_from_the_environment(monkeypatch):
+    monkeypatch.delenv("HC_SMOOTH_THREADS", raising=False)
+    uncapped = parallel.thread_count()
+    monkeypatch.setattr(parallel.os, "sched_getaffinity", lambda pid: set(range(12)), raising=False)
+    assert parallel.thread_count() == 8  # no cap: the available cores, at most 8
     monkeypatch.setenv("HC_SMOOTH_THREADS", "1")
     assert parallel.thread_count() == 1
+    monkeypatch.setenv("HC_SMOOTH_THREADS", "3")
+    assert parallel.thread_count() == 3
+    monkeypatch.setenv("HC_SMOOTH_THREADS", "20")
+    assert parallel.thread_count() == 12  # a cap above the cores: the cores
+    for ignored in ("not a number", "0", "-2"):  # as if unset
+        monkeypatch.setenv("HC_SMOOTH_THREADS", ignored)
+        assert parallel.thread_count() == 8
+    monkeypatch.undo()
     monkeypatch.setenv("HC_SMOOTH_THREADS", "not a number")
-    assert parallel.thread_count() >= 1
+    assert parallel.thread_count() == uncapped
 
 
 def test_pool_grows_to_the_largest_request(monkeypatch):
