@@ -126,6 +126,17 @@ PIN_BOUNDARY = Setting(
     "pin_boundary", "bool", "Pin Boundary", "Keep the vertices on open boundaries (holes, borders) fixed",
     False, flag="pin-boundary", help="keep open-boundary vertices fixed",
 )
+INFLUENCE_GROUP = Setting(
+    "influence_group", "string", "Influence Group",
+    "Vertex group whose weights scale how far each vertex moves in every iteration (0 = stays, 1 = the full "
+    "step; empty: full everywhere), for smoothing painted where the scan is noisy",
+    "", flag="influence-group", metavar="NAME",
+    help="vertex group whose weights scale each vertex's move (0 stays, 1 full; .blend, OBJ groups)",
+)
+INVERT_INFLUENCE_GROUP = Setting(
+    "invert_influence_group", "bool", "Invert Influence", "Use one minus the weights of the influence group",
+    False, flag="invert-influence", help="use one minus the --influence-group weights",
+)
 OUTPUT = Setting(
     "output", "enum", "Output", "Where the result goes", "MESH",
     items=(
@@ -134,7 +145,8 @@ OUTPUT = Setting(
     ),
 )
 
-MESH = (METHOD, ALPHA, BETA, ITERATIONS, MODE, TOLERANCE, VERTEX_GROUP, INVERT_VERTEX_GROUP, PIN_BOUNDARY, OUTPUT)
+MESH = (METHOD, ALPHA, BETA, ITERATIONS, MODE, TOLERANCE, VERTEX_GROUP, INVERT_VERTEX_GROUP, PIN_BOUNDARY,
+        INFLUENCE_GROUP, INVERT_INFLUENCE_GROUP, OUTPUT)
 
 # --- point clouds: object.hc_smooth_points --------------------------------------------------------------
 

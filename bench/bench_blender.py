@@ -177,7 +177,7 @@ def main():
     rows.append(("  vertex group read alone (bulk path)",
                  median_time(lambda: mesh_io.vertex_group_members(obj, group.index), repeats)))
     rows.append(("  vertex group read alone (per-vertex loop)",
-                 median_time(lambda: mesh_io._vertex_group_members_loop(obj.data, group.index), 1)))
+                 median_time(lambda: mesh_io._vertex_group_weights_loop(obj.data, group.index), 1)))
 
     reset()
     modifier = obj.modifiers.new("Smooth", "SMOOTH")

@@ -24,7 +24,8 @@ POINT_OPTIONS = {s.flag.replace("-", "_"): s for s in settings_spec.POINTS if s.
 POINT_FIELDS = {name: setting.name for name, setting in POINT_OPTIONS.items()}
 POINT_ONLY = tuple(name for name in POINT_OPTIONS if name not in MESH_OPTIONS)
 # Mesh-only options, and the value each may keep with --points because it describes what runs anyway.
-MESH_ONLY = {"iterations": None, "mode": "SIMULTANEOUS", "tolerance": 0.0, "method": "HC", "pin_boundary": False}
+MESH_ONLY = {"iterations": None, "mode": "SIMULTANEOUS", "tolerance": 0.0, "method": "HC", "pin_boundary": False,
+             "influence_group": "", "invert_influence": False}
 
 
 def _option(name):
@@ -182,6 +183,8 @@ def parse(argv):
         raise UsageError("give either -o OUTDIR or --in-place (inputs are never overwritten otherwise)")
     if args.invert_group and not args.fixed_group:
         raise UsageError("--invert-group needs --fixed-group NAME")
+    if args.invert_influence and not args.influence_group:
+        raise UsageError("--invert-influence needs --influence-group NAME")
     if args.points:
         refused = [_option(name) for name, keeps in MESH_ONLY.items()
                    if getattr(args, name) not in (None, keeps)]

@@ -27,6 +27,7 @@ class Job:
     faces: np.ndarray  # (t, 3) triangles of a closed mesh, else None (not needed)
     fixed: np.ndarray  # bool (n,)
     closed: bool = False  # the faces enclose a volume (consistently oriented, no boundary)
+    influence: np.ndarray = None  # float32 (n,) weights of the influence group, if any
     key_block: object = None  # the active shape key that holds ``positions``, if any
     operator: object = None
     result: np.ndarray = None
@@ -70,12 +71,22 @@ def make_job(obj, props, extra_fixed=None):
             raise objects.InputError(f"Object '{obj.name}' has no vertex group '{props.vertex_group}'")
         members = mesh_io.vertex_group_members(obj, group.index)
         fixed |= ~members if props.invert_vertex_group else members
+    influence = None
+    if props.influence_group:
+        group = obj.vertex_groups.get(props.influence_group)
+        if group is None:
+            raise objects.InputError(f"Object '{obj.name}' has no vertex group '{props.influence_group}' "
+                                     "(the influence group)")
+        influence = mesh_io.vertex_group_weights(obj, group.index)
+        if props.invert_influence_group:
+            influence = 1.0 - influence
+        np.clip(influence, 0.0, 1.0, out=influence)  # Blender keeps weights in [0, 1]; rounding may not
     if props.pin_boundary:
         fixed |= core.topology.boundary_vertices(n, edges, corner_edges)
     # Triangulated once per mesh, for the volume in the report (only the positions change).
     faces = core.metrics.fan_triangles(mesh_io.read_faces(mesh, corner_verts)) if closed else None
     return Job(obj=obj, mesh=mesh, positions=positions, edges=edges, faces=faces, fixed=fixed,
-               closed=closed, key_block=key_block)
+               closed=closed, key_block=key_block, influence=influence)
 
 
 def run(jobs, props, chunk=None):
@@ -93,7 +104,7 @@ def run(jobs, props, chunk=None):
         with warnings.catch_warnings():  # the operators report the convergence region themselves
             warnings.simplefilter("ignore", core.ConvergenceWarning)
             smoothing = core.Smoothing(job.positions, None, operator=job.operator, iterations=props.iterations,
-                                       fixed=job.fixed, **settings)
+                                       fixed=job.fixed, influence=job.influence, **settings)
         while not smoothing.finished:
             done += smoothing.advance(chunk)
             if not smoothing.finished:

@@ -86,7 +86,12 @@ def write_shape_key(key_block, positions):
 
 
 def vertex_group_members(obj, group_index):
-    """Boolean mask of the vertices with weight > 0 in the vertex group.
+    """Boolean mask of the vertices with weight > 0 in the vertex group."""
+    return vertex_group_weights(obj, group_index) > 0.0
+
+
+def vertex_group_weights(obj, group_index):
+    """The vertex group's weights, float32, 0 where a vertex is not in the group.
 
     Blender has no bulk accessor for weights (a Python loop costs ~1 s per million vertices), but
     Geometry Nodes read a vertex group as a named attribute: a throw-away object sharing the mesh,
@@ -97,24 +102,24 @@ def vertex_group_members(obj, group_index):
     name = obj.vertex_groups[group_index].name
     if len(obj.data.vertices) >= _BULK_MINIMUM and obj.data.attributes.get(name) is None:
         try:
-            return _weights_through_geometry_nodes(obj.data, name) > 0.0
+            return _weights_through_geometry_nodes(obj.data, name)
         except (RuntimeError, KeyError, AttributeError, TypeError):  # e.g. a read-only scene collection
             pass
-    return _vertex_group_members_loop(obj.data, group_index)
+    return _vertex_group_weights_loop(obj.data, group_index)
 
 
 _BULK_MINIMUM = 2_000  # below this the loop is as fast as setting up an evaluation
 _WEIGHT_ATTRIBUTE = "hc_smooth_weight"
 
 
-def _vertex_group_members_loop(mesh, group_index):
-    mask = np.zeros(len(mesh.vertices), dtype=bool)
+def _vertex_group_weights_loop(mesh, group_index):
+    weights = np.zeros(len(mesh.vertices), dtype=np.float32)
     for vertex in mesh.vertices:
         for element in vertex.groups:
-            if element.group == group_index and element.weight > 0.0:
-                mask[vertex.index] = True
+            if element.group == group_index:
+                weights[vertex.index] = element.weight
                 break
-    return mask
+    return weights
 
 
 def _weights_through_geometry_nodes(mesh, group_name):

@@ -29,7 +29,8 @@ def test_identifiers_and_flags_are_unique(settings):
 def test_identifiers_users_rely_on():
     # Users' scripts, presets and the command line name these: they must not change.
     assert [s.name for s in spec.MESH] == ["method", "alpha", "beta", "iterations", "mode", "tolerance",
-                                           "vertex_group", "invert_vertex_group", "pin_boundary", "output"]
+                                           "vertex_group", "invert_vertex_group", "pin_boundary",
+                                           "influence_group", "invert_influence_group", "output"]
     assert [s.name for s in spec.POINTS] == ["auto_amount", "alpha", "beta", "rounds", "iterations_per_round",
                                              "neighbours", "spacing_factor", "gap_factor", "min_quality", "swap",
                                              "vertex_group", "invert_vertex_group", "keep_rfs_mesh"]
@@ -39,7 +40,8 @@ def test_identifiers_users_rely_on():
     assert {s.flag: s.name for s in spec.MESH + spec.POINTS if s.flag} == {
         "method": "method", "alpha": "alpha", "beta": "beta", "iterations": "iterations", "mode": "mode",
         "tolerance": "tolerance", "fixed-group": "vertex_group", "invert-group": "invert_vertex_group",
-        "pin-boundary": "pin_boundary", "rounds": "rounds", "steps-per-round": "iterations_per_round",
+        "pin-boundary": "pin_boundary", "influence-group": "influence_group",
+        "invert-influence": "invert_influence_group", "rounds": "rounds", "steps-per-round": "iterations_per_round",
         "neighbours": "neighbours", "reach": "spacing_factor", "gap": "gap_factor"}
 
 
