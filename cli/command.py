@@ -37,6 +37,7 @@ class Outcome:
     changes: list = field(default_factory=list)  # core.Change per smoothed mesh
     warnings: list = field(default_factory=list)
     error: str = ""
+    blender_lines: list = field(default_factory=list)  # what Blender printed while a failed file ran
 
     def change_text(self):
         if not self.changes:
@@ -71,6 +72,9 @@ def main(argv):
     except arguments.UsageError as error:
         print(error, file=sys.stderr)
         return 2
+    except OSError as error:  # an input that cannot be looked at (an unreadable folder): no traceback
+        print(f"{error.filename}: {error.strerror}" if error.filename else str(error), file=sys.stderr)
+        return 2
     for note in plan.notes:
         print(f"hc_smooth: note: {note}")
     if plan.points:
@@ -92,6 +96,8 @@ def main(argv):
         print(f"[{number}/{total}] {progress_line(outcome)}", flush=True)
         for text in outcome.warnings:
             print(f"  warning: {text}", flush=True)
+        for line in outcome.blender_lines:
+            print(f"  blender: {line}", flush=True)
     print(summary_table(outcomes), flush=True)
     failed = [outcome for outcome in outcomes if outcome.error]
     if failed:
@@ -110,32 +116,46 @@ def point_settings(plan):
 
 
 def process(source, target, plan, settings):
-    """Smooth one input file into ``target``; every failure becomes ``Outcome.error`` (no output written)."""
+    """Smooth one input file into ``target``; every failure becomes ``Outcome.error`` (no output written).
+
+    What Blender prints meanwhile (its importers' and exporters' reports) is kept off the console and
+    handed to the caller only when the file failed (``Outcome.blender_lines``)."""
     outcome = Outcome(source=source, target=target)
     start = time.perf_counter()
-    try:
-        os.makedirs(os.path.dirname(target), exist_ok=True)
-        if os.path.splitext(source)[1].lower() == arguments.BLEND:
-            smooth_blend_file(source, target, plan, settings, outcome)
-        else:
-            smooth_mesh_file(source, target, plan, settings, outcome)
-    except (FileError, InputError, ValueError, OSError) as error:
-        outcome.error = str(error)
-    except Exception as error:  # a bug: report it with its traceback and go on with the other files
-        traceback.print_exc()
-        outcome.error = f"internal error: {type(error).__name__}: {error}"
+    bug = None
+    with files.blender_output() as printed, warnings.catch_warnings(record=True) as caught:
+        try:
+            if os.path.splitext(source)[1].lower() == arguments.BLEND:
+                smooth_blend_file(source, target, plan, settings, outcome)
+            else:
+                smooth_mesh_file(source, target, plan, settings, outcome)
+        except (FileError, InputError, ValueError, OSError) as error:
+            outcome.error = str(error)
+        except MemoryError:
+            outcome.error = "not enough memory for this file"
+        except Exception as error:  # a bug: report it with its traceback and go on with the other files
+            bug = traceback.format_exc()
+            outcome.error = f"internal error: {type(error).__name__}: {error}"
+    if bug:
+        print(bug, end="", file=sys.stderr, flush=True)
+    # Python's warnings would have gone to the collected stderr: they are the file's warnings.
+    outcome.warnings.extend(str(warning.message) for warning in caught
+                            if not issubclass(warning.category, core.ConvergenceWarning))  # said at the start
+    if outcome.error:
+        outcome.blender_lines = [line for line in printed if line.strip() not in outcome.error]
     outcome.seconds = time.perf_counter() - start
     return outcome
 
 
 def smooth_mesh_file(source, target, plan, settings, outcome):
     bpy.ops.wm.read_homefile(use_empty=True)  # each file starts from an empty scene
-    objects = files.import_file(source)
+    objects = files.import_file(source, result_ext=os.path.splitext(target)[1].lower())
     meshes = [obj for obj in objects if obj.type == "MESH"]
     if not meshes:
         raise FileError("no mesh in this file")
+    layout = files.read_layout(source)  # what the result keeps of the input: encoding, normals, materials
     smooth_objects(meshes, plan, settings, outcome)
-    files.export_file(meshes, target)
+    files.export_file(meshes, target, layout)
 
 
 def is_point_cloud(obj):
