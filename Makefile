@@ -6,10 +6,13 @@ PYTEST_ARGS ?=
 # A hung interpreter must fail the run, not stall CI: each environment's suite gets this many seconds.
 TEST_TIMEOUT ?= 1200
 
-.PHONY: envs test test-core demo build dist clean
+.PHONY: envs env-bpy45 env-bpy52 test test-core demo build dist clean
 
-envs:
-	bash scripts/setup_envs.sh
+# Both test environments; `make env-bpy45` / `make env-bpy52` makes one alone.
+envs: env-bpy45 env-bpy52
+
+env-bpy45 env-bpy52:
+	bash scripts/setup_envs.sh $(@:env-%=%)
 
 # The whole suite (core + headless Blender) on Blender 4.5 LTS and Blender 5.2 LTS; fails if either fails.
 test: envs
@@ -22,17 +25,17 @@ test: envs
 test-core:
 	python3 -m pytest -q tests/core
 
-# The main job: a headless demo on a built-in default (noisy subdivided Suzanne).
-demo: envs
+# The main job: a headless demo on a built-in default (noisy subdivided Suzanne), on Blender 4.5 only.
+demo: env-bpy45
 	$(PY45) demo/demo.py
 
 # The extension zip, built by Blender's own extension tool.
-build: envs
+build: env-bpy45
 	$(PY45) scripts/build_extension.py
 
 # One zip per platform with SciPy wheels for Blender 4.2-5.0 (cp311) and 5.1+ (cp313), validated, in dist/.
 # Downloads the wheels from PyPI once into build/wheels.
-dist: envs
+dist: env-bpy45
 	$(PY45) scripts/dist.py
 
 clean:

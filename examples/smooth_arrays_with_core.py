@@ -1,7 +1,13 @@
 """Call HC Smooth's core directly on NumPy arrays from a `blender -b --python` script.
 
-    blender -b scene.blend --python examples/smooth_arrays_with_core.py -- OBJECT
+    blender -b scene.blend --python examples/smooth_arrays_with_core.py -- Scan
     blender -b --python examples/smooth_arrays_with_core.py          (a noisy sphere, for a try)
+
+With Blender as a Python module (`pip install bpy`; HC Smooth installed with
+`python scripts/hc_smooth_bpy.py install ZIP`, see docs/python_api.md), the same two runs:
+
+    python scripts/hc_smooth_bpy.py run scene.blend examples/smooth_arrays_with_core.py -- Scan
+    python scripts/hc_smooth_bpy.py run examples/smooth_arrays_with_core.py
 
 The core (hc_smooth, laplacian_smooth, measure_change) needs only NumPy and SciPy: read positions
 and edges in bulk, smooth, write back. It is importable from the installed extension, whose
@@ -9,6 +15,7 @@ module name depends on the repository it was installed into (bl_ext.<repository>
 """
 
 import importlib
+import os
 import sys
 
 import bpy
@@ -16,11 +23,18 @@ import numpy as np
 
 
 def hc_smooth_package():
-    """The installed extension's package, whatever repository it came from."""
+    """The installed HC Smooth package, bl_ext.<repository>.hc_smooth, enabled if it is not yet:
+    Blender enables installed extensions at start-up, the bpy module does not."""
     for name in bpy.context.preferences.addons.keys():
         if name.startswith("bl_ext.") and name.endswith(".hc_smooth"):
             return importlib.import_module(name)
-    raise SystemExit("HC Smooth is not installed and enabled in this Blender")
+    for repo in bpy.context.preferences.extensions.repos:
+        if repo.enabled and os.path.isdir(os.path.join(repo.directory, "hc_smooth")):
+            bpy.ops.preferences.addon_enable(module=f"bl_ext.{repo.module}.hc_smooth")
+            return importlib.import_module(f"bl_ext.{repo.module}.hc_smooth")
+    raise SystemExit(f"HC Smooth is not installed in this Blender's user folder ({bpy.utils.resource_path('USER')}): "
+                     "install the zip (Preferences > Get Extensions > Install from Disk, or "
+                     "`python scripts/hc_smooth_bpy.py install ZIP` for the bpy module)")
 
 
 def main():

@@ -1,17 +1,43 @@
 """Smooth meshes from a `blender -b --python` script with the HC Smooth operators.
 
-    blender -b scene.blend --python examples/smooth_with_operators.py -- OBJECT [OUTPUT.blend]
+    blender -b scene.blend --python examples/smooth_with_operators.py -- Scan smoothed.blend
     blender -b --python examples/smooth_with_operators.py          (a noisy sphere, for a try)
+
+With Blender as a Python module (`pip install bpy`; HC Smooth installed with
+`python scripts/hc_smooth_bpy.py install ZIP`, see docs/python_api.md), the same two runs:
+
+    python scripts/hc_smooth_bpy.py run scene.blend examples/smooth_with_operators.py -- Scan smoothed.blend
+    python scripts/hc_smooth_bpy.py run examples/smooth_with_operators.py
+
+Arguments: the object to smooth (default: a noisy try-out sphere) and, optionally, a .blend file
+to save a copy of the result to.
 
 Shows: object.hc_smooth on chosen objects through bpy.context.temp_override (a background
 Blender has no selection you can rely on), a fixed vertex group, output into a new shape key,
 and mesh.hc_smooth in Edit mode on the selected vertices only.
 """
 
+import importlib
+import os
 import sys
 
 import bpy
 import numpy as np
+
+
+def hc_smooth_package():
+    """The installed HC Smooth package, bl_ext.<repository>.hc_smooth, enabled if it is not yet:
+    Blender enables installed extensions at start-up, the bpy module does not."""
+    for name in bpy.context.preferences.addons.keys():
+        if name.startswith("bl_ext.") and name.endswith(".hc_smooth"):
+            return importlib.import_module(name)
+    for repo in bpy.context.preferences.extensions.repos:
+        if repo.enabled and os.path.isdir(os.path.join(repo.directory, "hc_smooth")):
+            bpy.ops.preferences.addon_enable(module=f"bl_ext.{repo.module}.hc_smooth")
+            return importlib.import_module(f"bl_ext.{repo.module}.hc_smooth")
+    raise SystemExit(f"HC Smooth is not installed in this Blender's user folder ({bpy.utils.resource_path('USER')}): "
+                     "install the zip (Preferences > Get Extensions > Install from Disk, or "
+                     "`python scripts/hc_smooth_bpy.py install ZIP` for the bpy module)")
 
 
 def script_arguments():
@@ -31,6 +57,7 @@ def noisy_sphere(name="Scan"):
 
 
 def main():
+    hc_smooth_package()  # registers bpy.ops.object.hc_smooth and bpy.ops.mesh.hc_smooth
     args = script_arguments()
     obj = bpy.data.objects[args[0]] if args else noisy_sphere()
 

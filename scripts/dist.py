@@ -1,11 +1,13 @@
 """Per-platform extension zips with SciPy bundled as wheels (run with a Python that has the bpy module).
 
-    python scripts/dist.py [--output-dir dist] [--cache build/wheels]
+    python scripts/dist.py [--output-dir dist] [--cache build/wheels] [--platform linux-x64 ...]
 
 1. Downloads SciPy wheels (no dependencies: Blender bundles NumPy, never ship it) for every platform
-   and Python that Blender 4.2+ uses, into a cache that later runs reuse.
+   (or those given with --platform) and Python that Blender 4.2+ uses, into a cache that later runs
+   reuse (~35 MB per wheel; all eight ~270 MB).
 2. Stages a copy of the package with those wheels and a generated manifest listing them (the
-   committed blender_manifest.toml stays wheel-free, so plain `make build` works offline).
+   committed blender_manifest.toml stays wheel-free, so plain `make build` works offline), in a
+   temporary folder that is removed afterwards.
 3. Builds one zip per platform with Blender's own tool (`build --split-platforms`), validates each
    and checks what went in. Each zip carries the wheels of both Pythons; at install time Blender
    keeps only the wheel matching its own Python version and platform.
@@ -16,6 +18,7 @@ import pathlib
 import shutil
 import subprocess
 import sys
+import tempfile
 import tomllib
 import zipfile
 
@@ -38,17 +41,18 @@ STAGING_IGNORE = shutil.ignore_patterns(".git", ".envs", "build", "dist", "demo_
                                         ".pytest_cache", ".benchmarks", "__pycache__", "*.zip")
 
 
-def download_wheels(cache):
+def download_wheels(cache, platforms=tuple(PLATFORMS)):
     """One SciPy wheel per (Python, platform), downloaded once into ``cache/<python>-<platform>/``."""
     wheels = []
     for python, requirement in PYTHONS:
-        for platform, tags in PLATFORMS.items():
+        for platform in platforms:
+            tags = PLATFORMS[platform]
             folder = cache / f"cp{python.replace('.', '')}-{platform}"
             found = sorted(folder.glob("scipy-*.whl"))
             if not found:
                 folder.mkdir(parents=True, exist_ok=True)
                 command = [sys.executable, "-m", "pip", "download", "--quiet", "--disable-pip-version-check",
-                           "--only-binary=:all:", "--no-deps", "--implementation", "cp",
+                           "--only-binary=:all:", "--no-deps", "--no-cache-dir", "--implementation", "cp",
                            "--python-version", python, "--dest", str(folder), requirement]
                 for tag in tags:
                     command += ["--platform", tag]
@@ -62,31 +66,29 @@ def download_wheels(cache):
     return wheels
 
 
-def manifest_with_wheels(text, wheel_names):
+def manifest_with_wheels(text, wheel_names, platforms=tuple(PLATFORMS)):
     """The manifest text with `platforms` and `wheels` added as top-level keys (before the first table)."""
     data = tomllib.loads(text)
     if "wheels" in data or "platforms" in data:
         raise SystemExit("dist: blender_manifest.toml already lists wheels or platforms; remove them (dist adds both)")
     lines = text.splitlines(keepends=True)
     first_table = next((i for i, line in enumerate(lines) if line.lstrip().startswith("[")), len(lines))
-    added = ["# Added by scripts/dist.py: SciPy for every platform (NumPy comes with Blender).\n",
-             "platforms = [" + ", ".join(f'"{p}"' for p in PLATFORMS) + "]\n",
+    added = ["# Added by scripts/dist.py: SciPy for these platforms (NumPy comes with Blender).\n",
+             "platforms = [" + ", ".join(f'"{p}"' for p in platforms) + "]\n",
              "wheels = [\n", *(f'  "./wheels/{name}",\n' for name in wheel_names), "]\n\n"]
     result = "".join(lines[:first_table] + added + lines[first_table:])
     parsed = tomllib.loads(result)
-    assert parsed["wheels"] == [f"./wheels/{name}" for name in wheel_names] and parsed["platforms"] == list(PLATFORMS)
+    assert parsed["wheels"] == [f"./wheels/{name}" for name in wheel_names] and parsed["platforms"] == list(platforms)
     return result
 
 
-def stage(wheels, staging):
-    if staging.exists():
-        shutil.rmtree(staging)
+def stage(wheels, staging, platforms=tuple(PLATFORMS)):
     shutil.copytree(ROOT, staging, ignore=STAGING_IGNORE)
     (staging / "wheels").mkdir()
     for wheel in wheels:
         shutil.copy2(wheel, staging / "wheels" / wheel.name)
     manifest = staging / "blender_manifest.toml"
-    manifest.write_text(manifest_with_wheels(manifest.read_text(), [wheel.name for wheel in wheels]))
+    manifest.write_text(manifest_with_wheels(manifest.read_text(), [wheel.name for wheel in wheels], platforms))
 
 
 def build(staging, output_dir):
@@ -127,11 +129,16 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--output-dir", default=str(ROOT / "dist"))
     parser.add_argument("--cache", default=str(ROOT / "build" / "wheels"), help="downloaded wheels (reused)")
-    parser.add_argument("--staging", default=str(ROOT / "build" / "dist-staging"))
+    parser.add_argument("--platform", action="append", choices=list(PLATFORMS),
+                        help="build only this platform's zip (repeatable; default: all)")
     args = parser.parse_args()
-    wheels = download_wheels(pathlib.Path(args.cache))
-    stage(wheels, pathlib.Path(args.staging))
-    for path in build(pathlib.Path(args.staging), pathlib.Path(args.output_dir)):
+    platforms = tuple(args.platform or PLATFORMS)
+    wheels = download_wheels(pathlib.Path(args.cache), platforms)
+    with tempfile.TemporaryDirectory(prefix="hc_smooth_dist_") as work:
+        staging = pathlib.Path(work) / "hc_smooth"
+        stage(wheels, staging, platforms)
+        zips = build(staging, pathlib.Path(args.output_dir))
+    for path in zips:
         print(f"{path}  {path.stat().st_size / 1e6:.1f} MB")
 
 

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Create the two test environments, each with Blender as a Python module (bpy) from PyPI:
+# Create the test environments, each with Blender as a Python module (bpy) from PyPI:
 #   .envs/bpy45  Blender 4.5 LTS, Python 3.11, NumPy 1.26 (as Blender 4.x bundles), SciPy 1.15
 #   .envs/bpy52  Blender 5.2 LTS, Python 3.13, NumPy 2.x,  SciPy 1.17
+#   bash scripts/setup_envs.sh [bpy45] [bpy52]     (no argument: both)
 # Idempotent: an environment whose stamp matches its requirements is left alone.
+# pip's own cache is off: the environments are the only copy, nothing is written outside the repository.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -26,12 +28,18 @@ make_env() {  # make_env NAME PYTHON_VERSION REQUIREMENTS...
     echo "setup_envs: creating $dir ($*)"
     rm -rf "$dir"
     "$(find_python "$version")" -m venv "$dir"
-    "$dir/bin/python" -m pip install --quiet --upgrade pip 2>&1 | grep -v "is ignored: it is neither" || true
-    "$dir/bin/python" -m pip install --quiet "$@" 2>&1 | grep -v "is ignored: it is neither" || true
+    "$dir/bin/python" -m pip install --quiet --no-cache-dir --upgrade pip 2>&1 | grep -v "is ignored: it is neither" || true
+    "$dir/bin/python" -m pip install --quiet --no-cache-dir "$@" 2>&1 | grep -v "is ignored: it is neither" || true
     "$dir/bin/python" -c "import bpy, numpy, scipy, pytest, hypothesis"  # fail here, not in the tests
     echo "$stamp" > "$dir/.stamp"
 }
 
 TEST_TOOLS=(pytest==9.* hypothesis==6.*)
-make_env bpy45 3.11 "bpy==4.5.*" "numpy==1.26.*" "scipy==1.15.*" "${TEST_TOOLS[@]}"
-make_env bpy52 3.13 "bpy==5.2.*" "numpy>=2.2,<2.7" "scipy==1.17.*" "${TEST_TOOLS[@]}"
+[ $# -gt 0 ] || set -- bpy45 bpy52
+for name in "$@"; do
+    case $name in
+        bpy45) make_env bpy45 3.11 "bpy==4.5.*" "numpy==1.26.*" "scipy==1.15.*" "${TEST_TOOLS[@]}" ;;
+        bpy52) make_env bpy52 3.13 "bpy==5.2.*" "numpy>=2.2,<2.7" "scipy==1.17.*" "${TEST_TOOLS[@]}" ;;
+        *) echo "setup_envs: unknown environment $name (bpy45, bpy52)" >&2; exit 2 ;;
+    esac
+done

@@ -3,13 +3,16 @@ the zip built by Blender's own extension tool, then package_install_files into a
 
 import os
 import pathlib
+import shutil
 import subprocess
 import sys
 import tempfile
 
-# Blender reads its user folder once, when bpy is first imported: point it at an empty one.
+# Blender reads its user folder once, when bpy is first imported: point it at an empty one. Subprocesses
+# inherit it, and Blender's thumbnail cache ($XDG_CACHE_HOME/thumbnails): nothing goes to the home folder.
 USER_RESOURCES = tempfile.mkdtemp(prefix="hc_smooth_user_")
 os.environ["BLENDER_USER_RESOURCES"] = USER_RESOURCES
+os.environ["XDG_CACHE_HOME"] = os.path.join(USER_RESOURCES, "cache")
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
@@ -18,6 +21,12 @@ import pytest  # noqa: E402
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 from blender_scene import ADDON  # noqa: E402
 sys.path.insert(0, str(ROOT))  # `import core` (the same code, loaded outside Blender) for comparisons
+
+
+def pytest_sessionfinish(session, exitstatus):
+    # tests/conftest.py ends the process with os._exit, which skips Blender's removal of its temp folder.
+    shutil.rmtree(USER_RESOURCES, ignore_errors=True)
+    shutil.rmtree(bpy.app.tempdir, ignore_errors=True)
 
 
 @pytest.fixture(scope="session")

@@ -15,6 +15,7 @@ import importlib.util
 import json
 import os
 import pathlib
+import shutil
 import sys
 
 zip_path, work = sys.argv[1], pathlib.Path(sys.argv[2])
@@ -89,4 +90,5 @@ except Exception as error:  # reported to the test, which fails with it
 finally:
     print("REPORT " + json.dumps(report), flush=True)
     sys.stderr.flush()
+    shutil.rmtree(bpy.app.tempdir, ignore_errors=True)  # Blender removes it at exit, which os._exit skips
     os._exit(0)  # bpy 4.5 can deadlock in C exit handlers (see tests/conftest.py)

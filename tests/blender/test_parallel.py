@@ -1,40 +1,30 @@
-"""One process per file: the `xargs -P` line of docs/command_line.md on a folder of generated scans,
-with `blender -b -c` replaced by blender_c.py (the bpy module stand-in; there is no blender binary)."""
+"""One process per file: the `xargs -P` line of docs/command_line.md for Blender as a Python module
+(`scripts/hc_smooth_bpy.py hc_smooth`; there is no blender binary here), as written, on a folder of
+generated scans."""
 
 import os
-import pathlib
-import shlex
-import subprocess
 import sys
 import time
 
 import bpy
 import pytest
 
-from blender_scene import noisy_sphere, select_only
-from blender_scene import ADDON
+from blender_scene import ADDON, noisy_sphere, select_only
+from bpy_route import ROOT, ROUTE, install_documented, run_line, user_env, workdir
 
-HERE = pathlib.Path(__file__).resolve().parent
-DOCS = HERE.parents[1] / "docs" / "command_line.md"
+DOCS = ROOT / "docs" / "command_line.md"
 SCANS = 6
 
 
 def documented_xargs_line():
-    (line,) = [line for line in DOCS.read_text().splitlines() if "| xargs -0 -P" in line]
-    assert "blender -b -c hc_smooth" in line
-    return line.replace("blender -b -c hc_smooth", f"{shlex.quote(sys.executable)} "
-                                                    f"{shlex.quote(str(HERE / 'blender_c.py'))} hc_smooth")
+    (line,) = [line for line in DOCS.read_text().splitlines() if f"| xargs -0 -P 4 -n 1 {ROUTE} hc_smooth" in line]
+    return line
 
 
 @pytest.fixture(scope="module")
 def user_folder(extension_zip, tmp_path_factory):
     """A Blender user folder with HC Smooth installed from the built zip, shared by the processes."""
-    folder = tmp_path_factory.mktemp("user")
-    completed = subprocess.run([sys.executable, str(HERE / "blender_c.py"), "--install", str(extension_zip)],
-                               env={**os.environ, "BLENDER_USER_RESOURCES": str(folder)},
-                               capture_output=True, text=True, timeout=120)
-    assert completed.returncode == 0, completed.stdout + completed.stderr
-    return folder
+    return install_documented(extension_zip, tmp_path_factory.mktemp("parallel"))
 
 
 def make_scans(folder, count=SCANS):
@@ -48,8 +38,7 @@ def make_scans(folder, count=SCANS):
 
 def run_documented_line(cwd, user_folder):
     start = time.perf_counter()
-    completed = subprocess.run(documented_xargs_line(), shell=True, cwd=cwd, capture_output=True, text=True,
-                               timeout=300, env={**os.environ, "BLENDER_USER_RESOURCES": str(user_folder)})
+    completed = run_line(documented_xargs_line(), workdir(cwd), user_env(user_folder))
     print(f"xargs -P 4 over {len(os.listdir(cwd / 'scans'))} scans: {time.perf_counter() - start:.1f} s")
     return completed
 
