@@ -1,8 +1,10 @@
 # HC Smooth: set-up, tests, demo and build. Every target installs what it needs (see scripts/setup_envs.sh).
 ENVS := bpy45 bpy52
 PY45 := .envs/bpy45/bin/python
-# Extra pytest arguments, e.g. `make test PYTEST_ARGS="-k hc -x"`.
+# Extra pytest arguments, e.g. `make test PYTEST_ARGS="-k hc -x"`; test paths among them replace `tests`
+# (`make test PYTEST_ARGS="-q tests/blender/test_examples.py"` runs that file on both Blenders).
 PYTEST_ARGS ?=
+TEST_PATHS := $(if $(filter tests%,$(PYTEST_ARGS)),,tests)
 # A hung interpreter must fail the run, not stall CI: each environment's suite gets this many seconds.
 TEST_TIMEOUT ?= 1200
 
@@ -18,7 +20,7 @@ env-bpy45 env-bpy52:
 test: envs
 	@status=0; for env in $(ENVS); do \
 	  echo "=== tests on $$env ==="; \
-	  timeout $(TEST_TIMEOUT) .envs/$$env/bin/python -m pytest -p no:cacheprovider $(PYTEST_ARGS) tests || status=1; \
+	  timeout $(TEST_TIMEOUT) .envs/$$env/bin/python -m pytest -p no:cacheprovider $(PYTEST_ARGS) $(TEST_PATHS) || status=1; \
 	done; exit $$status
 
 # Core only, with whatever python3 has NumPy, SciPy, pytest and hypothesis.
