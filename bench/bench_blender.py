@@ -98,9 +98,7 @@ def bench_closed(n_vertices, shuffle, repeats):
 
     times["object"] = median_time(hc_object, repeats, reset)
     reset()
-    props = type("Props", (), dict(method="HC", alpha=0.1, beta=0.6, iterations=ITERATIONS, mode="SIMULTANEOUS",
-                                   tolerance=0.0, vertex_group="", invert_vertex_group=False,
-                                   pin_boundary=False, output="MESH"))()
+    props = sys.modules[ADDON + ".cli.arguments"].Settings(iterations=ITERATIONS)  # the declared defaults
     (job,) = [jobs.make_job(obj, props)]
     list(jobs.run([job], props))
 

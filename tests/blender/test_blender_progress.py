@@ -19,10 +19,9 @@ def jobs_module():
 
 
 def settings(**overrides):
-    values = dict(method="HC", alpha=0.1, beta=0.6, iterations=9, mode="SIMULTANEOUS", tolerance=0.0,
-                  vertex_group="", invert_vertex_group=False, pin_boundary=False, output="MESH")
-    values.update(overrides)
-    return SimpleNamespace(**values)
+    """The operator's settings as the command line hands them over: the declared defaults, 9 iterations."""
+    settings_class = importlib.import_module(f"{ADDON}.cli.arguments").Settings
+    return settings_class(**{"iterations": 9, **overrides})
 
 
 def test_chunked_run_equals_one_call_and_reports_rising_progress(scene):
