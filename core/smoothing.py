@@ -151,6 +151,15 @@ class Smoothing:
     def finished(self):
         return self.stopped_early or self.done >= self.iterations
 
+    def steps(self, chunk=None):
+        """Advance ``chunk`` iterations at a time (all at once if None), yielding the fraction of the run
+        done after each slice, as core.pointcloud.PointCloudSmoother.steps does; then call ``result()``."""
+        while not self.finished:
+            self.advance(chunk)
+            yield 1.0 if self.finished else self.done / self.iterations
+        if not self.done:
+            yield 1.0  # nothing to run: one slice, already done
+
     def advance(self, count=None, check=True):
         """Run up to ``count`` more iterations (all that remain if None); returns how many ran.
         ``check``: raise DivergenceError now if the positions have blown up (else ``result()`` does)."""

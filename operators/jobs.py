@@ -96,24 +96,20 @@ def run(jobs, props, chunk=None):
     result is the one-slice result bit for bit.
     """
     settings = settings_of(props)
-    total = max(1, props.iterations * len(jobs))
-    done = 0
-    for job in jobs:
+    for number, job in enumerate(jobs):
         start = time.perf_counter()
         job.operator = core.umbrella_operator(job.edges, len(job.positions))
         with warnings.catch_warnings():  # the operators report the convergence region themselves
             warnings.simplefilter("ignore", core.ConvergenceWarning)
             smoothing = core.Smoothing(job.positions, None, operator=job.operator, iterations=props.iterations,
                                        fixed=job.fixed, influence=job.influence, **settings)
-        while not smoothing.finished:
-            done += smoothing.advance(chunk)
-            if not smoothing.finished:
-                yield done / total
+        for fraction in smoothing.steps(chunk):
+            if fraction < 1.0:
+                yield (number + fraction) / len(jobs)
         result = smoothing.result()
         job.result, job.iterations_run = result.positions, result.iterations
         job.seconds = time.perf_counter() - start
-        done += props.iterations - result.iterations  # iterations skipped by an early stop count as done
-        yield done / total
+        yield (number + 1) / len(jobs)
 
 
 def write(job, props):

@@ -140,14 +140,12 @@ def make_smoother(cloud, settings):
 
 def run(clouds, settings):
     """Every cloud's stages in turn; yields the fraction done and sets each cloud's result. Writes nothing."""
-    steps_per_cloud = settings.rounds + 4  # four build stages, then the rounds
-    total = steps_per_cloud * len(clouds)
     for number, cloud in enumerate(clouds):
         smoother = make_smoother(cloud, settings)
         with warnings.catch_warnings():  # the convergence region is reported once, at the end
             warnings.simplefilter("ignore", core.ConvergenceWarning)
-            for step, _ in enumerate(smoother.steps(), start=1):
-                yield (number * steps_per_cloud + step) / total
+            for fraction in smoother.steps():
+                yield (number + fraction) / len(clouds)
         cloud.result, cloud.report = smoother.result, smoother.report
 
 

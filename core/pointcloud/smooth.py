@@ -117,17 +117,18 @@ def smooth_point_cloud(
                              iterations_per_round=iterations_per_round, fixed=fixed, neighbours=neighbours,
                              spacing_factor=spacing_factor, gap_factor=gap_factor, min_quality=min_quality,
                              swap=swap)
-    for stage, done in run.steps():
-        if stage == "round" and progress is not None and progress(done, run.rounds) is False:
-            raise Cancelled(f"cancelled after {done} of {run.rounds} rounds")
+    for _ in run.steps():
+        if run.stage == "round" and progress is not None and progress(run.rounds_done, run.rounds) is False:
+            raise Cancelled(f"cancelled after {run.rounds_done} of {run.rounds} rounds")
     return (run.result, run.report) if return_mesh else run.result
 
 
 class PointCloudSmoother:
     """smooth_point_cloud in steps, for callers that interleave it with other work (a modal operator
     that shows progress and lets Esc cancel): checks everything on construction, then ``steps()``
-    yields (stage, rounds done) after each stage and round; afterwards ``result`` and ``report``
-    are set. ``alpha`` and ``iterations_per_round`` hold "auto" until the first stage has estimated
+    yields the fraction of the run done after each stage and round, as core.Smoothing.steps does
+    (``stage`` names the stage just finished, ``rounds_done`` counts the rounds); once the generator
+    is exhausted ``result`` and ``report`` are set. ``alpha`` and ``iterations_per_round`` hold "auto" until the first stage has estimated
     the noise, then the values in use. Abandoning the generator leaves the input untouched."""
 
     def __init__(self, points, *, alpha=AUTO, beta=0.55, rounds=3, iterations_per_round=AUTO, fixed=None,
@@ -155,6 +156,14 @@ class PointCloudSmoother:
         self.result = None
         self.report = None
 
+    BUILD_STAGES = ("neighbours", "emst", "sdg", "rfs")
+
+    def _finished(self, stage, rounds_done=0):
+        """Record a finished stage; the fraction of the run done (each stage and round counts one)."""
+        self.stage, self.rounds_done = stage, rounds_done
+        done = len(self.BUILD_STAGES) if stage == "round" else self.BUILD_STAGES.index(stage) + 1
+        return (done + rounds_done) / (len(self.BUILD_STAGES) + self.rounds)
+
     def steps(self):
         start, fixed_mask = self.points, self.fixed
         seconds = {}
@@ -178,18 +187,18 @@ class PointCloudSmoother:
         if self.alpha == AUTO:
             self.alpha = matched_alpha(self.rounds * self.iterations_per_round)
         lap("noise")
-        yield "neighbours", 0
+        yield self._finished("neighbours")
         tree, _ = boruvka_emst(index)
         lap("emst")
-        yield "emst", 0
+        yield self._finished("emst")
         graph = surface_description_graph(index, tree, spacing_factor=self.spacing_factor,
                                           gap_factor=self.gap_factor)
         lap("sdg")
-        yield "sdg", 0
+        yield self._finished("sdg")
         current = index.points  # float64 copy, ours to move
         mesh = rfs_mesh(current, graph.edges, min_quality=self.min_quality)
         lap("rfs")
-        yield "rfs", 0
+        yield self._finished("rfs")
         swapper = EdgeSwapper(mesh.faces, m) if self.swap and self.rounds > 1 else None
         swaps = []
         operator = None
@@ -207,7 +216,7 @@ class PointCloudSmoother:
                     mesh = RFSMesh(swapper.faces.copy(), swapper.edges)
                     operator = None  # the neighbourhoods changed
                 lap("swap")
-            yield "round", done
+            yield self._finished("round", done)
 
         result = (current[index.representative] * self.scale).astype(start.dtype)
         # Fixed and unmoved points bit-identical to the input, whatever the round trip did.

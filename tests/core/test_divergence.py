@@ -91,3 +91,10 @@ def test_tolerance_stops_at_the_same_iteration_at_any_scale(mode, scale):
     far = core.smooth(NOISY * scale, EDGES, **options)
     assert unit.stopped_early and far.stopped_early and far.iterations == unit.iterations
     assert np.array_equal(far.positions, unit.positions * scale)  # a power of two: exact
+
+
+def test_steps_yield_the_fraction_done_like_the_point_cloud_run():
+    run = core.Smoothing(NOISY, EDGES, method="hc", alpha=0.1, beta=0.6, iterations=10)
+    assert list(run.steps(4)) == [0.4, 0.8, 1.0]
+    assert np.array_equal(run.result().positions, core.hc_smooth(NOISY, EDGES, alpha=0.1, beta=0.6, iterations=10))
+    assert list(core.Smoothing(NOISY, EDGES, iterations=0).steps()) == [1.0]

@@ -124,8 +124,12 @@ def test_stepwise_run_equals_one_call_and_reports_stages():
 
     points = noisy_sphere(500, 0.01, seed=4)
     run = PointCloudSmoother(points, rounds=3)
-    stages = list(run.steps())
+    stages, fractions = [], []
+    for fraction in run.steps():
+        stages.append((run.stage, run.rounds_done))
+        fractions.append(fraction)
     assert stages == [("neighbours", 0), ("emst", 0), ("sdg", 0), ("rfs", 0), ("round", 1), ("round", 2), ("round", 3)]
+    assert fractions == [k / 7 for k in range(1, 8)]
     assert np.array_equal(run.result, core.smooth_point_cloud(points, rounds=3))
     with pytest.raises(ValueError, match="alpha"):
         PointCloudSmoother(points, alpha=2)  # checked before any work
