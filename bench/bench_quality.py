@@ -1,0 +1,532 @@
+"""Mesh smoothing quality on real scans: HC Smooth's default result against other smoothers' defaults,
+their small grids of settings, and the best result any HC setting reaches on the same input.
+
+Inputs (bench_quality_inputs.py): the sample meshes of the pymeshlab wheel (bunny, cow, bone,
+airplane), Blender's Suzanne subdivided twice (open), a cube, a thin plate and a thin torus; Gaussian
+noise of σ = 0.1 / 0.2 / 0.4 / 1 % of the bounding-box diagonal, along the clean vertex normals
+("normal") and on every coordinate ("iso"), one seed per cell.
+
+Measured per result: RMS and max distance of the vertices to the clean surface (% of the diagonal),
+volume change against the clean mesh (closed meshes; the noisy input's own is shown beside it), wall time of the smoothing call (median of
+--repeats for the rows at defaults, one run for grid rows).
+
+    python bench/bench_quality.py                                  # every mesh, noise kind and σ; peers in Python
+    python bench/bench_quality.py --blender                        # with Blender's Smooth / Laplacian Smooth modifiers
+    python bench/bench_quality.py --meshes bunny,cow --kinds normal --sigmas 0.004
+    python bench/bench_quality.py --no-grid                        # skip the HC parameter grid (faster)
+    python bench/bench_quality.py --hc 0.05,0.6,20                 # an extra fixed HC setting (alpha,beta,iterations)
+    python bench/bench_quality.py --plot docs/images/error_vs_iterations.png   # error vs iterations, one scan
+
+The report (markdown) goes to stdout and bench/results/; the raw numbers, HC grid included, to a JSON
+file beside it.
+"""
+
+import argparse
+import json
+import pathlib
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+import zlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
+import core  # noqa: E402
+import settings_spec  # noqa: E402
+import bench_quality_inputs as inputs  # noqa: E402
+import meshes  # noqa: E402
+
+SIGMAS = "0.001,0.002,0.004,0.01"
+HC_ALPHAS = (0.0, 0.01, 0.03, 0.1, 0.3)
+HC_BETAS = (0.5, 0.6, 0.75, 0.9)
+HC_CHECKPOINTS = (1, 2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30, 40, 50, 60, 80, 100, 130, 160, 200)
+GRID_SUBSET = 3000  # vertices the grid's RMS is measured on; the best candidates are re-measured on all
+GRID_GIVE_UP = 1.25  # a path of the grid stops once its error rises above this times its minimum so far
+
+
+# --- one input ----------------------------------------------------------------------------------------
+
+@dataclass
+class Case:
+    mesh: str
+    kind: str
+    sigma: float  # fraction of the diagonal
+    clean: np.ndarray
+    faces: np.ndarray
+    noisy: np.ndarray
+    edges: np.ndarray = field(init=False)
+    diagonal: float = field(init=False)
+    closed: bool = field(init=False)
+
+    def __post_init__(self):
+        self.edges = meshes.edges_from_faces(self.faces)
+        self.diagonal = inputs.diagonal(self.clean)
+        self.closed = inputs.is_closed(self.faces)
+        self.surface = inputs.Surface(self.clean, self.faces)
+        self.volume = inputs.signed_volume(self.clean, self.faces) if self.closed else None
+        self.noisy_volume = inputs.signed_volume(self.noisy, self.faces) if self.closed else None
+
+    @property
+    def key(self):
+        return f"{self.mesh}/{self.kind}/{self.sigma:g}"
+
+    def rms(self, positions, rows=None):
+        points = positions if rows is None else positions[rows]
+        return float(np.sqrt(np.mean(self.surface.distance(points) ** 2)) / self.diagonal)
+
+    def measure(self, positions):
+        distance = self.surface.distance(positions) / self.diagonal
+        volume = inputs.signed_volume(positions, self.faces) if self.closed else None
+        return {"rms": float(np.sqrt(np.mean(distance ** 2))), "max": float(distance.max()),
+                "dv": volume / self.volume - 1.0 if self.closed else None,
+                "dv_input": volume / self.noisy_volume - 1.0 if self.closed else None}
+
+
+def make_case(mesh, kind, sigma, seed):
+    clean, faces = inputs.load_mesh(mesh)
+    normals = inputs.vertex_normals(clean, faces)
+    cell_seed = zlib.crc32(f"{mesh}/{kind}/{sigma:g}".encode()) ^ seed
+    noisy = inputs.add_noise(clean, normals, sigma * inputs.diagonal(clean), kind, cell_seed)
+    return Case(mesh, kind, sigma, clean, faces, noisy)
+
+
+# --- HC Smooth ----------------------------------------------------------------------------------------
+
+def quiet(function, *args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", core.ConvergenceWarning)
+        return function(*args, **kwargs)
+
+
+def hc_default_settings():
+    """HC Smooth's mesh defaults, as the operator, the scene settings and the command line get them."""
+    return {"alpha": settings_spec.ALPHA.default, "beta": settings_spec.BETA.default,
+            "iterations": settings_spec.ITERATIONS.default}
+
+
+def hc_default(case):
+    """HC Smooth's default result: what the operator and the command line give with nothing changed."""
+    return quiet(core.hc_smooth, case.noisy, case.edges, **hc_default_settings()), hc_default_settings()
+
+
+def hc_fixed(case, params):
+    return quiet(core.hc_smooth, case.noisy, case.edges, alpha=params["alpha"], beta=params["beta"],
+                 iterations=params["iterations"])
+
+
+def hc_grid(case, seed):
+    """RMS of HC at every (alpha, beta, checkpoint) of the grid on a vertex subset, then the best few
+    re-measured on all vertices. Returns (grid (a, b, c) array, best {params, rms, max, dv})."""
+    n = len(case.noisy)
+    rows = np.sort(np.random.default_rng(seed).choice(n, min(n, GRID_SUBSET), replace=False))
+    operator = core.umbrella_operator(case.edges, n)
+    grid = np.full((len(HC_ALPHAS), len(HC_BETAS), len(HC_CHECKPOINTS)), np.nan)
+    for ia, alpha in enumerate(HC_ALPHAS):
+        for ib, beta in enumerate(HC_BETAS):
+            run = quiet(core.Smoothing, case.noisy, None, method="hc", alpha=alpha, beta=beta,
+                        iterations=HC_CHECKPOINTS[-1], operator=operator)
+            done = 0
+            for ic, checkpoint in enumerate(HC_CHECKPOINTS):
+                try:
+                    run.advance(checkpoint - done)
+                except core.DivergenceError:
+                    break
+                done = checkpoint
+                grid[ia, ib, ic] = case.rms(run.result().positions, rows)
+                path = grid[ia, ib, : ic + 1]
+                if ic >= 3 and path[-1] > GRID_GIVE_UP * path.min() and path[-1] > path[-2]:
+                    break  # past this path's minimum: the error only grows from here
+    order = np.argsort(np.nan_to_num(grid, nan=np.inf), axis=None)[:6]
+    best = None
+    for flat in order:
+        ia, ib, ic = np.unravel_index(flat, grid.shape)
+        params = {"alpha": HC_ALPHAS[ia], "beta": HC_BETAS[ib], "iterations": HC_CHECKPOINTS[ic]}
+        measured = case.measure(hc_fixed(case, params))
+        if best is None or measured["rms"] < best["rms"]:
+            best = {"params": params, **measured}
+    return grid, best
+
+
+# --- peers --------------------------------------------------------------------------------------------
+
+def _trimesh(case):
+    import trimesh
+
+    return trimesh.Trimesh(case.noisy.copy(), case.faces, process=False, validate=False)
+
+
+def trimesh_taubin(case, p):
+    import trimesh
+
+    mesh = _trimesh(case)
+    trimesh.smoothing.filter_taubin(mesh, lamb=p["lamb"], nu=p["nu"], iterations=p["iterations"])
+    return np.asarray(mesh.vertices)
+
+
+def trimesh_laplacian(case, p):
+    import trimesh
+
+    mesh = _trimesh(case)
+    trimesh.smoothing.filter_laplacian(mesh, lamb=p["lamb"], iterations=p["iterations"], volume_constraint=True)
+    return np.asarray(mesh.vertices)
+
+
+def _open3d(case):
+    import open3d as o3d
+
+    return o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(case.noisy),
+                                     o3d.utility.Vector3iVector(case.faces.astype(np.int32)))
+
+
+def open3d_taubin(case, p):
+    return np.asarray(_open3d(case).filter_smooth_taubin(number_of_iterations=p["iterations"]).vertices)
+
+
+def open3d_laplacian(case, p):
+    return np.asarray(_open3d(case).filter_smooth_laplacian(number_of_iterations=p["iterations"]).vertices)
+
+
+def _meshlab(case, filter_name, calls=1, **params):
+    import pymeshlab
+
+    meshset = pymeshlab.MeshSet()
+    meshset.add_mesh(pymeshlab.Mesh(vertex_matrix=case.noisy, face_matrix=case.faces.astype(np.int32)))
+    for _ in range(calls):
+        meshset.apply_filter(filter_name, **params)
+    out = meshset.current_mesh().vertex_matrix()
+    if out.shape != case.noisy.shape:
+        raise RuntimeError(f"MeshLab changed the vertex count ({len(case.noisy)} -> {len(out)})")
+    return out.copy()
+
+
+def meshlab_two_step(case, p):
+    return _meshlab(case, "apply_coord_two_steps_smoothing", stepsmoothnum=p["steps"])
+
+
+def meshlab_hc(case, p):
+    return _meshlab(case, "apply_coord_hc_laplacian_smoothing", calls=p["calls"])
+
+
+def laplacian_plain(case, p):
+    return core.laplacian_smooth(case.noisy, case.edges, variant="plain", iterations=p["iterations"])
+
+
+@dataclass
+class Peer:
+    name: str
+    default: dict
+    grid: list
+    run: object = None  # (case, params) -> positions; None: a Blender modifier
+    modifier: str = None
+    needs: str = None  # the module it imports
+
+    def settings(self):
+        seen, out = set(), []
+        for params in [self.default] + self.grid:
+            key = json.dumps(params, sort_keys=True)
+            if key not in seen:
+                seen.add(key)
+                out.append(params)
+        return out
+
+
+def label(params):
+    return ", ".join(f"{k} {v:g}" if isinstance(v, (int, float)) and not isinstance(v, bool) else f"{k} {v}"
+                     for k, v in params.items())
+
+
+PEERS = [
+    Peer("Laplacian (HC Smooth, 10 it.)", {"iterations": settings_spec.ITERATIONS.default},
+         [{"iterations": k} for k in (1, 2, 3, 5, 20)], laplacian_plain),
+    Peer("trimesh Laplacian (vol.)", {"lamb": 0.5, "iterations": 10},
+         [{"lamb": 0.5, "iterations": k} for k in (1, 3, 30)], trimesh_laplacian, needs="trimesh"),
+    Peer("trimesh Taubin", {"lamb": 0.5, "nu": 0.5, "iterations": 10},
+         [{"lamb": 0.5, "nu": 0.5, "iterations": k} for k in (3, 30, 100, 300)], trimesh_taubin, needs="trimesh"),
+    Peer("Open3D Laplacian", {"iterations": 1}, [{"iterations": k} for k in (3, 10, 30)], open3d_laplacian,
+         needs="open3d"),
+    Peer("Open3D Taubin", {"iterations": 1}, [{"iterations": k} for k in (3, 10, 30, 100, 300)], open3d_taubin,
+         needs="open3d"),
+    Peer("MeshLab two-step", {"steps": 3}, [{"steps": k} for k in (1, 10, 30)], meshlab_two_step, needs="pymeshlab"),
+    Peer("MeshLab HC", {"calls": 1}, [{"calls": k} for k in (3, 10, 30)], meshlab_hc, needs="pymeshlab"),
+    Peer("Blender Smooth", {}, [{"factor": f, "iterations": k} for f in (0.5, 1.0) for k in (1, 3, 10, 30)
+                                if (f, k) != (0.5, 1)], modifier="SMOOTH"),
+    Peer("Blender Laplacian Smooth", {},
+         [{"lambda_factor": f, "iterations": k} for f in (0.1, 1.0) for k in (1, 10)] + [{"iterations": 10}],
+         modifier="LAPLACIANSMOOTH"),
+]
+
+
+def available(peer):
+    if peer.needs is None:
+        return True
+    try:
+        __import__(peer.needs)
+        return True
+    except ImportError:
+        return False
+
+
+def timed(function, *args, repeats=1):
+    times, out = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        out = function(*args)
+        times.append(time.perf_counter() - start)
+    return out, statistics.median(times)
+
+
+def run_blender(cases, peers, repeats, out):
+    """Every Blender peer setting on every case, in one bpy45 process. Returns {(case key, peer, json params):
+    (positions, seconds)}."""
+    python = inputs.BPY45
+    if not python.exists():
+        out(f"Blender peers skipped: {python} is missing\n")
+        return {}
+    jobs, index = {}, []
+    for case in cases:
+        for peer in peers:
+            for params in peer.settings():
+                i = len(index)
+                jobs.update({f"vertices_{i}": case.noisy, f"faces_{i}": case.faces, f"modifier_{i}": peer.modifier,
+                             f"settings_{i}": json.dumps(params), f"repeats_{i}": repeats if params == peer.default else 1})
+                index.append((case.key, peer.name, json.dumps(params, sort_keys=True)))
+    with tempfile.TemporaryDirectory() as folder:
+        job_file, result_file = pathlib.Path(folder, "jobs.npz"), pathlib.Path(folder, "results.npz")
+        np.savez(job_file, count=len(index), **jobs)
+        subprocess.run([str(python), str(ROOT / "bench" / "bench_quality_blender.py"), str(job_file), str(result_file)],
+                       check=True, timeout=3600)
+        results = np.load(result_file)
+        return {key: (results[f"positions_{i}"], float(results[f"seconds_{i}"])) for i, key in enumerate(index)}
+
+
+# --- report -------------------------------------------------------------------------------------------
+
+def pct(value, digits=3):
+    return "–" if value is None else f"{100 * value:.{digits}f}"
+
+
+def signed_pct(value):
+    return "–" if value is None else f"{100 * value:+.2f}"
+
+
+def quality(args, out, record):
+    cases = [make_case(m, k, s, args.seed) for m in inputs.parse_list(args.meshes)
+             for k in inputs.parse_list(args.kinds) for s in inputs.parse_list(args.sigmas, float)]
+    peers = [p for p in PEERS if (p.modifier is None or args.blender) and available(p)]
+    if args.no_peers:
+        peers = []
+    missing = [p.name for p in PEERS if p.modifier is None and not available(p)]
+    blender = run_blender(cases, [p for p in peers if p.modifier], args.repeats, out) if args.blender else {}
+    peers = [p for p in peers if p.modifier is None or blender]
+    extra = None
+    if args.hc:
+        a, b, k = args.hc.split(",")
+        extra = {"alpha": float(a), "beta": float(b), "iterations": int(k)}
+
+    out("## Mesh smoothing quality on real scans\n")
+    out(f"Load average at start: {' '.join(f'{x:.2f}' for x in __import__('os').getloadavg())}. "
+        + (f"Not installed: {', '.join(missing)}. " if missing else "")
+        + ("" if args.blender else "Blender's modifiers not run (add --blender). "))
+    out("RMS distance to the clean surface, % of the bounding-box diagonal (lower is better).\n")
+    columns = ["HC Smooth default", "best HC"] + [p.name for p in peers] + (["HC " + label(extra)] if extra else [])
+    out("| mesh | noise | σ | input | " + " | ".join(columns) + " | default / best HC | best peer default |")
+    out("|---" * (len(columns) + 6) + "|")
+    volume_rows, peer_best_rows, time_rows = [], [], []
+    for case in cases:
+        cell = {"mesh": case.mesh, "kind": case.kind, "sigma": case.sigma, "vertices": len(case.noisy),
+                "closed": case.closed, "edge_over_diagonal": inputs.mean_edge_length(case.clean, case.faces) / case.diagonal,
+                "input": case.measure(case.noisy), "methods": {}}
+        (ours, chosen), seconds = timed(hc_default, case, repeats=args.repeats)
+        cell["methods"]["HC Smooth default"] = {"params": chosen, **case.measure(ours), "seconds": seconds}
+        if not args.no_grid:
+            grid, best = hc_grid(case, zlib.crc32(case.key.encode()))
+            cell["hc_grid"] = {"alphas": HC_ALPHAS, "betas": HC_BETAS, "iterations": HC_CHECKPOINTS,
+                               "rms_on_subset": grid.tolist()}
+            cell["methods"]["best HC"] = best
+        if extra:
+            result, seconds = timed(hc_fixed, case, extra)
+            cell["methods"]["HC " + label(extra)] = {"params": extra, **case.measure(result), "seconds": seconds}
+        for peer in peers:
+            runs = []
+            for params in peer.settings():
+                is_default = params == peer.default
+                try:
+                    if peer.modifier:
+                        result, seconds = blender[(case.key, peer.name, json.dumps(params, sort_keys=True))]
+                    else:
+                        result, seconds = timed(peer.run, case, params, repeats=args.repeats if is_default else 1)
+                    measured = case.measure(result)
+                except Exception as error:  # a peer failing is a result too
+                    measured, seconds = {"rms": None, "max": None, "dv": None, "error": f"{type(error).__name__}: {error}"}, None
+                runs.append({"params": params, "default": is_default, **measured, "seconds": seconds})
+            cell["methods"][peer.name] = runs[0]
+            cell.setdefault("peer_grids", {})[peer.name] = runs
+        record.append(cell)
+
+        m = cell["methods"]
+        ours_rms = m["HC Smooth default"]["rms"]
+        best = m.get("best HC")
+        peer_defaults = {p.name: m[p.name]["rms"] for p in peers if m[p.name]["rms"] is not None}
+        best_peer = min(peer_defaults, key=peer_defaults.get) if peer_defaults else None
+        cells = [pct(ours_rms), f"{pct(best['rms'])} ({label(best['params'])})" if best else "–"]
+        cells += [pct(m[p.name]["rms"]) for p in peers]
+        if extra:
+            cells.append(pct(m["HC " + label(extra)]["rms"]))
+        ratio = f"{ours_rms / best['rms']:.2f}" if best else "–"
+        verdict = "–"
+        if best_peer:
+            won = ours_rms < peer_defaults[best_peer]
+            verdict = f"{'won' if won else '**LOST**'} ({best_peer} {pct(peer_defaults[best_peer])})"
+        out(f"| {case.mesh} | {case.kind} | {case.sigma:.1%} | {pct(cell['input']['rms'])} | " + " | ".join(cells)
+            + f" | {ratio} | {verdict} |")
+        volume_rows.append((case, [m[c]["dv"] if c in m and m[c].get("dv") is not None else None for c in columns],
+                            [m[c]["max"] if c in m and m[c].get("max") is not None else None for c in columns]))
+        peer_best_rows.append((case, cell))
+        time_rows.append((case, [m[c].get("seconds") if c in m else None for c in columns]))
+
+    out("\nVolume change against the clean mesh, % (closed meshes; Suzanne is open). Noise along the normals "
+        "inflates thin, curved parts, so the noisy input's own change is shown:\n")
+    out("| mesh | noise | σ | input | " + " | ".join(columns) + " |")
+    out("|---" * (len(columns) + 4) + "|")
+    for (case, volumes, _), cell in zip(volume_rows, record[-len(volume_rows):]):
+        if case.closed:
+            out(f"| {case.mesh} | {case.kind} | {case.sigma:.1%} | {signed_pct(cell['input']['dv'])} | "
+                + " | ".join(signed_pct(v) for v in volumes) + " |")
+    out("\nMax distance to the clean surface, % of the diagonal:\n")
+    out("| mesh | noise | σ | input | " + " | ".join(columns) + " |")
+    out("|---" * (len(columns) + 4) + "|")
+    for (case, _, maxima), cell in zip(volume_rows, record[-len(volume_rows):]):
+        out(f"| {case.mesh} | {case.kind} | {case.sigma:.1%} | {pct(cell['input']['max'], 2)} | "
+            + " | ".join(pct(v, 2) for v in maxima) + " |")
+    if peers:
+        out("\nPeers at the best setting of their grid (RMS, setting; the grids are in the JSON file):\n")
+        out("| mesh | noise | σ | " + " | ".join(p.name for p in peers) + " |")
+        out("|---" * (len(peers) + 3) + "|")
+        for case, cell in peer_best_rows:
+            texts = []
+            for peer in peers:
+                runs = [r for r in cell["peer_grids"][peer.name] if r["rms"] is not None]
+                best_run = min(runs, key=lambda r: r["rms"]) if runs else None
+                texts.append(f"{pct(best_run['rms'])} ({label(best_run['params']) or 'defaults'})" if best_run else "failed")
+            out(f"| {case.mesh} | {case.kind} | {case.sigma:.1%} | " + " | ".join(texts) + " |")
+    out(f"\nTime of the smoothing call, s (median of {args.repeats} at defaults; best HC: not timed):\n")
+    out("| mesh | vertices | noise | σ | " + " | ".join(columns) + " |")
+    out("|---" * (len(columns) + 4) + "|")
+    for case, seconds in time_rows:
+        out(f"| {case.mesh} | {len(case.noisy)} | {case.kind} | {case.sigma:.1%} | "
+            + " | ".join("–" if s is None else f"{s:.3f}" for s in seconds) + " |")
+    if not args.no_grid and record:
+        ratios = [c["methods"]["HC Smooth default"]["rms"] / c["methods"]["best HC"]["rms"] for c in record]
+        out(f"\nHC Smooth default / best HC: median {np.median(ratios):.2f}, worst {max(ratios):.2f} "
+            f"({sum(r <= 1.1 for r in ratios)} of {len(ratios)} cells within 10 %).")
+    if peers and record:
+        lost = [c for c in record if any(
+            r["rms"] is not None and r["default"] and r["rms"] <= c["methods"]["HC Smooth default"]["rms"]
+            for runs in c["peer_grids"].values() for r in runs)]
+        out(f"Cells where a peer's default beat HC Smooth's default: {len(lost)} of {len(record)}.")
+    dvs = [(abs(c["methods"]["HC Smooth default"]["dv"]), abs(c["methods"]["HC Smooth default"]["dv_input"]))
+           for c in record if c["closed"]]
+    if dvs:
+        out(f"Largest |ΔV| of HC Smooth's default on closed meshes: {100 * max(d[0] for d in dvs):.2f} % against "
+            f"the clean mesh, {100 * max(d[1] for d in dvs):.2f} % against the noisy input.")
+
+
+# --- error versus iterations --------------------------------------------------------------------------
+
+def plot(args, out):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    mesh, kind, sigma = args.plot_case.split("/")
+    case = make_case(mesh, kind, float(sigma), args.seed)
+    steps = np.unique(np.round(np.geomspace(1, args.plot_iterations, 40)).astype(int))
+    defaults = hc_default_settings()
+    curves = {}
+
+    def follow(name, method, **params):
+        run = quiet(core.Smoothing, case.noisy, case.edges, method=method, iterations=int(steps[-1]), **params)
+        done, values = 0, []
+        for k in steps:
+            run.advance(int(k) - done)
+            done = int(k)
+            values.append(case.rms(run.result().positions))
+        curves[name] = (steps, np.array(values))
+
+    follow(f"HC (α {defaults['alpha']:g}, β {defaults['beta']:g})", "hc", alpha=defaults["alpha"], beta=defaults["beta"])
+    follow("HC (α 0, β 0.6)", "hc", alpha=0.0, beta=0.6)
+    follow("Laplacian (paper 3.1)", "plain")
+    try:
+        values = [case.rms(trimesh_taubin(case, {"lamb": 0.5, "nu": 0.5, "iterations": int(k)})) for k in steps]
+        curves["Taubin λ|μ (trimesh, λ 0.5, ν 0.5)"] = (steps, np.array(values))
+    except ImportError:
+        out("trimesh is not installed: no Taubin curve")
+    figure, axes = plt.subplots(figsize=(7.5, 4.6), dpi=130)
+    styles = {"HC (α": ("#c0392b", "-"), "HC (α 0": ("#e67e22", "--"), "Laplacian": ("#2c3e50", "-"),
+              "Taubin": ("#2980b9", "-.")}
+    for name, (x, y) in curves.items():
+        colour, line = next(v for k, v in sorted(styles.items(), key=lambda kv: -len(kv[0])) if name.startswith(k))
+        axes.plot(x, 100 * y, line, color=colour, lw=2, label=name)
+    axes.axhline(100 * case.rms(case.noisy), color="grey", lw=1, ls=":", label="noisy input")
+    axes.set_xscale("log")
+    axes.set_yscale("log")
+    axes.set_xlabel("iterations")
+    axes.set_ylabel("RMS distance to the clean scan (% of diagonal)")
+    axes.set_title(f"{case.mesh} ({len(case.noisy):,} vertices), noise σ = {case.sigma:.1%} of the diagonal "
+                   f"{'along the normals' if case.kind == 'normal' else 'per coordinate'}", fontsize=10)
+    axes.grid(True, which="both", alpha=0.3)
+    axes.legend(fontsize=9)
+    figure.tight_layout()
+    path = ROOT / args.plot if not pathlib.Path(args.plot).is_absolute() else pathlib.Path(args.plot)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path)
+    out(f"| iterations | " + " | ".join(curves) + " |")
+    out("|---" * (len(curves) + 1) + "|")
+    for i, k in enumerate(steps):
+        out(f"| {k} | " + " | ".join(pct(y[i]) for _, y in curves.values()) + " |")
+    out(f"\nwritten {path}")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--meshes", default=",".join(inputs.ALL_MESHES))
+    parser.add_argument("--kinds", default="normal,iso", help="noise along the normals and/or isotropic")
+    parser.add_argument("--sigmas", default=SIGMAS, help="noise, fractions of the bounding-box diagonal")
+    parser.add_argument("--blender", action="store_true", help="also run Blender's modifiers (in .envs/bpy45)")
+    parser.add_argument("--no-grid", action="store_true", help="skip the HC parameter grid")
+    parser.add_argument("--no-peers", action="store_true")
+    parser.add_argument("--hc", default="", help="an extra HC setting alpha,beta,iterations")
+    parser.add_argument("--repeats", type=int, default=3, help="timing runs at defaults (median)")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--plot", default="", help="write the error-vs-iterations figure here instead")
+    parser.add_argument("--plot-case", default="bunny/normal/0.004", help="mesh/kind/sigma of the figure")
+    parser.add_argument("--plot-iterations", type=int, default=300)
+    args = parser.parse_args()
+    results = ROOT / "bench" / "results"
+    results.mkdir(exist_ok=True)
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    report = results / f"bench_quality-{stamp}.md"
+    record = []
+    with report.open("w") as handle:
+        def out(line):
+            print(line, flush=True)
+            handle.write(line + "\n")
+        out(f"`{' '.join(['bench/bench_quality.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
+        if args.plot:
+            plot(args, out)
+        else:
+            quality(args, out, record)
+    if record:
+        (results / f"bench_quality-{stamp}.json").write_text(json.dumps(record))
+    print(f"\n(written to {report})")
+
+
+if __name__ == "__main__":
+    main()
