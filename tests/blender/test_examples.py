@@ -156,7 +156,7 @@ def test_core_example_keeps_volume_better_than_laplacian(scene, monkeypatch, cap
     assert abs(change["HC"]) * 5 < abs(change["Laplacian"])
 
 
-def test_batch_example_runs_the_command(scene, monkeypatch, capsys, tmp_path):
+def test_batch_example_runs_the_command_in_process(scene, monkeypatch, capsys, tmp_path):
     noisy_sphere()
     bpy.ops.wm.stl_export(filepath=str(tmp_path / "scan.stl"))
     run_example("batch_from_script.py", monkeypatch, str(tmp_path / "scan.stl"), "-o", str(tmp_path / "out"))
