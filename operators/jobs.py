@@ -144,6 +144,6 @@ def summary(jobs, props):
     iterations = max((job.iterations_run for job in jobs), default=0)
     seconds = sum(job.seconds for job in jobs)
     where = " (new shape key)" if props.output == "SHAPE_KEY" else ""
-    names = f"{len(jobs)} meshes" if len(jobs) > 1 else f"'{jobs[0].mesh.name}'"
+    names = f"{len(jobs)} objects" if len(jobs) > 1 else f"'{jobs[0].obj.name}'"  # what the user selected
     return (f"{METHOD_LABEL[props.method]} on {names}{where}: {iterations} iterations, {moved} vertices moved, "
             f"{seconds:.2f} s, " + ", ".join(changes))

@@ -192,7 +192,7 @@ def summary(clouds, settings):
     points = sum(len(c.positions) for c in clouds)
     seconds = sum(sum(c.report.seconds.values()) for c in clouds)
     still = sum(c.report.isolated for c in clouds)
-    names = f"{len(clouds)} objects" if len(clouds) > 1 else f"'{clouds[0].data.name}'"
+    names = f"{len(clouds)} objects" if len(clouds) > 1 else f"'{clouds[0].obj.name}'"  # what the user selected
 
     def described(report):
         automatic = report.noise is not None and settings.auto_amount

@@ -194,3 +194,17 @@ def test_point_clouds_move_keys_relative_to_the_smoothed_key(scene):
     assert np.abs(displacement).max() > 1e-3
     np.testing.assert_allclose(key_positions(lift) - before["Lift"], displacement, atol=1e-6)
     assert np.array_equal(positions_of(obj.data), key_positions(basis))
+
+
+def test_status_lines_name_the_object_the_user_selected(scene, capfd):
+    obj = noisy_sphere()
+    obj.name, obj.data.name = "Scan", "Icosphere"
+    assert bpy.ops.object.hc_smooth(iterations=2) == {"FINISHED"}
+    assert "HC on 'Scan': 2 iterations" in capfd.readouterr().out
+    rng = np.random.default_rng(1)
+    points = rng.normal(size=(600, 3))
+    cloud = make_mesh_object("Points.001", points / np.linalg.norm(points, axis=1, keepdims=True))
+    cloud.name = "Cloud"
+    select_only(cloud)
+    assert bpy.ops.object.hc_smooth_points() == {"FINISHED"}
+    assert "HC Smooth Points on 'Cloud':" in capfd.readouterr().out
