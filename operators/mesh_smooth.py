@@ -65,15 +65,20 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
                 self.report({"WARNING"}, message)
 
     def execute(self, context):
+        return self._run_now(context)
+
+    def _run_now(self, context, jobs=None):
+        """Prepare (unless ``jobs`` are), smooth every job in one go, write and report. On any error
+        nothing is written and the mode is restored; bugs go on to Blender with their traceback."""
         try:
-            jobs = self.prepare(context)
+            jobs = self.prepare(context) if jobs is None else jobs
             for _ in jobs_module.run(jobs, self):
                 pass
-        except (InputError, ValueError) as error:  # bad input, or a run that blew up: nothing written
+        except (InputError, ValueError) as error:  # bad input, or a run that blew up
             self.abandon(context)
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        except Exception:  # a bug: back to the mode the user was in, then Blender shows the traceback
+        except Exception:
             self.abandon(context)
             raise
         self.finish(context, jobs)
@@ -88,28 +93,15 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
             return self.execute(context)
         try:
             self._jobs = self.prepare(context)
-        except InputError as error:
+        except (InputError, ValueError) as error:
             self.abandon(context)
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         work = sum(len(job.positions) for job in self._jobs) * self.iterations
         if work < MODAL_WORK:
-            return self._finish_now(context)
+            return self._run_now(context, self._jobs)
         chunk = max(1, int(MODAL_WORK // max(1, work // max(1, self.iterations))))
         return self.start_modal(context, jobs_module.run(self._jobs, self, chunk=chunk))
-
-    def _finish_now(self, context):
-        try:
-            for _ in jobs_module.run(self._jobs, self):
-                pass
-        except ValueError as error:
-            self.abandon(context)
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        except Exception:
-            self.abandon(context)
-            raise
-        return self.modal_finish(context)
 
     def modal_finish(self, context):
         self.finish(context, self._jobs)
