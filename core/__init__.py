@@ -8,6 +8,7 @@ from . import metrics, topology
 from .adjacency import Umbrella, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, in_convergence_region
 from .metrics import Change, measure_change
+from .noise import MeshAmount, choose_amount
 from .pointcloud import smooth_point_cloud
 from .smoothing import METHODS, MODES, Cancelled, Smoothing, SmoothResult, hc_smooth, laplacian_smooth, smooth
 
@@ -17,11 +18,13 @@ __all__ = [
     "Change",
     "ConvergenceWarning",
     "DivergenceError",
+    "MeshAmount",
     "METHODS",
     "MODES",
     "SmoothResult",
     "Smoothing",
     "Umbrella",
+    "choose_amount",
     "convergence_message",
     "hc_smooth",
     "in_convergence_region",

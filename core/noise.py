@@ -1,0 +1,219 @@
+"""How much should a noisy mesh be smoothed? (the Automatic Amount for meshes)
+
+With alpha = 0, k HC iterations are a linear filter of the input: every coordinate goes through the
+same matrix S_k, a polynomial in the umbrella operator T (paper section 5). Too few iterations leave
+noise, too many flatten the shape; the best k depends on the noise, the edge lengths and the shape's
+detail. It is chosen here from the mesh alone, by generalized cross-validation (GCV) along one HC run:
+
+* **Residual**: R(k) = mean over sample vertices of ((y_i - x_i(k)) . n_i)^2, the part of what the
+  smoothing removed that lies along the surface normal n_i (y the input, x(k) the result after k
+  iterations). Only the normal part: scan noise moves points off the surface, and a move along the
+  surface changes neither the shape nor its distance to the truth. The normals are the smallest PCA
+  axis of each sample vertex's 1-ring, taken on the state that minimizes the GCV of the whole
+  residual (all three coordinates), so that they belong to a smoothed surface, not to the noise.
+* **Degrees of freedom**: t(k) = tr(S_k) / n, estimated without forming S_k (Hutchinson): random
+  +-1 vectors z go through the same HC iterations, and t = mean of z . S_k z / n.
+* **GCV(k) = R(k) / (1 - t(k))^2** estimates the noise variance plus the error that is left, up to a
+  constant, without knowing the noise; its minimum is the amount that leaves the least error. GCV
+  is flat near its minimum, and flat in k where its resolution ends (a few iterations on lightly
+  noisy meshes with sharp edges): the amount chosen is the largest k whose GCV is within
+  ``TOLERANCE`` of the minimum, i.e. the most smoothing the estimate cannot tell from the best.
+* The square root of the minimum GCV is the noise estimate (standard deviation along the normals).
+
+The run stops once it is well past the chosen amount. Everything is deterministic (fixed probes,
+evenly spaced sample vertices), independent of the coordinates' scale, position and orientation.
+"""
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from .adjacency import Umbrella, umbrella_operator
+from .convergence import ConvergenceWarning, DivergenceError
+from .smoothing import Smoothing
+from .validation import check_fixed, check_positions, check_unit_interval
+
+TOLERANCE = 0.005  # GCV within this fraction of its minimum counts as the minimum (see above)
+MAX_ITERATIONS = 200  # the most the automatic amount chooses: bounds the cost on heavy noise and fine meshes
+SAMPLE_VERTICES = 4096  # vertices the residual and normals are measured on
+PROBE_ENTRIES = 60_000  # +-1 probe entries (vertices x probes) for the trace: at least 3 probes, at most 24
+_MIN_NEIGHBOURS = 3  # a 1-ring needs three points to define a plane
+_SEED = 20_161_999  # the probes' seed: fixed, so the choice is reproducible
+
+
+@dataclass(frozen=True)
+class MeshAmount:
+    """The amount of HC smoothing chosen for a mesh, and the estimate behind it."""
+
+    alpha: float
+    beta: float
+    iterations: int
+    sigma: float  # estimated noise, standard deviation along the normals (the positions' units)
+    edge_length: float  # median edge length of the input
+    explored: int  # iterations the estimate ran
+
+    @property
+    def ratio(self):
+        """Noise over edge length."""
+        return self.sigma / self.edge_length if self.edge_length > 0 else 0.0
+
+
+def _checkpoints(limit):
+    """Every iteration up to 12, then steps of ~15 %."""
+    k = 1
+    while k <= limit:
+        yield k
+        k = k + 1 if k < 12 else int(round(k * 1.15))
+
+
+def _ring_normals(points, rows, operator):
+    """Unit normals at ``rows``: the smallest PCA axis of each row's neighbours in ``points``."""
+    owner, neighbour = _neighbours(rows, operator)
+    ring = points[neighbour]
+    centre = np.zeros((rows.size, 3))
+    np.add.at(centre, owner, ring)
+    centre /= operator.degree[rows][:, None]
+    spread = ring - centre[owner]
+    covariance = np.zeros((rows.size, 3, 3))
+    np.add.at(covariance, owner, spread[:, :, None] * spread[:, None, :])
+    return np.linalg.eigh(covariance)[1][:, :, 0]
+
+
+class _Run:
+    """An HC run (alpha = 0) whose state can be read at a few vertices, in the caller's vertex order."""
+
+    def __init__(self, positions, operator, fixed, beta):
+        self.smoothing = Smoothing(positions, None, method="hc", alpha=0.0, beta=beta, iterations=MAX_ITERATIONS,
+                                   fixed=fixed, operator=operator)
+        self.order = self.smoothing.order  # None, or the cache-friendly vertex order the run works in
+        self.position_of = None
+        if self.order is not None:
+            self.position_of = np.empty_like(self.order)
+            self.position_of[self.order] = np.arange(self.order.size)
+
+    def advance(self, count):
+        self.smoothing.advance(count)
+
+    def planar(self):
+        """The current state, (3, n), in the run's own vertex order."""
+        return self.smoothing.current
+
+    def at(self, rows):
+        index = rows if self.position_of is None else self.position_of[rows]
+        return np.asarray(self.smoothing.current[:, index].T, dtype=np.float64)
+
+
+def choose_amount(positions, edges=None, *, beta=0.6, fixed=None, operator=None):
+    """The HC amount (alpha, iterations) for a noisy mesh at the given beta: see the module docstring.
+
+    ``positions`` (n, 3), ``edges`` (m, 2) as for ``hc_smooth`` (or a prebuilt ``operator``), ``fixed``
+    the vertices that never move. Returns a MeshAmount with alpha = 0 and the iterations chosen; a mesh
+    with nothing to smooth gets 0 iterations.
+    """
+    start = check_positions(positions)
+    beta = check_unit_interval(beta, "beta")
+    n = start.shape[0]
+    if operator is None:
+        operator = umbrella_operator(edges, n)
+    elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
+        raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
+    fixed_mask = check_fixed(fixed, n) | operator.isolated
+    movable = np.flatnonzero(~fixed_mask)
+    edge_length = _median_edge_length(start, operator)
+    if movable.size == 0:
+        return MeshAmount(0.0, beta, 0, 0.0, edge_length, 0)
+
+    surface_rows = movable[operator.degree[movable] >= _MIN_NEIGHBOURS]
+    use_normals = surface_rows.size >= 8  # else (lines, tiny meshes): the whole residual
+    candidates = surface_rows if use_normals else movable
+    rows = candidates[np.unique(np.linspace(0, candidates.size - 1, min(candidates.size, SAMPLE_VERTICES))
+                                .round().astype(np.int64))]
+    y = np.asarray(start[rows], dtype=np.float64)
+
+    probe_count = int(min(24, max(3, 3 * math.ceil(PROBE_ENTRIES / (3 * movable.size)))))
+    probes = np.random.default_rng(_SEED).choice(np.array([-1.0, 1.0], start.dtype), size=(n, probe_count))
+    probes[fixed_mask] = 0.0  # the trace over the movable vertices only
+    with warnings.catch_warnings():  # alpha = 0 lies outside Theorem 5.2's region: on purpose, see above
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        runs = [_Run(probes[:, i:i + 3], operator, fixed_mask, beta) for i in range(0, probe_count, 3)]
+        data = _Run(start, operator, fixed_mask, beta)
+    # Each probe block as its run holds it: (3, n), in the run's vertex order.
+    planar_probes = [np.ascontiguousarray((probes[:, i:i + 3] if run.order is None else probes[run.order, i:i + 3]).T)
+                     for i, run in zip(range(0, probe_count, 3), runs)]
+
+    ring = _ring_of(rows, operator) if use_normals else None
+    points = np.zeros((n, 3)) if use_normals else None  # the state at ``ring``, for the normals
+    done = 0
+    steps, traces, residuals = [], [], []
+    best_whole, normals = math.inf, None
+    for k in _checkpoints(MAX_ITERATIONS):
+        try:
+            data.advance(k - done)
+            for run in runs:
+                run.advance(k - done)
+        except DivergenceError:
+            break
+        done = k
+        trace = sum(float(np.einsum("ij,ij->", run.planar(), planar)) for run, planar in zip(runs, planar_probes))
+        t = min(trace / (probe_count * movable.size), 0.999)
+        state = data.at(rows)
+        residual = y - state
+        steps.append(k)
+        traces.append(t)
+        residuals.append(residual)
+        whole = float(np.einsum("ij,ij->", residual, residual)) / (rows.size * (1.0 - t) ** 2)
+        if use_normals and whole < best_whole:
+            best_whole = whole
+            points[ring] = data.at(ring)
+            normals = _ring_normals(points, rows, operator)
+        score = _scores(residuals, traces, normals)
+        chosen = _chosen(steps, score)
+        if k >= 12 and k >= 1.5 * chosen and k >= 1.25 * steps[int(np.argmin(_scores(residuals, traces, None)))]:
+            break  # well past the amount chosen
+    if not steps:  # diverged at once (beta far below 0.5): no amount is safe
+        return MeshAmount(0.0, beta, 0, 0.0, edge_length, 0)
+    score = _scores(residuals, traces, normals)
+    chosen = _chosen(steps, score)
+    sigma = math.sqrt(max(float(score.min()), 0.0)) if use_normals else math.sqrt(max(float(score.min()), 0.0) / 3)
+    return MeshAmount(0.0, beta, int(chosen), sigma, edge_length, int(done))
+
+
+def _neighbours(rows, operator):
+    """(owner, neighbour): every neighbour of every row, owner the row's place in ``rows``."""
+    starts, counts = operator.indptr[rows], operator.degree[rows]
+    owner = np.repeat(np.arange(rows.size), counts)
+    offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    return owner, operator.indices[np.repeat(starts, counts) + offsets]
+
+
+def _ring_of(rows, operator):
+    """The neighbours of ``rows``, each once."""
+    return np.unique(_neighbours(rows, operator)[1])
+
+
+def _scores(residuals, traces, normals):
+    """GCV at every step so far: of the normal part of the residual, or (normals None) of all of it."""
+    residual = np.asarray(residuals)  # (steps, rows, 3)
+    if normals is None:
+        squares = np.einsum("sij,sij->s", residual, residual) / residual.shape[1]
+    else:
+        along = np.einsum("sij,ij->si", residual, normals)
+        squares = np.einsum("si,si->s", along, along) / residual.shape[1]
+    return squares / (1.0 - np.asarray(traces)) ** 2
+
+
+def _chosen(steps, score):
+    """The largest step whose score is within TOLERANCE of the minimum."""
+    within = np.flatnonzero(score <= (1.0 + TOLERANCE) * score.min())
+    return steps[int(within.max())]
+
+
+def _median_edge_length(points, operator):
+    rows = np.repeat(np.arange(operator.n_vertices), operator.degree)
+    upper = operator.indices > rows
+    if not upper.any():
+        return 0.0
+    difference = np.asarray(points[rows[upper]], np.float64) - np.asarray(points[operator.indices[upper]], np.float64)
+    return float(np.median(np.sqrt(np.einsum("ij,ij->i", difference, difference))))

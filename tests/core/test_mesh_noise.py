@@ -1,0 +1,171 @@
+"""core.choose_amount: the Automatic Amount for meshes (core/noise.py)."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import core
+from core import noise
+
+
+def icosphere(level):
+    t = (1.0 + 5.0 ** 0.5) / 2.0
+    vertices = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
+                         [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
+    faces = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
+                      [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
+                      [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]])
+    vertices /= np.linalg.norm(vertices, axis=1, keepdims=True)
+    for _ in range(level):
+        n = len(vertices)
+        corners = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+        keys = corners.min(axis=1) * n + corners.max(axis=1)
+        unique, inverse = np.unique(keys, return_inverse=True)
+        middle = (vertices[unique // n] + vertices[unique % n]) / 2.0
+        vertices = np.concatenate([vertices, middle / np.linalg.norm(middle, axis=1, keepdims=True)])
+        ab, bc, ca = (n + inverse.reshape(-1, 3)).T
+        a, b, c = faces.T
+        faces = np.concatenate([np.stack(f, -1) for f in ([a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca])])
+    return vertices, faces
+
+
+def edges_of(faces):
+    pairs = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    return np.unique(pairs, axis=0)
+
+
+def bumpy_sphere(level=4):
+    """A unit sphere with bumps a few edges wide: detail that too much smoothing removes."""
+    vertices, faces = icosphere(level)
+    radius = 1.0 + 0.08 * np.sin(6 * vertices[:, 0]) * np.sin(6 * vertices[:, 1]) * np.sin(6 * vertices[:, 2])
+    return vertices * radius[:, None], faces
+
+
+def edge_length(vertices, edges):
+    return float(np.median(np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)))
+
+
+def with_normal_noise(vertices, ratio, edges, seed=0):
+    """Gaussian noise along the radial direction, ``ratio`` times the median edge length."""
+    normals = vertices / np.linalg.norm(vertices, axis=1, keepdims=True)
+    sigma = ratio * edge_length(vertices, edges)
+    return vertices + normals * np.random.default_rng(seed).normal(0.0, sigma, (len(vertices), 1)), sigma
+
+
+def surface_error(points, vertices):
+    """RMS distance of ``points`` to the bumpy sphere through ``vertices``, approximated radially."""
+    direction = points / np.linalg.norm(points, axis=1, keepdims=True)
+    true_radius = 1.0 + 0.08 * np.sin(6 * direction[:, 0]) * np.sin(6 * direction[:, 1]) * np.sin(6 * direction[:, 2])
+    return float(np.sqrt(np.mean((np.linalg.norm(points, axis=1) - true_radius) ** 2)))
+
+
+@pytest.mark.parametrize("ratio", [0.2, 0.5, 1.0])
+def test_noise_estimate_recovers_the_true_noise(ratio):
+    """The noise estimate is within 15 % of the true standard deviation along the normals."""
+    vertices, faces = icosphere(4)
+    edges = edges_of(faces)
+    noisy, sigma = with_normal_noise(vertices, ratio, edges)
+    amount = core.choose_amount(noisy, edges)
+    assert 0.85 < amount.sigma / sigma < 1.15
+    assert amount.alpha == 0.0 and amount.beta == 0.6
+    assert 1 <= amount.iterations <= noise.MAX_ITERATIONS
+
+
+def test_more_noise_more_iterations():
+    vertices, faces = bumpy_sphere()
+    edges = edges_of(faces)
+    chosen = [core.choose_amount(with_normal_noise(vertices, ratio, edges)[0], edges).iterations
+              for ratio in (0.05, 0.2, 0.8)]
+    assert chosen[0] < chosen[1] < chosen[2]
+
+
+@pytest.mark.parametrize("ratio", [0.05, 0.2, 0.8])
+def test_chosen_amount_is_near_the_best_number_of_iterations(ratio):
+    """Within 10 % of the least error any number of iterations (alpha 0, beta 0.6) reaches, and better
+    than the fixed amount alpha 0.1, 10 iterations."""
+    vertices, faces = bumpy_sphere()
+    edges = edges_of(faces)
+    noisy, _ = with_normal_noise(vertices, ratio, edges, seed=3)
+    amount = core.choose_amount(noisy, edges)
+    operator = core.umbrella_operator(edges, len(noisy))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", core.ConvergenceWarning)
+        run = core.Smoothing(noisy, None, alpha=0.0, beta=0.6, iterations=200, operator=operator)
+        errors = []
+        for _ in range(200):
+            run.advance(1)
+            errors.append(surface_error(run.result().positions, vertices))
+    chosen = errors[amount.iterations - 1]
+    fixed = surface_error(core.hc_smooth(noisy, edges, alpha=0.1, beta=0.6, iterations=10), vertices)
+    assert chosen <= 1.1 * min(errors)
+    assert chosen < fixed or ratio < 0.1  # at very light noise both leave about the same
+
+
+def test_scale_position_and_orientation_do_not_change_the_choice():
+    vertices, faces = bumpy_sphere(3)
+    edges = edges_of(faces)
+    noisy, _ = with_normal_noise(vertices, 0.4, edges)
+    reference = core.choose_amount(noisy, edges)
+    rotation, _ = np.linalg.qr(np.random.default_rng(5).normal(size=(3, 3)))
+    for scale in (1e-4, 1e5):
+        moved = noisy @ rotation.T * scale + np.array([3.0, -7.0, 11.0]) * scale
+        amount = core.choose_amount(moved, edges)
+        assert amount.iterations == reference.iterations
+        assert amount.sigma == pytest.approx(reference.sigma * scale, rel=1e-6)
+        assert amount.edge_length == pytest.approx(reference.edge_length * scale, rel=1e-9)
+
+
+def test_deterministic_and_input_untouched():
+    vertices, faces = bumpy_sphere(3)
+    edges = edges_of(faces)
+    noisy, _ = with_normal_noise(vertices, 0.3, edges)
+    noisy32 = noisy.astype(np.float32)
+    copy = noisy32.copy()
+    first, second = core.choose_amount(noisy32, edges), core.choose_amount(noisy32, edges)
+    assert first == second
+    assert np.array_equal(noisy32, copy)
+    assert core.choose_amount(noisy, edges).iterations == first.iterations
+
+
+def test_no_warning_and_operator_reused():
+    vertices, faces = bumpy_sphere(3)
+    edges = edges_of(faces)
+    noisy, _ = with_normal_noise(vertices, 0.3, edges)
+    operator = core.umbrella_operator(edges, len(noisy))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        amount = core.choose_amount(noisy, operator=operator)
+    assert amount == core.choose_amount(noisy, edges)
+
+
+def test_fixed_vertices():
+    vertices, faces = bumpy_sphere(3)
+    edges = edges_of(faces)
+    noisy, _ = with_normal_noise(vertices, 0.3, edges)
+    assert core.choose_amount(noisy, edges, fixed=np.ones(len(noisy), bool)).iterations == 0
+    half = noisy[:, 2] > 0
+    amount = core.choose_amount(noisy, edges, fixed=half)
+    assert amount.iterations >= 1 and amount.sigma > 0
+
+
+def test_lines_and_tiny_meshes():
+    """Without surface (a polyline: no vertex has three neighbours) the whole residual decides."""
+    t = np.linspace(0, 4 * np.pi, 400)
+    line = np.stack([np.cos(t), np.sin(t), t / 10], 1) + np.random.default_rng(0).normal(0, 0.01, (400, 3))
+    edges = np.stack([np.arange(399), np.arange(1, 400)], 1)
+    amount = core.choose_amount(line, edges)
+    assert amount.iterations >= 1 and amount.sigma > 0
+    triangle = core.choose_amount(np.eye(3), np.array([[0, 1], [1, 2], [2, 0]]))
+    assert triangle.iterations >= 0
+
+
+def test_bad_input():
+    vertices, faces = icosphere(2)
+    edges = edges_of(faces)
+    with pytest.raises(ValueError):
+        core.choose_amount(vertices[:, :2], edges)
+    with pytest.raises(ValueError):
+        core.choose_amount(vertices, edges, beta=1.5)
+    with pytest.raises(ValueError):
+        core.choose_amount(vertices, operator=core.umbrella_operator(edges, len(vertices) + 1))
