@@ -1,0 +1,331 @@
+"""The "HC Smooth" Geometry Nodes group behind the HC Smooth modifier, built by code.
+
+Built by code rather than shipped as a .blend asset: one builder serves every supported Blender
+(4.2 LTS to 5.2 LTS) and handles the node API differences in one place, where a .blend saved by one
+version is read by older ones only as far as they understand it; the nodes are reviewed and tested
+like the rest of the add-on. A file that uses the modifier stores the group, so it evaluates the
+same in a Blender without the add-on.
+
+The group runs the paper's simultaneous step (Vollmer, Mencl, Müller 1999: sections 3.1-3.3 and
+Algorithm 1) with the umbrella operator T x_i = mean_{j∈adj(i)} x_j taken on the edge domain: the
+edge field x(v1) + x(v2), read on points (Blender averages it over each vertex's edges), is
+x_i + T x_i. HC per movable vertex, in the form of core/smoothing.py:
+
+    s = α o + (1-α) q,   w = (1-β) (T q - s)  (w = 0 on fixed vertices),   p = s + w - T w
+
+T w is taken by writing w into the positions for a moment, so that both umbrellas read the edges'
+end positions (Edge Vertices) instead of gathering an attribute per edge end (Evaluate at Index),
+which costs about twice as much (bench/README.md, "HC Smooth modifier"). The Laplacian with the
+original point (p = α o + (1-α) T q) runs in the same Repeat zone. Plain Laplacian (p = T q) and the
+central point (p = α q + (1-α) T q) need no o, so one Blur Attribute node runs all their iterations:
+with weight W_i on vertex i's neighbours, Blur gives (q_i + W_i Σ_j q_j) / (1 + W_i |adj(i)|), which
+is the central step for W_i = (1-α) / (α |adj(i)|), the plain one as α -> 0, and q_i for W_i = 0.
+
+Fixed vertices (Fixed Group, Pin Boundary, and vertices without edges, as in core) keep q exactly:
+they are left out of Set Position, get Blur weight 0, and in HC take back their original position.
+"""
+
+import bpy
+
+from .. import settings_spec
+
+GROUP_NAME = "HC Smooth"
+# Bump whenever the nodes or the interface change: an older group in a file is then rebuilt in place.
+VERSION = 1
+VERSION_KEY = "hc_smooth_version"
+
+# Blur weight standing in for "only the neighbours" (plain Laplacian): the centre's own share is
+# 2^-40 of theirs, far below single-precision rounding, and W |q| stays finite up to |q| ~ 1e26.
+NEIGHBOURS_ONLY = 2.0**-40
+
+METHOD_ITEMS = tuple((choice.label, choice.description) for choice in settings_spec.METHOD.items)
+HC, LAPLACIAN, CENTRAL, ORIGINAL = range(4)  # the menu's values, in settings_spec.METHOD's order
+# settings_spec identifier ("LAPLACIAN_CENTRAL") -> the menu item's name ("Laplacian, Central Point")
+METHOD_NAMES = {choice.identifier: choice.label for choice in settings_spec.METHOD.items}
+
+
+# --- the group's interface ------------------------------------------------------------------------------
+
+INPUTS = (  # (name, socket type, a setting to take description / default / limits from, or overrides)
+    ("Method", "NodeSocketMenu", settings_spec.METHOD),
+    ("Alpha", "NodeSocketFloat", settings_spec.ALPHA),
+    ("Beta", "NodeSocketFloat", settings_spec.BETA),
+    ("Iterations", "NodeSocketInt", settings_spec.ITERATIONS),
+    ("Fixed Group", "NodeSocketFloat", dict(
+        description="Vertices with a weight above 0 stay fixed: pick a vertex group with the button on "
+        "the right", default=0.0, min=0.0, max=1.0)),
+    ("Invert Fixed Group", "NodeSocketBool", settings_spec.INVERT_VERTEX_GROUP),
+    ("Pin Boundary", "NodeSocketBool", settings_spec.PIN_BOUNDARY),
+    ("Influence", "NodeSocketFloat", dict(
+        description="Not used yet: painted influence will scale each vertex's move", default=1.0,
+        min=0.0, max=1.0)),
+)
+FIELD_INPUTS = ("Fixed Group", "Influence")  # per-vertex values (vertex groups); the rest are settings
+HIDDEN_INPUTS = ("Influence",)  # in the interface for scripts, not shown in the modifier until it works
+
+
+def _interface(tree):
+    interface = tree.interface
+    interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    sockets = {}
+    for name, socket_type, source in INPUTS:
+        spec = source if isinstance(source, dict) else dict(
+            description=source.description, default=source.default, min=source.min, max=source.max)
+        socket = interface.new_socket(name, in_out="INPUT", socket_type=socket_type,
+                                      description=spec["description"])
+        if socket_type != "NodeSocketMenu":  # a menu's default is set once its items exist
+            socket.default_value = spec["default"]
+        if spec.get("min") is not None:
+            socket.min_value = spec["min"]
+        if spec.get("max") is not None:
+            socket.max_value = spec["max"]
+        if name not in FIELD_INPUTS:
+            _single_value(socket)
+        socket.hide_in_modifier = name in HIDDEN_INPUTS
+        sockets[name] = socket
+    return sockets
+
+
+def _single_value(socket):
+    """A setting, not a field: no attribute toggle beside it in the modifier."""
+    if hasattr(socket, "structure_type"):  # Blender 4.5+
+        socket.structure_type = "SINGLE"
+    else:
+        socket.force_non_field = True
+
+
+# --- building nodes --------------------------------------------------------------------------------------
+
+class _Tree:
+    """Small helpers over a node tree: add nodes, and feed a socket either a link or a constant."""
+
+    def __init__(self, tree):
+        self.tree = tree
+        self.count = 0
+
+    def node(self, idname, **attributes):
+        node = self.tree.nodes.new(idname)
+        for key, value in attributes.items():
+            setattr(node, key, value)
+        node.location = (180 * (self.count % 12), -160 * (self.count // 12))  # a grid, for inspection
+        self.count += 1
+        return node
+
+    def feed(self, socket, value):
+        if isinstance(value, bpy.types.NodeSocket):
+            self.tree.links.new(value, socket)
+        else:
+            socket.default_value = value
+
+    def math(self, operation, a, b=0.0, c=None):
+        node = self.node("ShaderNodeMath", operation=operation)
+        for socket, value in zip(node.inputs, (a, b) if c is None else (a, b, c)):
+            self.feed(socket, value)
+        return node.outputs[0]
+
+    def vector(self, operation, a, b):
+        node = self.node("ShaderNodeVectorMath", operation=operation)
+        self.feed(node.inputs[0], a)
+        self.feed(node.inputs[1], b)
+        return node.outputs[0]
+
+    def scale(self, vector, factor):
+        node = self.node("ShaderNodeVectorMath", operation="SCALE")
+        self.feed(node.inputs[0], vector)
+        self.feed(node.inputs["Scale"], factor)
+        return node.outputs["Vector"]
+
+    def add(self, a, b):
+        return self.vector("ADD", a, b)
+
+    def subtract(self, a, b):
+        return self.vector("SUBTRACT", a, b)
+
+    def boolean(self, operation, a, b=False):
+        node = self.node("FunctionNodeBooleanMath", operation=operation)
+        self.feed(node.inputs[0], a)
+        if operation != "NOT":  # NOT has one input (Blender 5 lists no hidden second one)
+            self.feed(node.inputs[1], b)
+        return node.outputs[0]
+
+    def switch(self, input_type, condition, false, true):
+        node = self.node("GeometryNodeSwitch", input_type=input_type)
+        self.feed(node.inputs["Switch"], condition)
+        self.feed(node.inputs["False"], false)
+        self.feed(node.inputs["True"], true)
+        return node.outputs[0]
+
+    def on_domain(self, value, domain, data_type):
+        """Evaluate on Domain: ``value`` taken on ``domain``, read in the caller's (Blender interpolates)."""
+        node = self.node("GeometryNodeFieldOnDomain", domain=domain, data_type=data_type)
+        self.feed(node.inputs[0], value)
+        return node.outputs[0]
+
+    def capture(self, geometry, items):
+        """Capture Attribute on points, one item per (socket type, name, field); (geometry, [fields])."""
+        node = self.node("GeometryNodeCaptureAttribute", domain="POINT")
+        for socket_type, name, value in items:
+            node.capture_items.new(socket_type, name)
+            self.feed(node.inputs[name], value)
+        self.feed(node.inputs["Geometry"], geometry)
+        return node.outputs["Geometry"], [node.outputs[name] for _, name, _ in items]
+
+    def set_position(self, geometry, position, selection=None):
+        node = self.node("GeometryNodeSetPosition")
+        self.feed(node.inputs["Geometry"], geometry)
+        self.feed(node.inputs["Position"], position)
+        if selection is not None:
+            self.feed(node.inputs["Selection"], selection)
+        return node.outputs["Geometry"]
+
+    def position(self):
+        return self.node("GeometryNodeInputPosition").outputs[0]
+
+    def umbrella_of_positions(self):
+        """T q on points: the mean of the neighbours' positions (a vertex without edges gets -q; it is fixed)."""
+        ends = self.node("GeometryNodeInputMeshEdgeVertices")
+        pair_sum = self.add(ends.outputs["Position 1"], ends.outputs["Position 2"])
+        return self.subtract(self.on_domain(pair_sum, "EDGE", "FLOAT_VECTOR"), self.position())
+
+
+def build(tree):
+    """Fill an empty Geometry Nodes tree with the HC Smooth group."""
+    sockets = _interface(tree)
+    t = _Tree(tree)
+    inputs = t.node("NodeGroupInput").outputs
+    group_output = t.node("NodeGroupOutput")
+    alpha, beta, iterations = inputs["Alpha"], inputs["Beta"], inputs["Iterations"]
+
+    # The method as its number. A new Menu Switch has two items (numbers 0, 1): renamed, not replaced,
+    # so the items are numbered 0..3 in settings_spec's order and a 4.x script can set the number.
+    menu = t.node("GeometryNodeMenuSwitch", data_type="INT")
+    while len(menu.enum_items) < len(METHOD_ITEMS):
+        menu.enum_items.new("")
+    for number, (item, (name, description)) in enumerate(zip(menu.enum_items, METHOD_ITEMS)):
+        item.name, item.description = name, description
+        menu.inputs[name].default_value = number
+    t.feed(menu.inputs[0], inputs["Method"])
+    method = menu.outputs[0]
+
+    def is_method(number):  # 1.0 or 0.0; COMPARE's third input, the tolerance, is 0.5 by default
+        return t.math("COMPARE", method, float(number))
+
+    # Who moves: outside the fixed group (inside it, inverted), not on a pinned boundary, with neighbours.
+    in_group = t.math("GREATER_THAN", inputs["Fixed Group"], 0.0)
+    fixed = t.boolean("XOR", in_group, inputs["Invert Fixed Group"])
+    edge_faces = t.node("GeometryNodeInputMeshEdgeNeighbors").outputs["Face Count"]
+    boundary_edge = t.math("COMPARE", edge_faces, 1.0)  # an edge of exactly one face (loose edges: none)
+    on_boundary = t.math("GREATER_THAN", t.on_domain(boundary_edge, "EDGE", "FLOAT"), 0.0)
+    fixed = t.boolean("OR", fixed, t.boolean("AND", inputs["Pin Boundary"], on_boundary))
+    degree = t.node("GeometryNodeInputMeshVertexNeighbors").outputs["Vertex Count"]
+    fixed = t.boolean("OR", fixed, t.math("LESS_THAN", degree, 0.5))
+    movable = t.boolean("NOT", fixed)
+
+    # Plain and central Laplacian: one Blur Attribute, all iterations (weights as in the module's docstring).
+    a = t.math("MULTIPLY", alpha, is_method(CENTRAL))  # 0 for plain
+    weight = t.math("DIVIDE", t.math("SUBTRACT", 1.0, a), t.math("MULTIPLY_ADD", a, degree, NEIGHBOURS_ONLY))
+    blur = t.node("GeometryNodeBlurAttribute", data_type="FLOAT_VECTOR")
+    t.feed(blur.inputs[0], t.position())
+    t.feed(blur.inputs["Iterations"], iterations)
+    t.feed(blur.inputs["Weight"], t.math("MULTIPLY", weight, movable))
+    blurred = t.set_position(inputs["Geometry"], blur.outputs[0])
+
+    # HC and the Laplacian with the original point: a Repeat zone of simultaneous steps.
+    position = t.position()
+    start, (original, movable) = t.capture(inputs["Geometry"], [("VECTOR", "Original", position),
+                                                                ("BOOLEAN", "Movable", movable)])
+    repeat_in = t.node("GeometryNodeRepeatInput")
+    repeat_out = t.node("GeometryNodeRepeatOutput")
+    repeat_in.pair_with_output(repeat_out)
+    t.feed(repeat_in.inputs["Iterations"], iterations)
+    t.feed(repeat_in.inputs["Geometry"], start)
+    current = repeat_in.outputs["Geometry"]
+
+    q = t.position()
+    tq = t.umbrella_of_positions()
+    one_minus_alpha = t.math("SUBTRACT", 1.0, alpha)
+    laplacian = t.set_position(current, t.add(t.scale(original, alpha), t.scale(tq, one_minus_alpha)), movable)
+
+    s = t.add(t.scale(original, alpha), t.scale(q, one_minus_alpha))
+    keep = t.math("MULTIPLY", t.math("SUBTRACT", 1.0, beta), movable)
+    w = t.scale(t.subtract(tq, s), keep)
+    with_s, (s,) = t.capture(current, [("VECTOR", "Anchor", s)])
+    carrying_w = t.set_position(with_s, w)  # every vertex: T w below reads the neighbours' w, 0 if fixed
+    w = t.position()
+    hc_step = t.subtract(t.add(s, w), t.umbrella_of_positions())
+    hc = t.set_position(carrying_w, t.switch("VECTOR", movable, original, hc_step))  # fixed: o = q, exactly
+
+    t.feed(repeat_out.inputs["Geometry"], t.switch("GEOMETRY", is_method(HC), laplacian, hc))
+    iterated = repeat_out.outputs["Geometry"]
+    uses_blur = t.boolean("OR", is_method(LAPLACIAN), is_method(CENTRAL))
+    t.feed(group_output.inputs["Geometry"], t.switch("GEOMETRY", uses_blur, iterated, blurred))
+
+    sockets["Method"].default_value = METHOD_NAMES[settings_spec.METHOD.default]
+    return sockets
+
+
+# --- one group per file, rebuilt when the add-on's is newer -------------------------------------------------
+
+def find_group():
+    """The file's HC Smooth group (found by its version marker, not its name), or None."""
+    groups = [group for group in bpy.data.node_groups
+              if group.bl_idname == "GeometryNodeTree" and VERSION_KEY in group]
+    if not groups:
+        return None
+    # Local before linked (a linked one cannot be rebuilt), the newest version, then the plain name.
+    return min(groups, key=lambda group: (group.library is not None, -int(group[VERSION_KEY]),
+                                          group.name != GROUP_NAME, group.name))
+
+
+def ensure_group():
+    """The group the modifier uses: built once per file and reused; a group of an older version of the add-on
+    is rebuilt in place, keeping every modifier's settings. A newer or linked one is used as it is."""
+    group = find_group()
+    if group is None:
+        group = bpy.data.node_groups.new(GROUP_NAME, "GeometryNodeTree")
+        _fill(group)
+    elif int(group[VERSION_KEY]) < VERSION and group.library is None:
+        rebuild(group)
+    return group
+
+
+def _fill(group):
+    build(group)
+    group[VERSION_KEY] = VERSION
+    group.is_modifier = True  # offered in the Geometry Nodes modifier's group selector
+    if hasattr(group, "description"):  # the tooltip in the Add Modifier menu (4.x and later)
+        group.description = ("Smooth away scan noise without shrinking (HC, Vollmer, Mencl, M\u00fcller 1999); "
+                             "simultaneous mode")
+
+
+def rebuild(group):
+    """Replace the nodes and interface of ``group`` by this version's, keeping every modifier's input values
+    (by input name; inputs that no longer exist are dropped)."""
+    from . import inputs
+
+    users = [modifier for obj in bpy.data.objects for modifier in obj.modifiers
+             if modifier.type == "NODES" and modifier.node_group == group]
+    saved = []
+    for modifier in users:
+        values = {}
+        for item in group.interface.items_tree:
+            if item.item_type == "SOCKET" and item.in_out == "INPUT" and item.socket_type != "NodeSocketGeometry":
+                try:
+                    values[item.name] = (inputs.get_input(modifier, item.name),
+                                         inputs.get_input_attribute(modifier, item.name))
+                except (KeyError, AttributeError, TypeError):
+                    continue
+        saved.append((modifier, values))
+    group.nodes.clear()
+    group.interface.clear()
+    _fill(group)
+    for modifier, values in saved:
+        modifier.node_group = group  # makes the modifier's inputs match the new interface
+        for name, (value, attribute) in values.items():
+            try:
+                inputs.set_input(modifier, name, value)
+                if attribute:
+                    inputs.set_input_attribute(modifier, name, attribute)
+            except (KeyError, AttributeError, TypeError, ValueError):  # gone, or of another type now
+                continue
