@@ -20,6 +20,9 @@ detail. It is chosen here from the mesh alone, by generalized cross-validation (
   ``TOLERANCE`` of the minimum, i.e. the most smoothing the estimate cannot tell from the best.
 * The square root of the minimum GCV is the noise estimate (standard deviation along the normals).
 
+Where the noise is large against a thin part (a tube a few edges around), the amount with the least
+error also shrinks that part by a few per cent; core.volume.restore_volume gives the volume back.
+
 The run stops once it is well past the chosen amount. Everything is deterministic (fixed probes,
 evenly spaced sample vertices), independent of the coordinates' scale, position and orientation.
 """
