@@ -216,3 +216,9 @@ KEEP_RFS_MESH = Setting(
 
 POINTS = (AUTO_AMOUNT, POINT_ALPHA, POINT_BETA, ROUNDS, ITERATIONS_PER_ROUND, NEIGHBOURS, SPACING_FACTOR,
           GAP_FACTOR, MIN_QUALITY, SWAP, POINT_VERTEX_GROUP, POINT_INVERT_VERTEX_GROUP, KEEP_RFS_MESH)
+
+# --- the HC Smooth modifier: object.hc_smooth_modifier_add and the modifier's node group ------------------
+# The mesh settings a modifier can hold: it runs simultaneous mode and every iteration (no Mode, no
+# Tolerance), on the evaluated mesh (no Output).
+
+MODIFIER = (METHOD, ALPHA, BETA, ITERATIONS, VERTEX_GROUP, INVERT_VERTEX_GROUP, PIN_BOUNDARY)

@@ -252,8 +252,7 @@ def build(tree):
     w = t.scale(t.subtract(tq, s), keep)
     with_s, (s,) = t.capture(current, [("VECTOR", "Anchor", s)])
     carrying_w = t.set_position(with_s, w)  # every vertex: T w below reads the neighbours' w, 0 if fixed
-    w = t.position()
-    hc_step = t.subtract(t.add(s, w), t.umbrella_of_positions())
+    hc_step = t.subtract(t.add(s, t.position()), t.umbrella_of_positions())  # s + w - T w
     hc = t.set_position(carrying_w, t.switch("VECTOR", movable, original, hc_step))  # fixed: o = q, exactly
 
     t.feed(repeat_out.inputs["Geometry"], t.switch("GEOMETRY", is_method(HC), laplacian, hc))

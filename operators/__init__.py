@@ -2,9 +2,9 @@
 
 import bpy
 
-from . import mesh_smooth, point_cloud
+from . import mesh_smooth, modifier, point_cloud
 
-classes = (*mesh_smooth.classes, *point_cloud.classes)
+classes = (*mesh_smooth.classes, *point_cloud.classes, *modifier.classes)
 
 
 def register():

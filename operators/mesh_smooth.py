@@ -12,6 +12,7 @@ from . import jobs as jobs_module
 from . import mesh_io
 from .objects import InputError, unique_data
 from .modal_progress import ModalProgress
+from .modifier import draw_add_as_modifier
 from .properties import alpha_label, annotations, draw_convergence, draw_fixed_group, uses_alpha, uses_beta
 
 # Above this many vertex-iterations, an interactive run becomes modal (progress, Esc cancels).
@@ -42,6 +43,8 @@ class SmoothProperties:
         layout.prop(self, "output")
         if self.method == "HC":  # the Laplacian variants shrink by design: no standing warning for them
             draw_convergence(layout, self.method, self.alpha, self.beta)
+        if getattr(type(self), "bl_idname", None) == OBJECT_OT_hc_smooth.bl_idname:  # not Edit mode: no selection
+            draw_add_as_modifier(layout, self)  # in a modifier
 
 
 class _SmoothOperator(SmoothProperties, ModalProgress):

@@ -6,13 +6,14 @@ F3 does what the panel shows, and F9 (redo) starts from those values.
 
 import bpy
 
-from ..operators import properties
+from ..operators import modifier, properties
 from . import fixed, texts
 from .preset import HC_SMOOTH_MT_presets
 
 OBJECT_OPERATOR = "object.hc_smooth"
 EDIT_OPERATOR = "mesh.hc_smooth"
 POINTS_OPERATOR = "object.hc_smooth_points"
+MODIFIER_OPERATOR = "object.hc_smooth_modifier_add"
 
 
 def smooth_button(layout, context, text=None, icon="MOD_SMOOTH"):
@@ -25,6 +26,17 @@ def smooth_button(layout, context, text=None, icon="MOD_SMOOTH"):
         return None
     properties = layout.operator(idname, text=text or label, icon=icon)
     context.scene.hc_smooth.copy_to(properties)
+    return properties
+
+
+def modifier_button(layout, context, text="Add as Modifier", icon="MODIFIER", notes=True):
+    """object.hc_smooth_modifier_add with the scene settings (and, with ``notes``, what the modifier does
+    differently from the settings)."""
+    settings = context.scene.hc_smooth
+    for line in modifier.modifier_differences(settings) if notes else ():
+        layout.label(text=line, icon="INFO")
+    properties = layout.operator(MODIFIER_OPERATOR, text=text, icon=icon)
+    modifier.copy_settings(settings, properties)
     return properties
 
 
@@ -67,6 +79,7 @@ class VIEW3D_PT_hc_smooth(bpy.types.Panel):
         layout.use_property_split = False
         smooth_button(layout.column(), context)
         if context.mode == "OBJECT":
+            modifier_button(layout.column(align=True), context)
             layout.operator(POINTS_OPERATOR, text="Smooth Point Cloud", icon="OUTLINER_DATA_POINTCLOUD")
 
 
@@ -135,9 +148,15 @@ def draw_object_menu_entry(self, context):
     smooth_button(self.layout, context, text="HC Smooth")
 
 
+def draw_modifier_menu_entry(self, context):
+    """Add Modifier > Deform (Properties editor): the HC Smooth modifier with the scene settings."""
+    modifier_button(self.layout, context, text="HC Smooth", icon="MOD_SMOOTH", notes=False)
+
+
 MENU_ENTRIES = (
     (bpy.types.VIEW3D_MT_edit_mesh_vertices, draw_edit_menu_entry),
     (bpy.types.VIEW3D_MT_object, draw_object_menu_entry),
+    (bpy.types.OBJECT_MT_modifier_add_deform, draw_modifier_menu_entry),
 )
 
 classes = (VIEW3D_PT_hc_smooth, VIEW3D_PT_hc_smooth_fixed)
