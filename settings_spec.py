@@ -80,11 +80,19 @@ METHOD = Setting(
     ),
     flag="method", help="smoothing algorithm",
 )
+MESH_AUTO_AMOUNT = Setting(
+    "auto_amount", "bool", "Automatic Amount",
+    "HC: choose Iterations (with Alpha 0) from the noise the mesh itself shows, by cross-validating what the "
+    "iterations remove, and give closed parts back the volume they had. Off: use Alpha and Iterations as set",
+    True,
+)
 ALPHA = Setting(
     "alpha", "float", "Alpha",
     "HC and Laplacian with original point: weight of the original position (0 = none, higher keeps more "
-    "of the input, noise included). Laplacian with central point: weight of the current position",
+    "of the input, noise included). Laplacian with central point: weight of the current position. HC: used "
+    "when Automatic Amount is off",
     0.1, min=0.0, max=1.0, step=1, precision=3, flag="alpha", help="pull towards the original",
+    cli_default="{default}; HC: chosen with the iterations unless --alpha or --iterations is given",
 )
 BETA = Setting(
     "beta", "float", "Beta",
@@ -93,8 +101,10 @@ BETA = Setting(
     0.6, min=0.0, max=1.0, step=1, precision=3, flag="beta", help="HC correction weight",
 )
 ITERATIONS = Setting(
-    "iterations", "int", "Iterations", "Number of smoothing iterations (heavier noise needs more)",
+    "iterations", "int", "Iterations",
+    "Number of smoothing iterations (heavier noise needs more). HC: used when Automatic Amount is off",
     10, min=0, soft_max=200, flag="iterations", help="smoothing iterations",
+    cli_default="{default}; HC: chosen from the noise unless --alpha or --iterations is given",
 )
 MODE = Setting(
     "mode", "enum", "Mode", "Order in which vertices are updated within an iteration", "SIMULTANEOUS",
@@ -145,8 +155,8 @@ OUTPUT = Setting(
     ),
 )
 
-MESH = (METHOD, ALPHA, BETA, ITERATIONS, MODE, TOLERANCE, VERTEX_GROUP, INVERT_VERTEX_GROUP, PIN_BOUNDARY,
-        INFLUENCE_GROUP, INVERT_INFLUENCE_GROUP, OUTPUT)
+MESH = (METHOD, MESH_AUTO_AMOUNT, ALPHA, BETA, ITERATIONS, MODE, TOLERANCE, VERTEX_GROUP, INVERT_VERTEX_GROUP,
+        PIN_BOUNDARY, INFLUENCE_GROUP, INVERT_INFLUENCE_GROUP, OUTPUT)
 
 # --- point clouds: object.hc_smooth_points --------------------------------------------------------------
 

@@ -198,6 +198,8 @@ def parse(argv):
                              "only: add --points")
     settings = Settings(**{setting.name: getattr(args, name) for name, setting in MESH_OPTIONS.items()
                            if getattr(args, name) is not None})
+    if args.alpha is not None or args.iterations is not None:
+        settings.auto_amount = False  # as the operator with Automatic Amount off: explicit numbers run as given
     point_options = {POINT_FIELDS[name]: getattr(args, name) for name in POINT_FIELDS
                      if getattr(args, name) is not None}
     if "alpha" in point_options or "iterations_per_round" in point_options:

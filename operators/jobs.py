@@ -34,6 +34,8 @@ class Job:
     iterations_run: int = 0
     seconds: float = 0.0
     change: object = None  # core.Change of the result, measured once for every report
+    amount: object = None  # core.MeshAmount the Automatic Amount chose, if it ran
+    volume_offset: float = 0.0  # the largest offset along the normals that gave closed parts their volume back
 
 
 def settings_of(props):
@@ -41,6 +43,11 @@ def settings_of(props):
     precision, as Blender's float properties hold them, so every route runs the same numbers."""
     return dict(method=CORE_METHOD[props.method], alpha=as_property(props.alpha), beta=as_property(props.beta),
                 mode=props.mode.lower(), tolerance=as_property(props.tolerance))
+
+
+def automatic(props):
+    """Whether the Automatic Amount chooses the iterations (HC only; the Laplacian variants run as set)."""
+    return props.method == "HC" and props.auto_amount
 
 
 def as_property(value):
@@ -99,17 +106,35 @@ def run(jobs, props, chunk=None):
     for number, job in enumerate(jobs):
         start = time.perf_counter()
         job.operator = core.umbrella_operator(job.edges, len(job.positions))
+        iterations, job_settings = props.iterations, settings
+        if automatic(props):
+            job.amount = core.choose_amount(job.positions, operator=job.operator, beta=settings["beta"],
+                                            fixed=job.fixed)
+            iterations, job_settings = job.amount.iterations, {**settings, "alpha": job.amount.alpha}
         with warnings.catch_warnings():  # the operators report the convergence region themselves
             warnings.simplefilter("ignore", core.ConvergenceWarning)
-            smoothing = core.Smoothing(job.positions, None, operator=job.operator, iterations=props.iterations,
-                                       fixed=job.fixed, influence=job.influence, **settings)
+            smoothing = core.Smoothing(job.positions, None, operator=job.operator, iterations=iterations,
+                                       fixed=job.fixed, influence=job.influence, **job_settings)
         for fraction in smoothing.steps(chunk):
             if fraction < 1.0:
                 yield (number + fraction) / len(jobs)
         result = smoothing.result()
         job.result, job.iterations_run = result.positions, result.iterations
+        if job.amount is not None and job.closed and job.faces is not None:
+            keep_volume(job)
         job.seconds = time.perf_counter() - start
         yield (number + 1) / len(jobs)
+
+
+def keep_volume(job):
+    """Give each closed part of the result the volume it had (Automatic Amount): a uniform offset of its
+    moving vertices along their normals. Fixed vertices and those of influence 0 stay bit for bit."""
+    movable = ~job.fixed if job.influence is None else ~job.fixed & (job.influence > 0.0)
+    restored, offsets = core.volume.restore_volume(job.positions, job.result, job.faces, movable=movable)
+    result = restored.astype(job.result.dtype)
+    result[~movable] = job.result[~movable]
+    job.result = result
+    job.volume_offset = float(np.abs(offsets).max()) if offsets.size else 0.0
 
 
 def write(job, props):
@@ -145,5 +170,14 @@ def summary(jobs, props):
     seconds = sum(job.seconds for job in jobs)
     where = " (new shape key)" if props.output == "SHAPE_KEY" else ""
     names = f"{len(jobs)} objects" if len(jobs) > 1 else f"'{jobs[0].obj.name}'"  # what the user selected
-    return (f"{METHOD_LABEL[props.method]} on {names}{where}: {iterations} iterations, {moved} vertices moved, "
+    amounts = [job.amount for job in jobs if job.amount is not None]
+    if amounts:
+        chosen = "/".join(str(job.iterations_run) for job in jobs)
+        noise = "/".join(f"{amount.ratio:.2f}" for amount in amounts)
+        ran = f"automatic amount: noise {noise}x edge length, {chosen} iterations, alpha 0"
+        if any(job.volume_offset for job in jobs):
+            ran += ", volume kept"
+    else:
+        ran = f"{iterations} iterations"
+    return (f"{METHOD_LABEL[props.method]} on {names}{where}: {ran}, {moved} vertices moved, "
             f"{seconds:.2f} s, " + ", ".join(changes))

@@ -29,20 +29,28 @@ class SmoothProperties:
         layout = self.layout
         layout.use_property_split = True
         layout.prop(self, "method")
+        # getattr: draw() also runs on stand-ins that hold only some of the properties (tests/blender/test_ui.py).
+        automatic = self.method == "HC" and getattr(self, "auto_amount", False)
+        row = layout.row()
+        row.active = self.method == "HC"
+        row.prop(self, "auto_amount")
         column = layout.column()
-        column.active = uses_alpha(self.method)
+        column.active = uses_alpha(self.method) and not automatic  # greyed, still editable: applies once off
         column.prop(self, "alpha", text=alpha_label(self.method))
         row = layout.row()
         row.active = uses_beta(self.method)
         row.prop(self, "beta")
-        layout.prop(self, "iterations")
+        row = layout.row()
+        row.active = not automatic
+        row.prop(self, "iterations")
         layout.prop(self, "mode")
         layout.prop(self, "tolerance")
         draw_fixed_group(layout, self, context.active_object)
         layout.prop(self, "pin_boundary")
         layout.prop(self, "output")
         if self.method == "HC":  # the Laplacian variants shrink by design: no standing warning for them
-            draw_convergence(layout, self.method, self.alpha, self.beta)
+            # The automatic amount runs alpha 0 for the few iterations it chooses (no drift): only beta can warn.
+            draw_convergence(layout, self.method, 1.0 if automatic else self.alpha, self.beta)
         if getattr(type(self), "bl_idname", None) == OBJECT_OT_hc_smooth.bl_idname:  # not Edit mode: no selection
             draw_add_as_modifier(layout, self)  # in a modifier
 
@@ -63,7 +71,7 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
     def _report_done(self, jobs):
         self.report({"INFO"}, jobs_module.summary(jobs, self))
         if self.method == "HC":
-            message = core.convergence_message(self.alpha, self.beta)
+            message = core.convergence_message(1.0 if jobs_module.automatic(self) else self.alpha, self.beta)
             if message:
                 self.report({"WARNING"}, message)
 

@@ -73,7 +73,7 @@ try:
     co += np.random.default_rng(0).normal(scale=0.02, size=co.shape).astype(np.float32)
     obj.data.vertices.foreach_set("co", co)
     obj.data.update()
-    report["operator"] = sorted(bpy.ops.object.hc_smooth(iterations=10))
+    report["operator"] = sorted(bpy.ops.object.hc_smooth(auto_amount=False, iterations=10))
     after = np.empty_like(co)
     obj.data.vertices.foreach_get("co", after)
     report["operator_moved"] = int(np.count_nonzero(np.any((after != co).reshape(-1, 3), axis=1)))

@@ -31,7 +31,7 @@ def painted_sphere(subdivisions=3):
 def test_operator_equals_core_with_the_group_weights(scene, subdivisions, invert):
     obj, weights = painted_sphere(subdivisions)
     before = positions_of(obj.data)
-    assert bpy.ops.object.hc_smooth(iterations=6, influence_group="Influence",
+    assert bpy.ops.object.hc_smooth(auto_amount=False, iterations=6, influence_group="Influence",
                                     invert_influence_group=invert) == {"FINISHED"}
     influence = 1.0 - weights if invert else weights
     expected = core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=6,
@@ -48,7 +48,7 @@ def test_edit_mode_takes_the_influence_too(scene):
     before = positions_of(obj.data)
     bpy.ops.object.mode_set(mode="EDIT")
     bpy.ops.mesh.select_all(action="SELECT")
-    assert bpy.ops.mesh.hc_smooth(iterations=4, influence_group="Influence") == {"FINISHED"}
+    assert bpy.ops.mesh.hc_smooth(auto_amount=False, iterations=4, influence_group="Influence") == {"FINISHED"}
     bpy.ops.object.mode_set(mode="OBJECT")
     expected = core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=4, influence=weights)
     assert np.array_equal(positions_of(obj.data), expected)

@@ -24,26 +24,52 @@ def volume_change(before, after, mesh):
 def test_object_mode_equals_core_on_the_same_arrays(scene):
     obj = noisy_sphere()
     before = positions_of(obj.data)
-    assert bpy.ops.object.hc_smooth(alpha=0.25, beta=0.75, iterations=7) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth(auto_amount=False, alpha=0.25, beta=0.75, iterations=7) == {"FINISHED"}
     expected = core.hc_smooth(before, edges_of(obj.data), alpha=0.25, beta=0.75, iterations=7)
     assert np.array_equal(positions_of(obj.data), expected)
     for mode, method in (("SEQUENTIAL", "HC"), ("SIMULTANEOUS", "LAPLACIAN_ORIGINAL")):
         start = positions_of(obj.data)
-        bpy.ops.object.hc_smooth(method=method, mode=mode, alpha=0.25, beta=0.625, iterations=3)
+        bpy.ops.object.hc_smooth(auto_amount=False, method=method, mode=mode, alpha=0.25, beta=0.625, iterations=3)
         expected = core.smooth(start, edges_of(obj.data), method="hc" if method == "HC" else "original",
                                mode=mode.lower(), alpha=0.25, beta=0.625, iterations=3).positions
         assert np.array_equal(positions_of(obj.data), expected)
 
 
+def test_automatic_amount_is_the_default_and_keeps_the_volume(scene, capfd):
+    """With nothing set, HC runs the amount core.choose_amount picks (alpha 0), then gives the closed
+    mesh its volume back; the report says what it chose. Off, alpha and iterations run as set."""
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    edges = edges_of(obj.data)
+    assert bpy.ops.object.hc_smooth() == {"FINISHED"}
+    amount = core.choose_amount(before, edges, beta=BETA)
+    smoothed = core.hc_smooth(before, edges, alpha=0.0, beta=BETA, iterations=amount.iterations)
+    triangles = core.metrics.fan_triangles(np.array(faces_of(obj.data)))
+    expected = core.volume.restore_volume(before, smoothed, triangles)[0].astype(np.float32)
+    np.testing.assert_allclose(positions_of(obj.data), expected, rtol=0, atol=1e-6)
+    assert abs(volume_change(before, positions_of(obj.data), obj.data)) < 1e-5
+    report = capfd.readouterr().out
+    assert f"automatic amount: noise {amount.ratio:.2f}x edge length, {amount.iterations} iterations" in report
+    assert "volume kept" in report
+    obj.data.vertices.foreach_set("co", before.ravel())
+    obj.data.update()
+    assert bpy.ops.object.hc_smooth(auto_amount=False, iterations=4) == {"FINISHED"}
+    assert np.array_equal(positions_of(obj.data), core.hc_smooth(before, edges, alpha=ALPHA, beta=BETA, iterations=4))
+    obj.data.vertices.foreach_set("co", before.ravel())
+    obj.data.update()
+    assert bpy.ops.object.hc_smooth(method="LAPLACIAN", iterations=2) == {"FINISHED"}  # HC only
+    assert np.array_equal(positions_of(obj.data), core.laplacian_smooth(before, edges, iterations=2))
+
+
 def test_hc_keeps_volume_far_better_than_laplacian(scene, capfd):
     obj = noisy_sphere()
     before = positions_of(obj.data)
-    bpy.ops.object.hc_smooth(method="HC", iterations=30)
+    bpy.ops.object.hc_smooth(auto_amount=False, method="HC", iterations=30)
     hc = positions_of(obj.data)
     report = capfd.readouterr().out
     assert "HC on 'Sphere': 30 iterations" in report and "volume" in report
     obj.data.vertices.foreach_set("co", before.ravel())
-    bpy.ops.object.hc_smooth(method="LAPLACIAN", iterations=30)
+    bpy.ops.object.hc_smooth(auto_amount=False, method="LAPLACIAN", iterations=30)
     laplacian = positions_of(obj.data)
     hc_change, lap_change = volume_change(before, hc, obj.data), volume_change(before, laplacian, obj.data)
     assert lap_change < -0.3 and abs(hc_change) < 0.05 and abs(hc_change) < 0.1 * abs(lap_change)
@@ -57,7 +83,7 @@ def test_vertex_group_is_fixed_and_inversion_smooths_only_the_group(scene):
     members = np.flatnonzero(positions_of(obj.data)[:, 2] > 0.3)
     group.add(members.tolist(), 1.0, "REPLACE")
     before = positions_of(obj.data)
-    bpy.ops.object.hc_smooth(vertex_group="Keep", iterations=5)
+    bpy.ops.object.hc_smooth(auto_amount=False, vertex_group="Keep", iterations=5)
     after = positions_of(obj.data)
     assert np.array_equal(bits(after[members]), bits(before[members]))
     outside = np.setdiff1d(np.arange(len(before)), members)
@@ -66,7 +92,7 @@ def test_vertex_group_is_fixed_and_inversion_smooths_only_the_group(scene):
     assert np.array_equal(after, expected)
 
     obj.data.vertices.foreach_set("co", before.ravel())
-    bpy.ops.object.hc_smooth(vertex_group="Keep", invert_vertex_group=True, iterations=5)
+    bpy.ops.object.hc_smooth(auto_amount=False, vertex_group="Keep", invert_vertex_group=True, iterations=5)
     after = positions_of(obj.data)
     assert np.array_equal(bits(after[outside]), bits(before[outside]))
     assert (np.linalg.norm(after[members] - before[members], axis=1) > 0).mean() > 0.9
@@ -78,7 +104,7 @@ def test_pin_boundary_keeps_open_edges_in_place(scene):
     xy = np.abs(before[:, :2])
     boundary = np.isclose(xy, 1.0, atol=1e-5).any(axis=1)
     assert 0 < boundary.sum() < len(before)
-    bpy.ops.object.hc_smooth(pin_boundary=True, iterations=5)
+    bpy.ops.object.hc_smooth(auto_amount=False, pin_boundary=True, iterations=5)
     after = positions_of(obj.data)
     assert np.array_equal(bits(after[boundary]), bits(before[boundary]))
     assert np.all(np.linalg.norm(after[~boundary] - before[~boundary], axis=1) > 0)
@@ -90,7 +116,7 @@ def test_shape_keys_smooth_the_active_key_without_desyncing_the_basis(scene):
     key = obj.shape_key_add(name="Scan", from_mix=False)
     obj.active_shape_key_index = 1
     mesh_before = positions_of(obj.data)
-    bpy.ops.object.hc_smooth(iterations=4)
+    bpy.ops.object.hc_smooth(auto_amount=False, iterations=4)
     key_after = np.array([v.co[:] for v in key.data], dtype=np.float32)
     basis_after = np.array([v.co[:] for v in basis.data], dtype=np.float32)
     expected = core.hc_smooth(mesh_before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=4)
@@ -98,7 +124,7 @@ def test_shape_keys_smooth_the_active_key_without_desyncing_the_basis(scene):
     assert np.array_equal(basis_after, mesh_before) and np.array_equal(positions_of(obj.data), mesh_before)
 
     obj.active_shape_key_index = 0  # smoothing the basis moves the mesh with it
-    bpy.ops.object.hc_smooth(iterations=4)
+    bpy.ops.object.hc_smooth(auto_amount=False, iterations=4)
     basis_after = np.array([v.co[:] for v in basis.data], dtype=np.float32)
     assert np.array_equal(basis_after, expected) and np.array_equal(positions_of(obj.data), expected)
 
@@ -106,7 +132,7 @@ def test_shape_keys_smooth_the_active_key_without_desyncing_the_basis(scene):
 def test_output_to_a_new_shape_key_leaves_the_mesh(scene):
     obj = noisy_sphere()
     before = positions_of(obj.data)
-    bpy.ops.object.hc_smooth(output="SHAPE_KEY", iterations=4)
+    bpy.ops.object.hc_smooth(auto_amount=False, output="SHAPE_KEY", iterations=4)
     assert np.array_equal(bits(positions_of(obj.data)), bits(before))
     keys = obj.data.shape_keys.key_blocks
     assert [k.name for k in keys] == ["Basis", "HC Smooth"]
@@ -120,7 +146,7 @@ def test_a_mesh_shared_by_several_objects_is_smoothed_once(scene):
     scene.collection.objects.link(twin)
     select_only(obj, twin)
     before = positions_of(obj.data)
-    bpy.ops.object.hc_smooth(iterations=3)
+    bpy.ops.object.hc_smooth(auto_amount=False, iterations=3)
     once = core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=3)
     assert np.array_equal(positions_of(obj.data), once)
 
@@ -129,7 +155,7 @@ def test_several_objects_each_smoothed(scene):
     a, b = noisy_sphere("A", seed=1), noisy_sphere("B", seed=2)
     select_only(a, b)
     before = {o.name: positions_of(o.data) for o in (a, b)}
-    bpy.ops.object.hc_smooth(iterations=3)
+    bpy.ops.object.hc_smooth(auto_amount=False, iterations=3)
     for o in (a, b):
         expected = core.hc_smooth(before[o.name], edges_of(o.data), alpha=ALPHA, beta=BETA, iterations=3)
         assert np.array_equal(positions_of(o.data), expected)
@@ -148,7 +174,7 @@ def test_edit_mode_moves_only_selected_visible_vertices(scene):
     obj.data.vertices.foreach_set("select", selected)
     obj.data.vertices.foreach_set("hide", hidden)
     bpy.ops.object.mode_set(mode="EDIT")
-    assert bpy.ops.mesh.hc_smooth(iterations=5) == {"FINISHED"}
+    assert bpy.ops.mesh.hc_smooth(auto_amount=False, iterations=5) == {"FINISHED"}
     assert bpy.context.mode == "EDIT_MESH"
     bpy.ops.object.mode_set(mode="OBJECT")
     after = positions_of(obj.data)
@@ -173,12 +199,12 @@ def test_edit_mode_with_nothing_selected_says_so_and_stays_in_edit_mode(scene):
 def test_invoke_in_background_runs_execute(scene):
     obj = noisy_sphere()
     before = positions_of(obj.data)
-    assert bpy.ops.object.hc_smooth("INVOKE_DEFAULT", iterations=2) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth("INVOKE_DEFAULT", auto_amount=False, iterations=2) == {"FINISHED"}
     assert np.array_equal(positions_of(obj.data),
                           core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=2))
 
 
 def test_outside_the_convergence_region_warns(scene, capfd):
     noisy_sphere()
-    assert bpy.ops.object.hc_smooth(alpha=0.1, beta=0.3, iterations=2) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth(auto_amount=False, alpha=0.1, beta=0.3, iterations=2) == {"FINISHED"}
     assert "Theorem 5.2" in capfd.readouterr().out

@@ -19,9 +19,10 @@ def jobs_module():
 
 
 def settings(**overrides):
-    """The operator's settings as the command line hands them over: the declared defaults, 9 iterations."""
+    """The operator's settings as the command line hands them over: the declared defaults, 9 iterations
+    (given, so the Automatic Amount is off, as the command line does with --iterations)."""
     settings_class = importlib.import_module(f"{ADDON}.cli.arguments").Settings
-    return settings_class(**{"iterations": 9, **overrides})
+    return settings_class(**{"iterations": 9, "auto_amount": False, **overrides})
 
 
 def test_chunked_run_equals_one_call_and_reports_rising_progress(scene):

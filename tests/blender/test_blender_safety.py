@@ -30,7 +30,7 @@ def test_object_mode_refuses_a_blown_up_run_and_writes_nothing(scene):
     obj = noisy_sphere()
     before = positions_of(obj.data)
     with pytest.raises(RuntimeError, match=REGION):  # how bpy.ops hands on an operator's error report
-        bpy.ops.object.hc_smooth(alpha=0.0, beta=0.0, iterations=200)
+        bpy.ops.object.hc_smooth(auto_amount=False, alpha=0.0, beta=0.0, iterations=200)
     assert np.array_equal(bits(positions_of(obj.data)), bits(before))
 
 
@@ -40,7 +40,7 @@ def test_edit_mode_refuses_a_blown_up_run_and_stays_in_edit_mode(scene):
     bpy.ops.object.mode_set(mode="EDIT")
     bpy.ops.mesh.select_all(action="SELECT")
     with pytest.raises(RuntimeError, match=REGION):
-        bpy.ops.mesh.hc_smooth(alpha=0.0, beta=0.0, iterations=2000)
+        bpy.ops.mesh.hc_smooth(auto_amount=False, alpha=0.0, beta=0.0, iterations=2000)
     assert obj.mode == "EDIT"
     bpy.ops.object.mode_set(mode="OBJECT")
     assert np.array_equal(bits(positions_of(obj.data)), bits(before))
@@ -87,11 +87,11 @@ def test_keys_relative_to_the_smoothed_key_move_with_it(scene, smoothed, moving,
     before = {key.name: key_positions(key) for key in keys}
     offsets_before = offsets(obj)
     if route == "object":
-        assert bpy.ops.object.hc_smooth(iterations=5) == {"FINISHED"}
+        assert bpy.ops.object.hc_smooth(auto_amount=False, iterations=5) == {"FINISHED"}
     else:
         bpy.ops.object.mode_set(mode="EDIT")
         bpy.ops.mesh.select_all(action="SELECT")
-        assert bpy.ops.mesh.hc_smooth(iterations=5) == {"FINISHED"}
+        assert bpy.ops.mesh.hc_smooth(auto_amount=False, iterations=5) == {"FINISHED"}
         bpy.ops.object.mode_set(mode="OBJECT")
     after = {key.name: key_positions(key) for key in keys}
     expected = core.hc_smooth(before[smoothed], edges_of(obj.data), alpha=float(np.float32(0.1)),
@@ -150,7 +150,7 @@ def test_every_route_gives_the_same_result_with_a_tolerance(scene, addon, tmp_pa
     bpy.ops.wm.open_mainfile(filepath=str(source))
     obj = bpy.data.objects["Scan"]
     select_only(obj)
-    assert bpy.ops.object.hc_smooth(mode=mode, iterations=60, tolerance=tolerance) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth(auto_amount=False, mode=mode, iterations=60, tolerance=tolerance) == {"FINISHED"}
     assert np.array_equal(bits(positions_of(obj.data)), bits(expected.positions))
     bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "out" / "scan.blend"))
     assert np.array_equal(bits(positions_of(bpy.data.objects["Scan"].data)), bits(expected.positions))
@@ -199,7 +199,7 @@ def test_point_clouds_move_keys_relative_to_the_smoothed_key(scene):
 def test_status_lines_name_the_object_the_user_selected(scene, capfd):
     obj = noisy_sphere()
     obj.name, obj.data.name = "Scan", "Icosphere"
-    assert bpy.ops.object.hc_smooth(iterations=2) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth(auto_amount=False, iterations=2) == {"FINISHED"}
     assert "HC on 'Scan': 2 iterations" in capfd.readouterr().out
     rng = np.random.default_rng(1)
     points = rng.normal(size=(600, 3))

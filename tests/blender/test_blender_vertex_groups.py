@@ -56,7 +56,7 @@ def test_operator_keeps_the_bulk_read_group_fixed(scene):
     select_only(obj)
     before = np.empty(len(obj.data.vertices) * 3, dtype=np.float32)
     obj.data.vertices.foreach_get("co", before)
-    assert bpy.ops.object.hc_smooth(vertex_group="Keep", iterations=5) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth(auto_amount=False, vertex_group="Keep", iterations=5) == {"FINISHED"}
     after = np.empty_like(before)
     obj.data.vertices.foreach_get("co", after)
     fixed = members_by_blender(obj, group)

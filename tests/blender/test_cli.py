@@ -171,7 +171,7 @@ def test_smooths_each_format_like_the_operator(cli, capsys, tmp_path, fmt):
     positions, edges = import_positions(source)
     obj = bpy.data.objects[0]
     select_only(obj)
-    assert bpy.ops.object.hc_smooth(iterations=7, beta=0.7) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth(auto_amount=False, iterations=7, beta=0.7) == {"FINISHED"}
     expected = positions_of(obj.data)
     assert not np.allclose(expected, positions)  # it did smooth
     tolerance = 2e-6 if fmt == "obj" else 0  # OBJ stores 6 decimals; PLY/STL float32 round-trip exactly
@@ -179,6 +179,24 @@ def test_smooths_each_format_like_the_operator(cli, capsys, tmp_path, fmt):
     np.testing.assert_allclose(result, core.hc_smooth(positions, edges, alpha=0.1, beta=0.7, iterations=7),
                                rtol=0, atol=tolerance + 1e-5)
     assert leftovers(tmp_path / "out") == []
+
+
+def test_automatic_amount_unless_alpha_or_iterations_given(cli, tmp_path):
+    """Nothing given: the operator's default (Automatic Amount); --iterations or --alpha: exactly as given."""
+    source = export_noisy_sphere(tmp_path / "scan.ply")
+    positions, edges = import_positions(source)
+    obj = bpy.data.objects[0]
+    select_only(obj)
+    assert bpy.ops.object.hc_smooth() == {"FINISHED"}
+    automatic = positions_of(obj.data)
+    assert cli.main([str(source), "-o", str(tmp_path / "auto")]) == 0
+    np.testing.assert_array_equal(import_positions(tmp_path / "auto" / "scan.ply")[0], automatic)
+    for option, alpha, iterations in ((["--iterations", "3"], 0.1, 3), (["--alpha", "0.2"], 0.2, 10)):
+        assert cli.main([str(source), "-o", str(tmp_path / option[0][2:]), *option]) == 0
+        result, _ = import_positions(tmp_path / option[0][2:] / "scan.ply")
+        expected = core.hc_smooth(positions, edges, alpha=float(np.float32(alpha)), beta=float(np.float32(0.6)),
+                                  iterations=iterations)
+        np.testing.assert_array_equal(result, expected)
 
 
 def test_format_option_and_folder_input(cli, tmp_path):

@@ -175,7 +175,7 @@ def test_button_settings_run_the_operator_like_the_core(settings):
     """What the button hands over is a complete, valid set of operator arguments."""
     obj = noisy_sphere(subdivisions=2)
     before = positions_of(obj.data)
-    settings.alpha, settings.beta, settings.iterations = 0.2, 0.7, 4
+    settings.auto_amount, settings.alpha, settings.beta, settings.iterations = False, 0.2, 0.7, 4
     layout = draw(bpy.types.VIEW3D_PT_hc_smooth, bpy.context)
     ((_, properties),) = [button for button in layout.buttons() if button[0] == "object.hc_smooth"]
     assert bpy.ops.object.hc_smooth(**vars(properties)) == {"FINISHED"}

@@ -28,7 +28,7 @@ def test_identifiers_and_flags_are_unique(settings):
 
 def test_identifiers_users_rely_on():
     # Users' scripts, presets and the command line name these: they must not change.
-    assert [s.name for s in spec.MESH] == ["method", "alpha", "beta", "iterations", "mode", "tolerance",
+    assert [s.name for s in spec.MESH] == ["method", "auto_amount", "alpha", "beta", "iterations", "mode", "tolerance",
                                            "vertex_group", "invert_vertex_group", "pin_boundary",
                                            "influence_group", "invert_influence_group", "output"]
     assert [s.name for s in spec.POINTS] == ["auto_amount", "alpha", "beta", "rounds", "iterations_per_round",
