@@ -8,7 +8,7 @@ from . import metrics, topology, volume
 from .adjacency import Umbrella, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, in_convergence_region
 from .metrics import Change, measure_change
-from .noise import MeshAmount, choose_amount
+from .noise import AmountChooser, MeshAmount, choose_amount
 from .pointcloud import smooth_point_cloud
 from .smoothing import METHODS, MODES, Cancelled, Smoothing, SmoothResult, hc_smooth, laplacian_smooth, smooth
 
@@ -24,6 +24,7 @@ __all__ = [
     "SmoothResult",
     "Smoothing",
     "Umbrella",
+    "AmountChooser",
     "choose_amount",
     "convergence_message",
     "hc_smooth",

@@ -115,72 +115,102 @@ def choose_amount(positions, edges=None, *, beta=0.6, fixed=None, operator=None)
     the vertices that never move. Returns a MeshAmount with alpha = 0 and the iterations chosen; a mesh
     with nothing to smooth gets 0 iterations.
     """
-    start = check_positions(positions)
-    beta = check_unit_interval(beta, "beta")
-    n = start.shape[0]
-    if operator is None:
-        operator = umbrella_operator(edges, n)
-    elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
-        raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
-    fixed_mask = check_fixed(fixed, n) | operator.isolated
-    movable = np.flatnonzero(~fixed_mask)
-    edge_length = _median_edge_length(start, operator)
-    if movable.size == 0:
-        return MeshAmount(0.0, beta, 0, 0.0, edge_length, 0)
+    chooser = AmountChooser(positions, edges, beta=beta, fixed=fixed, operator=operator)
+    for _ in chooser.steps():
+        pass
+    return chooser.amount
 
-    surface_rows = movable[operator.degree[movable] >= _MIN_NEIGHBOURS]
-    use_normals = surface_rows.size >= 8  # else (lines, tiny meshes): the whole residual
-    candidates = surface_rows if use_normals else movable
-    rows = candidates[np.unique(np.linspace(0, candidates.size - 1, min(candidates.size, SAMPLE_VERTICES))
-                                .round().astype(np.int64))]
-    y = np.asarray(start[rows], dtype=np.float64)
 
-    probe_count = int(min(24, max(3, 3 * math.ceil(PROBE_ENTRIES / (3 * movable.size)))))
-    probes = np.random.default_rng(_SEED).choice(np.array([-1.0, 1.0], start.dtype), size=(n, probe_count))
-    probes[fixed_mask] = 0.0  # the trace over the movable vertices only
-    with warnings.catch_warnings():  # alpha = 0 lies outside Theorem 5.2's region: on purpose, see above
-        warnings.simplefilter("ignore", ConvergenceWarning)
-        runs = [_Run(probes[:, i:i + 3], operator, fixed_mask, beta) for i in range(0, probe_count, 3)]
-        data = _Run(start, operator, fixed_mask, beta)
-    # Each probe block as its run holds it: (3, n), in the run's vertex order.
-    planar_probes = [np.ascontiguousarray((probes[:, i:i + 3] if run.order is None else probes[run.order, i:i + 3]).T)
-                     for i, run in zip(range(0, probe_count, 3), runs)]
+class AmountChooser:
+    """choose_amount in slices, for callers that show progress and let the user cancel: checks and
+    prepares on construction; ``steps()`` yields the fraction of the largest possible run done, as
+    core.Smoothing.steps does; once it is exhausted ``amount`` holds the MeshAmount."""
 
-    ring = _ring_of(rows, operator) if use_normals else None
-    points = np.zeros((n, 3)) if use_normals else None  # the state at ``ring``, for the normals
-    done = 0
-    steps, traces, residuals = [], [], []
-    best_whole, normals = math.inf, None
-    for k in _checkpoints(MAX_ITERATIONS):
-        try:
-            data.advance(k - done)
-            for run in runs:
-                run.advance(k - done)
-        except DivergenceError:
-            break
-        done = k
-        trace = sum(float(np.einsum("ij,ij->", run.planar(), planar)) for run, planar in zip(runs, planar_probes))
-        t = min(trace / (probe_count * movable.size), 0.999)
-        state = data.at(rows)
-        residual = y - state
-        steps.append(k)
-        traces.append(t)
-        residuals.append(residual)
-        whole = float(np.einsum("ij,ij->", residual, residual)) / (rows.size * (1.0 - t) ** 2)
-        if use_normals and whole < best_whole:
-            best_whole = whole
-            points[ring] = data.at(ring)
-            normals = _ring_normals(points, rows, operator)
+    def __init__(self, positions, edges=None, *, beta=0.6, fixed=None, operator=None):
+        start = check_positions(positions)
+        self.beta = beta = check_unit_interval(beta, "beta")
+        n = start.shape[0]
+        if operator is None:
+            operator = umbrella_operator(edges, n)
+        elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
+            raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
+        self.operator = operator
+        fixed_mask = check_fixed(fixed, n) | operator.isolated
+        self.movable = movable = np.flatnonzero(~fixed_mask)
+        self.edge_length = _median_edge_length(start, operator)
+        self.amount = None
+        if movable.size == 0:
+            self.amount = MeshAmount(0.0, beta, 0, 0.0, self.edge_length, 0)
+            return
+
+        surface_rows = movable[operator.degree[movable] >= _MIN_NEIGHBOURS]
+        self.use_normals = surface_rows.size >= 8  # else (lines, tiny meshes): the whole residual
+        candidates = surface_rows if self.use_normals else movable
+        self.rows = candidates[np.unique(np.linspace(0, candidates.size - 1, min(candidates.size, SAMPLE_VERTICES))
+                                         .round().astype(np.int64))]
+        self.y = np.asarray(start[self.rows], dtype=np.float64)
+
+        self.probe_count = probe_count = int(min(24, max(3, 3 * math.ceil(PROBE_ENTRIES / (3 * movable.size)))))
+        probes = np.random.default_rng(_SEED).choice(np.array([-1.0, 1.0], start.dtype), size=(n, probe_count))
+        probes[fixed_mask] = 0.0  # the trace over the movable vertices only
+        with warnings.catch_warnings():  # alpha = 0 lies outside Theorem 5.2's region: on purpose, see above
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            self.runs = [_Run(probes[:, i:i + 3], operator, fixed_mask, beta) for i in range(0, probe_count, 3)]
+            self.data = _Run(start, operator, fixed_mask, beta)
+        # Each probe block as its run holds it: (3, n), in the run's vertex order.
+        self.planar_probes = [
+            np.ascontiguousarray((probes[:, i:i + 3] if run.order is None else probes[run.order, i:i + 3]).T)
+            for i, run in zip(range(0, probe_count, 3), self.runs)]
+        self.n = n
+
+    def steps(self):
+        if self.amount is not None:
+            yield 1.0
+            return
+        operator, rows, movable, data, runs = self.operator, self.rows, self.movable, self.data, self.runs
+        use_normals, probe_count = self.use_normals, self.probe_count
+        ring = _ring_of(rows, operator) if use_normals else None
+        points = np.zeros((self.n, 3)) if use_normals else None  # the state at ``ring``, for the normals
+        done = 0
+        steps, traces, residuals = [], [], []
+        best_whole, normals = math.inf, None
+        for k in _checkpoints(MAX_ITERATIONS):
+            try:
+                data.advance(k - done)
+                for run in runs:
+                    run.advance(k - done)
+            except DivergenceError:
+                break
+            done = k
+            trace = sum(float(np.einsum("ij,ij->", run.planar(), planar))
+                        for run, planar in zip(runs, self.planar_probes))
+            t = min(trace / (probe_count * movable.size), 0.999)
+            state = data.at(rows)
+            residual = self.y - state
+            steps.append(k)
+            traces.append(t)
+            residuals.append(residual)
+            whole = float(np.einsum("ij,ij->", residual, residual)) / (rows.size * (1.0 - t) ** 2)
+            if use_normals and whole < best_whole:
+                best_whole = whole
+                points[ring] = data.at(ring)
+                normals = _ring_normals(points, rows, operator)
+            score = _scores(residuals, traces, normals)
+            chosen = _chosen(steps, score)
+            if k >= 12 and k >= 1.5 * chosen and k >= 1.25 * steps[int(np.argmin(_scores(residuals, traces, None)))]:
+                break  # well past the amount chosen
+            yield k / MAX_ITERATIONS
+        self.amount = self._amount(steps, traces, residuals, normals, done)
+        yield 1.0
+
+    def _amount(self, steps, traces, residuals, normals, done):
+        if not steps:  # diverged at once (beta far below 0.5): no amount is safe
+            return MeshAmount(0.0, self.beta, 0, 0.0, self.edge_length, 0)
         score = _scores(residuals, traces, normals)
         chosen = _chosen(steps, score)
-        if k >= 12 and k >= 1.5 * chosen and k >= 1.25 * steps[int(np.argmin(_scores(residuals, traces, None)))]:
-            break  # well past the amount chosen
-    if not steps:  # diverged at once (beta far below 0.5): no amount is safe
-        return MeshAmount(0.0, beta, 0, 0.0, edge_length, 0)
-    score = _scores(residuals, traces, normals)
-    chosen = _chosen(steps, score)
-    sigma = math.sqrt(max(float(score.min()), 0.0)) if use_normals else math.sqrt(max(float(score.min()), 0.0) / 3)
-    return MeshAmount(0.0, beta, int(chosen), sigma, edge_length, int(done))
+        minimum = max(float(score.min()), 0.0)
+        sigma = math.sqrt(minimum) if self.use_normals else math.sqrt(minimum / 3)
+        return MeshAmount(0.0, self.beta, int(chosen), sigma, self.edge_length, int(done))
 
 
 def _neighbours(rows, operator):

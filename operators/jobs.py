@@ -96,6 +96,11 @@ def make_job(obj, props, extra_fixed=None):
                closed=closed, key_block=key_block, influence=influence)
 
 
+# Of a job with the Automatic Amount, the part of its progress bar the choice takes: its runs (the data
+# and the probes) go about twice as far as the smoothing that follows.
+CHOOSING_SHARE = 2 / 3
+
+
 def run(jobs, props, chunk=None):
     """Smooth every job; a generator yielding the fraction done after each chunk of iterations.
 
@@ -106,10 +111,14 @@ def run(jobs, props, chunk=None):
     for number, job in enumerate(jobs):
         start = time.perf_counter()
         job.operator = core.umbrella_operator(job.edges, len(job.positions))
-        iterations, job_settings = props.iterations, settings
+        iterations, job_settings, share = props.iterations, settings, 0.0
         if automatic(props):
-            job.amount = core.choose_amount(job.positions, operator=job.operator, beta=settings["beta"],
-                                            fixed=job.fixed)
+            chooser = core.AmountChooser(job.positions, operator=job.operator, beta=settings["beta"], fixed=job.fixed)
+            share = CHOOSING_SHARE
+            for fraction in chooser.steps():  # the longer half of the work: progress and Esc work here too
+                if fraction < 1.0:
+                    yield (number + share * fraction) / len(jobs)
+            job.amount = chooser.amount
             iterations, job_settings = job.amount.iterations, {**settings, "alpha": job.amount.alpha}
         with warnings.catch_warnings():  # the operators report the convergence region themselves
             warnings.simplefilter("ignore", core.ConvergenceWarning)
@@ -117,7 +126,7 @@ def run(jobs, props, chunk=None):
                                        fixed=job.fixed, influence=job.influence, **job_settings)
         for fraction in smoothing.steps(chunk):
             if fraction < 1.0:
-                yield (number + fraction) / len(jobs)
+                yield (number + share + (1.0 - share) * fraction) / len(jobs)
         result = smoothing.result()
         job.result, job.iterations_run = result.positions, result.iterations
         if job.amount is not None and job.closed and job.faces is not None:

@@ -137,3 +137,15 @@ def test_modal_error_is_reported_and_abandons():
     assert operator.modal(context, TIMER) == {"CANCELLED"}
     assert operator.abandoned and not operator.finished
     assert operator.reports == [({"ERROR"}, "bad settings")]
+
+
+def test_automatic_amount_reports_progress_while_it_chooses(scene):
+    jobs = jobs_module()
+    props = settings(auto_amount=True)
+    job = jobs.make_job(noisy_sphere(), props)
+    progress = list(jobs.run([job], props, chunk=5))
+    choosing = [f for f in progress if f < jobs.CHOOSING_SHARE]
+    assert len(choosing) >= 2 and progress == sorted(progress) and progress[-1] == 1.0
+    whole = jobs.make_job(noisy_sphere("B"), props)
+    list(jobs.run([whole], props))
+    assert job.amount == whole.amount and np.array_equal(job.result, whole.result)
