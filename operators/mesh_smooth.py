@@ -13,7 +13,8 @@ from . import mesh_io
 from .objects import InputError, unique_data
 from .modal_progress import ModalProgress
 from .modifier import draw_add_as_modifier
-from .properties import alpha_label, annotations, draw_convergence, draw_fixed_group, uses_alpha, uses_beta
+from .properties import (alpha_label, annotations, draw_convergence, draw_fixed_group, draw_influence_group, uses_alpha,
+                         uses_beta)
 
 # Above this many vertex-iterations, an interactive run becomes modal (progress, Esc cancels).
 MODAL_WORK = 5_000_000
@@ -47,6 +48,7 @@ class SmoothProperties:
         layout.prop(self, "tolerance")
         draw_fixed_group(layout, self, context.active_object)
         layout.prop(self, "pin_boundary")
+        draw_influence_group(layout, self, context.active_object)
         layout.prop(self, "output")
         if self.method == "HC":  # the Laplacian variants shrink by design: no standing warning for them
             # The automatic amount runs alpha 0 for the few iterations it chooses (no drift): only beta can warn.

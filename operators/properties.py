@@ -85,3 +85,16 @@ def draw_fixed_group(layout, props, obj):
     else:
         row.prop(props, "vertex_group", text="Fixed Group")
     row.prop(props, "invert_vertex_group", text="", icon="ARROW_LEFTRIGHT")
+
+
+def draw_influence_group(layout, props, obj):
+    """The painted influence: a vertex group (searchable on a mesh) whose weights scale each vertex's
+    move, with its Invert toggle; for the redo panels and the N-panel."""
+    row = layout.row(align=True)
+    if obj is not None and obj.type == "MESH":
+        row.prop_search(props, "influence_group", obj, "vertex_groups", text="Influence")
+    else:
+        row.prop(props, "influence_group", text="Influence")
+    sub = row.row(align=True)
+    sub.active = bool(props.influence_group)
+    sub.prop(props, "invert_influence_group", text="", icon="ARROW_LEFTRIGHT")

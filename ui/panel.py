@@ -63,17 +63,25 @@ class VIEW3D_PT_hc_smooth(bpy.types.Panel):
         layout.use_property_decorate = False
         column = layout.column()
         column.prop(settings, "method")
+        automatic = settings.method == "HC" and settings.auto_amount
         sub = column.column()
-        sub.active = properties.uses_alpha(settings.method)
+        sub.active = settings.method == "HC"
+        sub.prop(settings, "auto_amount")
+        sub = column.column()
+        sub.active = properties.uses_alpha(settings.method) and not automatic  # greyed, still editable
         sub.prop(settings, "alpha", text=properties.alpha_label(settings.method))
         sub = column.column()
         sub.active = properties.uses_beta(settings.method)
         sub.prop(settings, "beta")
-        column.prop(settings, "iterations")
+        sub = column.column()
+        sub.active = not automatic
+        sub.prop(settings, "iterations")
         column.prop(settings, "mode")
         column.prop(settings, "tolerance")
 
-        properties.draw_convergence(layout.box(), settings.method, settings.alpha, settings.beta, always=True)
+        # The automatic amount runs alpha 0 for the iterations it chooses (no drift): only beta can warn.
+        alpha = 1.0 if automatic else settings.alpha
+        properties.draw_convergence(layout.box(), settings.method, alpha, settings.beta, always=True)
 
         layout.prop(settings, "output")
         layout.use_property_split = False
@@ -105,6 +113,7 @@ class VIEW3D_PT_hc_smooth_fixed(bpy.types.Panel):
         sub.active = bool(settings.vertex_group)
         sub.prop(settings, "invert_vertex_group", text="", icon="ARROW_LEFTRIGHT")
         layout.prop(settings, "pin_boundary")
+        properties.draw_influence_group(layout, settings, mesh_object)
 
         column = layout.column(align=True)
         edit_mode = context.mode == "EDIT_MESH"

@@ -12,7 +12,7 @@ from ..operators.properties import annotations
 # The settings a button passes on (all of them) and those a preset stores: the strength of the smoothing,
 # not the choices that belong to one mesh (vertex group, boundary, output).
 OPERATOR_SETTINGS = tuple(setting.name for setting in settings_spec.MESH)
-PRESET_SETTINGS = ("method", "alpha", "beta", "iterations", "mode", "tolerance")
+PRESET_SETTINGS = ("method", "auto_amount", "alpha", "beta", "iterations", "mode", "tolerance")
 
 
 class HCSmoothSettings(bpy.types.PropertyGroup):

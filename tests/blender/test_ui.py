@@ -186,11 +186,15 @@ def test_button_settings_run_the_operator_like_the_core(settings):
 
 @pytest.mark.parametrize("alpha, beta", [(0.1, 0.6), (0.0, 0.6), (0.1, 0.5), (0.3, 0.2), (0.0, 0.0)])
 def test_panel_shows_the_convergence_region(settings, alpha, beta):
-    settings.method, settings.alpha, settings.beta = "HC", alpha, beta
+    settings.method, settings.alpha, settings.beta, settings.auto_amount = "HC", alpha, beta, False
     layout = draw(bpy.types.VIEW3D_PT_hc_smooth, bpy.context)
     icons = [kwargs.get("icon") for _, _, kwargs in layout.calls("label")]
     inside = core.in_convergence_region(settings.alpha, settings.beta)
     assert ("CHECKMARK" in icons) == inside and ("ERROR" in icons) == (not inside)
+    # The automatic amount sets alpha itself (and stops in time): only beta decides.
+    settings.auto_amount = True
+    icons = [kwargs.get("icon") for _, _, kwargs in draw(bpy.types.VIEW3D_PT_hc_smooth, bpy.context).calls("label")]
+    assert ("CHECKMARK" in icons) == (settings.beta > 0.5)
 
 
 def test_convergence_status_follows_the_paper():
@@ -377,10 +381,12 @@ def test_redo_panels_draw_the_fixed_group_and_the_convergence_warning(scene, idn
     # The operators' draw() (the F9 panel) shares its fixed-group row and convergence label.
     obj = noisy_sphere()
     operator_class = getattr(bpy.types, idname)
-    props = types.SimpleNamespace(layout=RecordingLayout(), method="HC", alpha=0.1, beta=0.6)
+    props = types.SimpleNamespace(layout=RecordingLayout(), method="HC", alpha=0.1, beta=0.6, influence_group="")
     operator_class.draw(props, bpy.context)
     searched = [args for args, _ in ((e[1], e[2]) for e in props.layout.calls("prop_search"))]
     assert searched and searched[0][1:3] == ("vertex_group", obj)
+    if idname != "OBJECT_OT_hc_smooth_points":  # the mesh operators: the painted influence too
+        assert [args[1:3] for args in searched[1:]] == [("influence_group", obj)]
     assert [e[1][1] for e in props.layout.calls("prop")].count("invert_vertex_group") == 1
     assert not props.layout.labels()  # inside the region: no warning
     props.layout, props.beta = RecordingLayout(), 0.4

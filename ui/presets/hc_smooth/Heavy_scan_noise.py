@@ -2,6 +2,7 @@ import bpy
 settings = bpy.context.scene.hc_smooth
 
 settings.method = 'HC'
+settings.auto_amount = False
 settings.alpha = 0.01
 settings.beta = 0.6
 settings.iterations = 100
