@@ -1,6 +1,7 @@
 """End-to-end speed of the installed operators against Blender's own smoothing, in one run.
 
     .envs/bpy45/bin/python bench/bench_blender.py [--size 1000] [--torus 1M] [--repeats 3]
+                                                  [--modifier 100k,1M] [--only-modifier]
 
 On a noisy grid of (size+1)² vertices (1000 → 1,002,001 vertices, 2M faces) it times, median of
 --repeats runs, 10 iterations each:
@@ -12,8 +13,10 @@ On a noisy grid of (size+1)² vertices (1000 → 1,002,001 vertices, 2M faces) i
 Then, on closed triangulated tori of --torus vertices (what photogrammetry and Poisson reconstruction
 produce), once in grid order and once numbered at random, it times object.hc_smooth end to end, the
 report alone (measuring the change: the enclosed volume before and after), the Smooth modifier and
-mesh.hc_smooth in Edit mode (its first call, and the median). It prints markdown tables and the
-ratios set as targets. Run it with either test environment (Blender 4.5 or 5.2 as the bpy module);
+mesh.hc_smooth in Edit mode (its first call, and the median). Then the HC Smooth modifier (the Geometry Nodes
+group of nodes/hc_group.py) on closed tori of each --modifier size: its evaluation per method against the
+Smooth modifier's, wall and CPU time, and what its parts cost (an umbrella step, Set Position, Blur
+Attribute per call, ...; see modifier_tables). It prints markdown tables and the ratios set as targets. Run it with either test environment (Blender 4.5 or 5.2 as the bpy module);
 it installs the extension itself.
 """
 
@@ -148,11 +151,17 @@ def restore(obj, points):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=1000, help="grid subdivisions per side")
-    parser.add_argument("--torus", type=lambda text: int(float(text.upper().replace("M", "e6").replace("K", "e3"))),
+    parser.add_argument("--torus", type=count,
                         default=1_000_000, help="vertices of the closed triangle tori (1M; 0 skips them)")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--modifier", type=lambda text: [count(part) for part in text.split(",") if count(part)],
+                        default="100k,1M", help="vertices of the tori for the HC Smooth modifier (0 skips it)")
+    parser.add_argument("--only-modifier", action="store_true", help="run the modifier section alone")
     args = parser.parse_args()
     install_extension(ROOT / "build" / "bench")
+    if args.only_modifier:
+        modifier_tables(args.modifier, args.repeats)
+        return
     mesh_io = sys.modules[ADDON + ".operators.mesh_io"]
 
     bpy.ops.wm.read_homefile(use_empty=True)
@@ -232,6 +241,13 @@ def main():
         print(f"| {name} | {value} | {target} | {'ok' if ok else 'MISSED'} |")
     if args.torus:
         closed_tables(args.torus, repeats)
+    if args.modifier:
+        modifier_tables(args.modifier, repeats)
+
+
+def count(text):
+    """'1M' -> 1000000, '100k' -> 100000, '0' -> 0."""
+    return int(float(text.strip().upper().replace("M", "e6").replace("K", "e3")))
 
 
 def closed_tables(n_vertices, repeats):
@@ -252,6 +268,160 @@ def closed_tables(n_vertices, repeats):
                 (f"{order}: Edit mode, first call", f"{times['edit first']:.2f} s", "≤ 2.5 s",
                  times["edit first"] <= 2.5)):
             print(f"| {name} | {value} | {target} | {'ok' if ok else 'MISSED'} |")
+
+
+
+# --- the HC Smooth modifier -------------------------------------------------------------------------------
+
+METHODS = ("HC", "LAPLACIAN", "LAPLACIAN_CENTRAL", "LAPLACIAN_ORIGINAL")
+
+
+def timed_evaluation(obj, repeats):
+    """Median wall and CPU seconds (all threads) of re-evaluating ``obj``'s modifier stack, after one warm-up."""
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+
+    def evaluate():
+        obj.update_tag(refresh={"DATA"})
+        depsgraph.update()
+        obj.evaluated_get(depsgraph).data  # noqa: B018 - the evaluated mesh is the product
+
+    evaluate()
+    walls, cpus = [], []
+    for _ in range(repeats):
+        wall, cpu = time.perf_counter(), time.process_time()
+        evaluate()
+        walls.append(time.perf_counter() - wall)
+        cpus.append(time.process_time() - cpu)
+    return statistics.median(walls), statistics.median(cpus)
+
+
+def part_trees():
+    """Geometry Nodes trees that repeat one part of the modifier's step ITERATIONS times, to price it alone."""
+    hc_group = sys.modules[ADDON + ".nodes.hc_group"]
+
+    def looped(name, body, before=None):
+        tree = bpy.data.node_groups.new(name, "GeometryNodeTree")
+        tree.is_modifier = True
+        tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+        tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+        t = hc_group._Tree(tree)
+        geometry = t.node("NodeGroupInput").outputs[0]
+        output = t.node("NodeGroupOutput")
+        extra = None
+        if before is not None:
+            geometry, extra = before(t, geometry)
+        repeat_in, repeat_out = t.node("GeometryNodeRepeatInput"), t.node("GeometryNodeRepeatOutput")
+        repeat_in.pair_with_output(repeat_out)
+        repeat_in.inputs["Iterations"].default_value = ITERATIONS
+        t.feed(repeat_in.inputs["Geometry"], geometry)
+        t.feed(repeat_out.inputs["Geometry"], body(t, repeat_in.outputs["Geometry"], extra))
+        t.feed(output.inputs[0], repeat_out.outputs["Geometry"])
+        return tree
+
+    def blur(t, iterations):
+        node = t.node("GeometryNodeBlurAttribute", data_type="FLOAT_VECTOR")
+        t.feed(node.inputs[0], t.position())
+        t.feed(node.inputs["Iterations"], iterations)
+        t.feed(node.inputs["Weight"], 1.0)
+        return node.outputs[0]
+
+    def gathered_umbrella(t, attribute):
+        ends = t.node("GeometryNodeInputMeshEdgeVertices")
+        pair = []
+        for end in ("Vertex Index 1", "Vertex Index 2"):
+            node = t.node("GeometryNodeFieldAtIndex", domain="POINT", data_type="FLOAT_VECTOR")
+            t.feed(node.inputs["Value"], attribute)
+            t.feed(node.inputs["Index"], ends.outputs[end])
+            pair.append(node.outputs[0])
+        return t.subtract(t.on_domain(t.add(*pair), "EDGE", "FLOAT_VECTOR"), attribute)
+
+    def nested_umbrella(t):  # (q_i + q_j) / 2 on each edge, lazily; its mean over a vertex's edges; 2 m - q
+        mean = t.on_domain(t.on_domain(t.position(), "POINT", "FLOAT_VECTOR"), "EDGE", "FLOAT_VECTOR")
+        return t.subtract(t.scale(mean, 2.0), t.position())
+
+    def split_umbrella(t):  # mean of Position 1 plus mean of Position 2: no edge array, two edge loops
+        ends = t.node("GeometryNodeInputMeshEdgeVertices")
+        means = [t.on_domain(ends.outputs[end], "EDGE", "FLOAT_VECTOR") for end in ("Position 1", "Position 2")]
+        return t.subtract(t.add(*means), t.position())
+
+    def capture_position(t, geometry):
+        geometry, (captured,) = t.capture(geometry, [("VECTOR", "Value", t.position())])
+        return geometry, captured
+
+    shift = (0.0, 0.0, 1e-6)
+
+    def captured_shift(t, geometry):
+        geometry, (value,) = t.capture(geometry, [("VECTOR", "Value", t.add(t.position(), shift))])
+        return t.set_position(geometry, value)
+
+    return {
+        "Set Position (q + c)": looped("part: set position", lambda t, g, _: t.set_position(g, t.add(t.position(), shift))),
+        "Capture Attribute + Set Position from it": looped("part: capture", lambda t, g, _: captured_shift(t, g)),
+        "umbrella of the positions (Edge Vertices, Evaluate on Domain) + Set Position": looped(
+            "part: umbrella", lambda t, g, _: t.set_position(g, t.umbrella_of_positions())),
+        "umbrella of an attribute (2 × Evaluate at Index) + Set Position": looped(
+            "part: gathered umbrella", lambda t, g, x: t.set_position(g, gathered_umbrella(t, x)), capture_position),
+        "umbrella, nested Evaluate on Domain (point → edge → point) + Set Position": looped(
+            "part: nested umbrella", lambda t, g, _: t.set_position(g, nested_umbrella(t))),
+        "umbrella, each end position averaged onto the points alone + Set Position": looped(
+            "part: split umbrella", lambda t, g, _: t.set_position(g, split_umbrella(t))),
+        "Blur Attribute, 1 iteration per call + Set Position": looped(
+            "part: blur", lambda t, g, _: t.set_position(g, blur(t, 1))),
+    }
+
+
+def modifier_tables(sizes, repeats):
+    """The HC Smooth modifier against the Smooth modifier on closed tori, and the price of its parts."""
+    inputs = sys.modules[ADDON + ".nodes.inputs"]
+    method_names = sys.modules[ADDON + ".nodes.hc_group"].METHOD_NAMES
+    print(f"\n# HC Smooth modifier, closed triangle tori, {ITERATIONS} iterations, Blender {bpy.app.version_string}, "
+          f"median of {repeats}; wall / CPU seconds (CPU: all threads), ratio to the Smooth modifier of the same "
+          "run\n")
+    print("| vertices | Smooth modifier | " + " | ".join(METHODS) + " |\n|---:|---:|" + "---:|" * len(METHODS))
+    checks, parts = [], {}
+    for n_vertices in sizes:
+        bpy.ops.wm.read_homefile(use_empty=True)
+        obj, _ = closed_torus(n_vertices, shuffle=False)
+        smooth = obj.modifiers.new("Smooth", "SMOOTH")
+        smooth.factor, smooth.iterations = 0.5, ITERATIONS
+        reference = timed_evaluation(obj, repeats)
+        obj.modifiers.remove(smooth)
+        assert bpy.ops.object.hc_smooth_modifier_add(iterations=ITERATIONS) == {"FINISHED"}
+        modifier = obj.modifiers[-1]
+        cells, hc = [], None
+        for method in METHODS:
+            inputs.set_input(modifier, "Method", method_names[method])
+            wall, cpu = timed_evaluation(obj, repeats)
+            hc = (wall, cpu) if method == "HC" else hc
+            cells.append(f"{wall:.3f} / {cpu:.3f} ({wall / reference[0]:.1f}× / {cpu / reference[1]:.1f}×)")
+        print(f"| {len(obj.data.vertices):,} | {reference[0]:.3f} / {reference[1]:.3f} | " + " | ".join(cells) + " |")
+        obj.modifiers.remove(modifier)
+        if n_vertices >= 1_000_000:
+            checks.append((f"{n_vertices:,}: HC / Smooth modifier (wall, CPU)",
+                           f"{hc[0] / reference[0]:.1f}× / {hc[1] / reference[1]:.1f}×", "≤ 4×",
+                           hc[0] <= 4 * reference[0]))
+        if n_vertices <= 100_000:
+            checks.append((f"{n_vertices:,}: HC, one evaluation (wall, CPU)", f"{hc[0]:.3f} / {hc[1]:.3f} s",
+                           "≤ 0.15 s", hc[0] <= 0.15))
+        part = obj.modifiers.new("Part", "NODES")
+        for name, tree in part_trees().items():
+            part.node_group = tree
+            parts.setdefault(name, {})[n_vertices] = timed_evaluation(obj, repeats)
+        part.node_group = None
+        smooth = obj.modifiers.new("Smooth", "SMOOTH")  # the price of one Smooth iteration, same object
+        smooth.factor, smooth.iterations = 0.5, ITERATIONS
+        obj.modifiers.remove(part)
+        parts.setdefault("Smooth modifier, one of its iterations (for scale)", {})[n_vertices] = \
+            timed_evaluation(obj, repeats)
+    print("\n| check | value | target | |\n|---|---:|---:|---|")
+    for name, value, target, ok in checks:
+        print(f"| {name} | {value} | {target} | {'ok' if ok else 'MISSED'} |")
+    print(f"\nWhere the time goes: each part repeated {ITERATIONS}× in a Repeat zone, milliseconds per repetition, "
+          "wall / CPU\n")
+    print("| part | " + " | ".join(f"{n:,}" for n in sizes) + " |\n|---|" + "---:|" * len(sizes))
+    for name, by_size in parts.items():
+        print(f"| {name} | " + " | ".join(f"{1000 * by_size[n][0] / ITERATIONS:.1f} / "
+                                         f"{1000 * by_size[n][1] / ITERATIONS:.1f}" for n in sizes) + " |")
 
 
 if __name__ == "__main__":

@@ -15,7 +15,7 @@ x_i + T x_i. HC per movable vertex, in the form of core/smoothing.py:
 
 T w is taken by writing w into the positions for a moment, so that both umbrellas read the edges'
 end positions (Edge Vertices) instead of gathering an attribute per edge end (Evaluate at Index),
-which costs about twice as much (bench/README.md, "HC Smooth modifier"). The Laplacian with the
+which costs two to three times as much (bench/README.md, "HC Smooth modifier"). The Laplacian with the
 original point (p = α o + (1-α) T q) runs in the same Repeat zone. Plain Laplacian (p = T q) and the
 central point (p = α q + (1-α) T q) need no o, so one Blur Attribute node runs all their iterations:
 with weight W_i on vertex i's neighbours, Blur gives (q_i + W_i Σ_j q_j) / (1 + W_i |adj(i)|), which
@@ -82,7 +82,8 @@ def _interface(tree):
             socket.max_value = spec["max"]
         if name not in FIELD_INPUTS:
             _single_value(socket)
-        socket.hide_in_modifier = name in HIDDEN_INPUTS
+        if hasattr(socket, "hide_in_modifier"):
+            socket.hide_in_modifier = name in HIDDEN_INPUTS
         sockets[name] = socket
     return sockets
 
@@ -91,7 +92,7 @@ def _single_value(socket):
     """A setting, not a field: no attribute toggle beside it in the modifier."""
     if hasattr(socket, "structure_type"):  # Blender 4.5+
         socket.structure_type = "SINGLE"
-    else:
+    elif hasattr(socket, "force_non_field"):
         socket.force_non_field = True
 
 
