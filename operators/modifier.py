@@ -47,6 +47,8 @@ def modifier_differences(settings):
         lines.append("The modifier runs Simultaneous mode")
     if getattr(settings, "tolerance", 0.0) > 0.0:
         lines.append("The modifier runs every iteration")
+    if getattr(settings, "influence_group", ""):
+        lines.append("The modifier has no Influence Group yet")
     return lines
 
 

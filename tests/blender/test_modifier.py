@@ -334,6 +334,9 @@ def test_redo_panel_offers_add_as_modifier_with_the_same_settings(scene):
     operator.properties.mode = "SEQUENTIAL"  # the modifier cannot do that: the panel says so
     panel = redo_panel(operator)
     assert "The modifier runs Simultaneous mode" in panel.labels()
+    if "influence_group" in operator.properties.bl_rna.properties:  # nor use an influence group (yet)
+        operator.properties.influence_group = "Paint"
+        assert "The modifier has no Influence Group yet" in redo_panel(operator).labels()
 
 
 def test_edit_mode_redo_panel_has_no_add_as_modifier(scene):
