@@ -53,8 +53,9 @@ class SmoothProperties:
         if self.method == "HC":  # the Laplacian variants shrink by design: no standing warning for them
             # The automatic amount runs alpha 0 for the few iterations it chooses (no drift): only beta can warn.
             draw_convergence(layout, self.method, 1.0 if automatic else self.alpha, self.beta)
-        if getattr(type(self), "bl_idname", None) == OBJECT_OT_hc_smooth.bl_idname:  # not Edit mode: no selection
-            draw_add_as_modifier(layout, self)  # in a modifier
+        # Object mode only: Edit mode's selection (the vertices to smooth) has no equivalent in a modifier.
+        if getattr(type(self), "bl_idname", None) == OBJECT_OT_hc_smooth.bl_idname:
+            draw_add_as_modifier(layout, self)
 
 
 class _SmoothOperator(SmoothProperties, ModalProgress):
