@@ -97,11 +97,11 @@ def bench_closed(n_vertices, shuffle, repeats):
     times = {}
 
     def hc_object():
-        assert bpy.ops.object.hc_smooth(iterations=ITERATIONS) == {"FINISHED"}
+        assert bpy.ops.object.hc_smooth(auto_amount=False, iterations=ITERATIONS) == {"FINISHED"}
 
     times["object"] = median_time(hc_object, repeats, reset)
     reset()
-    props = sys.modules[ADDON + ".cli.arguments"].Settings(iterations=ITERATIONS)  # the declared defaults
+    props = sys.modules[ADDON + ".cli.arguments"].Settings(iterations=ITERATIONS, auto_amount=False)
     (job,) = [jobs.make_job(obj, props)]
     list(jobs.run([job], props))
 
@@ -130,7 +130,7 @@ def bench_closed(n_vertices, shuffle, repeats):
         bpy.ops.mesh.select_all(action="SELECT")
 
     def hc_edit():
-        assert bpy.ops.mesh.hc_smooth(iterations=ITERATIONS) == {"FINISHED"}
+        assert bpy.ops.mesh.hc_smooth(auto_amount=False, iterations=ITERATIONS) == {"FINISHED"}
 
     enter_edit_mode_all_selected()
     start = time.perf_counter()
@@ -175,7 +175,7 @@ def main():
     rows = []
 
     def hc_object(**extra):
-        assert bpy.ops.object.hc_smooth(iterations=ITERATIONS, **extra) == {"FINISHED"}
+        assert bpy.ops.object.hc_smooth(auto_amount=False, iterations=ITERATIONS, **extra) == {"FINISHED"}
 
     rows.append(("object.hc_smooth (Object mode, HC, simultaneous)", median_time(hc_object, repeats, reset)))
     rows.append(("object.hc_smooth, sequential", median_time(lambda: hc_object(mode="SEQUENTIAL"), repeats, reset)))
@@ -210,7 +210,7 @@ def main():
                              enter_edit_mode_all_selected)))
 
     def hc_edit():
-        assert bpy.ops.mesh.hc_smooth(iterations=ITERATIONS) == {"FINISHED"}
+        assert bpy.ops.mesh.hc_smooth(auto_amount=False, iterations=ITERATIONS) == {"FINISHED"}
         assert obj.mode == "EDIT"
 
     rows.append(("mesh.hc_smooth (Edit mode, all selected, end to end)",
