@@ -8,13 +8,22 @@ TEST_PATHS := $(if $(filter tests%,$(PYTEST_ARGS)),,tests)
 # A hung interpreter must fail the run, not stall CI: each environment's suite gets this many seconds.
 TEST_TIMEOUT ?= 1200
 
-.PHONY: envs env-bpy45 env-bpy52 test test-core demo build dist clean
+.PHONY: envs env-bpy45 env-bpy52 env-lint test test-core lint format demo build dist clean
 
 # Both test environments; `make env-bpy45` / `make env-bpy52` makes one alone.
 envs: env-bpy45 env-bpy52
 
-env-bpy45 env-bpy52:
+env-bpy45 env-bpy52 env-lint:
 	bash scripts/setup_envs.sh $(@:env-%=%)
+
+# Style (pyproject.toml): ruff's lint rules and its formatting, checked; `make format` applies both.
+lint: env-lint
+	.envs/lint/bin/ruff check --no-cache .
+	.envs/lint/bin/ruff format --no-cache --check .
+
+format: env-lint
+	.envs/lint/bin/ruff check --no-cache --fix .
+	.envs/lint/bin/ruff format --no-cache .
 
 # The whole suite (core + headless Blender) on Blender 4.5 LTS and Blender 5.2 LTS; fails if either fails.
 test: envs

@@ -58,160 +58,320 @@ def settings_class(name, settings, doc):
         """A snapshot of an operator's properties (a modal run must not see later edits)."""
         return cls(**{f.name: getattr(props, f.name) for f in fields(cls)})
 
-    return make_dataclass(name, [(s.name, KINDS[s.kind], field(default=s.default)) for s in settings],
-                          namespace={"of": classmethod(of), "__doc__": doc})
+    return make_dataclass(
+        name,
+        [(s.name, KINDS[s.kind], field(default=s.default)) for s in settings],
+        namespace={"of": classmethod(of), "__doc__": doc},
+    )
 
 
 # --- meshes: object.hc_smooth, mesh.hc_smooth and the scene settings (scene.hc_smooth) -----------------
 
 METHOD = Setting(
-    "method", "enum", "Method", "Smoothing algorithm", "HC",
+    "method",
+    "enum",
+    "Method",
+    "Smoothing algorithm",
+    "HC",
     items=(
-        Choice("HC", "HC", "Laplacian step, then push every vertex back towards its previous and original "
-               "position: removes noise without shrinking (Vollmer, Mencl, M\u00fcller 1999)",
-               short="HC", core="hc"),
-        Choice("LAPLACIAN", "Laplacian", "Move every vertex to the average of its neighbours: shrinks with "
-               "every iteration (paper 3.1)", short="Laplacian", core="plain"),
-        Choice("LAPLACIAN_CENTRAL", "Laplacian, Central Point", "Laplacian that keeps Alpha of the current "
-               "position: slower, shrinks the same way (paper 3.2)", short="Laplacian (central)", core="central"),
-        Choice("LAPLACIAN_ORIGINAL", "Laplacian, Original Point", "Laplacian that pulls towards the original "
-               "position with weight Alpha: converges, but shrinks part of the way (paper 3.3)",
-               short="Laplacian (original)", core="original"),
+        Choice(
+            "HC",
+            "HC",
+            "Laplacian step, then push every vertex back towards its previous and original "
+            "position: removes noise without shrinking (Vollmer, Mencl, M\u00fcller 1999)",
+            short="HC",
+            core="hc",
+        ),
+        Choice(
+            "LAPLACIAN",
+            "Laplacian",
+            "Move every vertex to the average of its neighbours: shrinks with every iteration (paper 3.1)",
+            short="Laplacian",
+            core="plain",
+        ),
+        Choice(
+            "LAPLACIAN_CENTRAL",
+            "Laplacian, Central Point",
+            "Laplacian that keeps Alpha of the current position: slower, shrinks the same way (paper 3.2)",
+            short="Laplacian (central)",
+            core="central",
+        ),
+        Choice(
+            "LAPLACIAN_ORIGINAL",
+            "Laplacian, Original Point",
+            "Laplacian that pulls towards the original "
+            "position with weight Alpha: converges, but shrinks part of the way (paper 3.3)",
+            short="Laplacian (original)",
+            core="original",
+        ),
     ),
-    flag="method", help="smoothing algorithm",
+    flag="method",
+    help="smoothing algorithm",
 )
 MESH_AUTO_AMOUNT = Setting(
-    "auto_amount", "bool", "Automatic Amount",
+    "auto_amount",
+    "bool",
+    "Automatic Amount",
     "HC: choose Iterations (with Alpha 0) from the noise the mesh itself shows, by cross-validating what the "
     "iterations remove, and give closed parts back the volume they had. Off: use Alpha and Iterations as set",
     True,
 )
 ALPHA = Setting(
-    "alpha", "float", "Alpha",
+    "alpha",
+    "float",
+    "Alpha",
     "HC and Laplacian with original point: weight of the original position (0 = none, higher keeps more "
     "of the input, noise included). Laplacian with central point: weight of the current position. HC: used "
     "when Automatic Amount is off",
-    0.1, min=0.0, max=1.0, step=1, precision=3, flag="alpha", help="pull towards the original",
+    0.1,
+    min=0.0,
+    max=1.0,
+    step=1,
+    precision=3,
+    flag="alpha",
+    help="pull towards the original",
     cli_default="{default}; HC: chosen with the iterations unless --alpha or --iterations is given",
 )
 BETA = Setting(
-    "beta", "float", "Beta",
+    "beta",
+    "float",
+    "Beta",
     "HC: weight of a vertex's own correction against its neighbours'. Convergence is proven for "
     "Beta > 0.5 (with Alpha > 0)",
-    0.6, min=0.0, max=1.0, step=1, precision=3, flag="beta", help="HC correction weight",
+    0.6,
+    min=0.0,
+    max=1.0,
+    step=1,
+    precision=3,
+    flag="beta",
+    help="HC correction weight",
 )
 ITERATIONS = Setting(
-    "iterations", "int", "Iterations",
+    "iterations",
+    "int",
+    "Iterations",
     "Number of smoothing iterations (heavier noise needs more). HC: used when Automatic Amount is off",
-    10, min=0, soft_max=200, flag="iterations", help="smoothing iterations",
+    10,
+    min=0,
+    soft_max=200,
+    flag="iterations",
+    help="smoothing iterations",
     cli_default="{default}; HC: chosen from the noise unless --alpha or --iterations is given",
 )
 MODE = Setting(
-    "mode", "enum", "Mode", "Order in which vertices are updated within an iteration", "SIMULTANEOUS",
+    "mode",
+    "enum",
+    "Mode",
+    "Order in which vertices are updated within an iteration",
+    "SIMULTANEOUS",
     items=(
-        Choice("SIMULTANEOUS", "Simultaneous", "Every vertex reads the positions of the previous iteration "
-               "(paper, Algorithm 1)"),
-        Choice("SEQUENTIAL", "Sequential", "Vertices in index order, each reading the already updated "
-               "positions of lower-index neighbours (Gauss\u2013Seidel)"),
+        Choice(
+            "SIMULTANEOUS",
+            "Simultaneous",
+            "Every vertex reads the positions of the previous iteration (paper, Algorithm 1)",
+        ),
+        Choice(
+            "SEQUENTIAL",
+            "Sequential",
+            "Vertices in index order, each reading the already updated "
+            "positions of lower-index neighbours (Gauss\u2013Seidel)",
+        ),
     ),
-    flag="mode", help="order of the updates within an iteration",
+    flag="mode",
+    help="order of the updates within an iteration",
 )
 TOLERANCE = Setting(
-    "tolerance", "float", "Tolerance",
+    "tolerance",
+    "float",
+    "Tolerance",
     "Stop early once no vertex moves more than this fraction of the bounding-box diagonal in an "
     "iteration (0 = always run every iteration)",
-    0.0, min=0.0, soft_max=0.01, step=0.01, precision=6,
-    flag="tolerance", help="stop early below this move, a fraction of the bounding-box diagonal",
+    0.0,
+    min=0.0,
+    soft_max=0.01,
+    step=0.01,
+    precision=6,
+    flag="tolerance",
+    help="stop early below this move, a fraction of the bounding-box diagonal",
 )
 VERTEX_GROUP = Setting(
-    "vertex_group", "string", "Vertex Group", "Vertices in this group (weight above 0) stay fixed (empty: none)",
-    "", flag="fixed-group", metavar="NAME",
+    "vertex_group",
+    "string",
+    "Vertex Group",
+    "Vertices in this group (weight above 0) stay fixed (empty: none)",
+    "",
+    flag="fixed-group",
+    metavar="NAME",
     help="vertices (points) in this vertex group stay fixed (.blend, OBJ groups)",
 )
 INVERT_VERTEX_GROUP = Setting(
-    "invert_vertex_group", "bool", "Invert", "Fix every vertex outside the group instead: smooth only the group",
-    False, flag="invert-group", help="fix everything outside --fixed-group instead (smooth only the group)",
+    "invert_vertex_group",
+    "bool",
+    "Invert",
+    "Fix every vertex outside the group instead: smooth only the group",
+    False,
+    flag="invert-group",
+    help="fix everything outside --fixed-group instead (smooth only the group)",
 )
 PIN_BOUNDARY = Setting(
-    "pin_boundary", "bool", "Pin Boundary", "Keep the vertices on open boundaries (holes, borders) fixed",
-    False, flag="pin-boundary", help="keep open-boundary vertices fixed",
+    "pin_boundary",
+    "bool",
+    "Pin Boundary",
+    "Keep the vertices on open boundaries (holes, borders) fixed",
+    False,
+    flag="pin-boundary",
+    help="keep open-boundary vertices fixed",
 )
 INFLUENCE_GROUP = Setting(
-    "influence_group", "string", "Influence Group",
+    "influence_group",
+    "string",
+    "Influence Group",
     "Vertex group whose weights scale how far each vertex moves in every iteration (0 = stays, 1 = the full "
     "step; empty: full everywhere), for smoothing painted where the scan is noisy",
-    "", flag="influence-group", metavar="NAME",
+    "",
+    flag="influence-group",
+    metavar="NAME",
     help="vertex group whose weights scale each vertex's move (0 stays, 1 full; .blend, OBJ groups)",
 )
 INVERT_INFLUENCE_GROUP = Setting(
-    "invert_influence_group", "bool", "Invert Influence", "Use one minus the weights of the influence group",
-    False, flag="invert-influence", help="use one minus the --influence-group weights",
+    "invert_influence_group",
+    "bool",
+    "Invert Influence",
+    "Use one minus the weights of the influence group",
+    False,
+    flag="invert-influence",
+    help="use one minus the --influence-group weights",
 )
 OUTPUT = Setting(
-    "output", "enum", "Output", "Where the result goes", "MESH",
+    "output",
+    "enum",
+    "Output",
+    "Where the result goes",
+    "MESH",
     items=(
         Choice("MESH", "Mesh", "Move the vertices (of the active shape key, if the mesh has shape keys)"),
         Choice("SHAPE_KEY", "New Shape Key", "Write the result into a new shape key and leave the mesh as it was"),
     ),
 )
 
-MESH = (METHOD, MESH_AUTO_AMOUNT, ALPHA, BETA, ITERATIONS, MODE, TOLERANCE, VERTEX_GROUP, INVERT_VERTEX_GROUP,
-        PIN_BOUNDARY, INFLUENCE_GROUP, INVERT_INFLUENCE_GROUP, OUTPUT)
+MESH = (
+    METHOD,
+    MESH_AUTO_AMOUNT,
+    ALPHA,
+    BETA,
+    ITERATIONS,
+    MODE,
+    TOLERANCE,
+    VERTEX_GROUP,
+    INVERT_VERTEX_GROUP,
+    PIN_BOUNDARY,
+    INFLUENCE_GROUP,
+    INVERT_INFLUENCE_GROUP,
+    OUTPUT,
+)
 
 # --- point clouds: object.hc_smooth_points --------------------------------------------------------------
 
 AUTO_AMOUNT = Setting(
-    "auto_amount", "bool", "Automatic Amount",
+    "auto_amount",
+    "bool",
+    "Automatic Amount",
     "Choose Steps per Round and Alpha from the noise estimated relative to the point spacing (noisier: "
     "more steps and a weaker pull; nearly clean, sparse points: a few steps). Off: use the values set below",
     True,
 )
 POINT_ALPHA = replace(
-    ALPHA, default=0.01, step=0.1,
+    ALPHA,
+    default=0.01,
+    step=0.1,
     description="Pull towards the original positions (small: more smoothing; raise it for nearly clean, "
     "sparse points). Used when Automatic Amount is off",
     cli_default="chosen from the noise unless given, then --steps-per-round applies",
 )
 POINT_BETA = replace(
-    BETA, default=0.55,
+    BETA,
+    default=0.55,
     description="Weight of a point's own correction against its neighbours'. Convergence is proven for "
     "Beta > 0.5 (with Alpha > 0)",
 )
 ROUNDS = Setting(
-    "rounds", "int", "Rounds",
+    "rounds",
+    "int",
+    "Rounds",
     "Runs of Steps per Round HC steps, with edge swapping of the RFS mesh in between (with Automatic Amount "
     "the chosen steps are spread over the rounds)",
-    3, min=0, soft_max=50, flag="rounds", help="runs of HC steps with edge swapping between them",
+    3,
+    min=0,
+    soft_max=50,
+    flag="rounds",
+    help="runs of HC steps with edge swapping between them",
 )
 ITERATIONS_PER_ROUND = Setting(
-    "iterations_per_round", "int", "Steps per Round",
+    "iterations_per_round",
+    "int",
+    "Steps per Round",
     "HC iterations between two passes of edge swapping. Used when Automatic Amount is off",
-    22, min=1, soft_max=100, flag="steps-per-round", metavar="N", help="HC steps per round",
+    22,
+    min=1,
+    soft_max=100,
+    flag="steps-per-round",
+    metavar="N",
+    help="HC steps per round",
     cli_default="chosen from the noise unless given, then {default} and --alpha apply",
 )
 NEIGHBOURS = Setting(
-    "neighbours", "int", "Neighbours", "How many nearest neighbours each point may connect to",
-    16, min=2, soft_max=64, flag="neighbours", metavar="N", help="nearest neighbours a point may connect to",
+    "neighbours",
+    "int",
+    "Neighbours",
+    "How many nearest neighbours each point may connect to",
+    16,
+    min=2,
+    soft_max=64,
+    flag="neighbours",
+    metavar="N",
+    help="nearest neighbours a point may connect to",
 )
 SPACING_FACTOR = Setting(
-    "spacing_factor", "float", "Reach",
+    "spacing_factor",
+    "float",
+    "Reach",
     "Connect neighbours up to this many times the local point spacing (larger: wider neighbourhoods, "
     "stronger smoothing)",
-    2.5, min=0.1, soft_max=5.0, flag="reach", metavar="R", help="connect neighbours up to R local spacings",
+    2.5,
+    min=0.1,
+    soft_max=5.0,
+    flag="reach",
+    metavar="R",
+    help="connect neighbours up to R local spacings",
 )
 GAP_FACTOR = Setting(
-    "gap_factor", "float", "Gap",
+    "gap_factor",
+    "float",
+    "Gap",
     "Never connect across a gap wider than this many local spacings: separate parts stay separate (must be "
     "at least Reach)",
-    3.0, min=0.1, soft_max=10.0, flag="gap", metavar="G",
+    3.0,
+    min=0.1,
+    soft_max=10.0,
+    flag="gap",
+    metavar="G",
     help="never connect across a gap of G local spacings, at least --reach",
 )
 MIN_QUALITY = Setting(
-    "min_quality", "float", "Face Quality", "Drop RFS faces below this Bank-Smith quality (1 = equilateral)",
-    0.3, min=0.0, max=1.0,
+    "min_quality",
+    "float",
+    "Face Quality",
+    "Drop RFS faces below this Bank-Smith quality (1 = equilateral)",
+    0.3,
+    min=0.0,
+    max=1.0,
 )
 SWAP = Setting(
-    "swap", "bool", "Edge Swapping", "Swap edges of the RFS mesh between HC steps (paper section 7)", True,
+    "swap",
+    "bool",
+    "Edge Swapping",
+    "Swap edges of the RFS mesh between HC steps (paper section 7)",
+    True,
 )
 POINT_VERTEX_GROUP = replace(
     VERTEX_GROUP,
@@ -220,12 +380,28 @@ POINT_VERTEX_GROUP = replace(
 )
 POINT_INVERT_VERTEX_GROUP = replace(INVERT_VERTEX_GROUP, description="Fix every point outside the group instead")
 KEEP_RFS_MESH = Setting(
-    "keep_rfs_mesh", "bool", "Keep RFS Mesh", "Add the final RFS mesh as a new wireframe object to inspect it",
+    "keep_rfs_mesh",
+    "bool",
+    "Keep RFS Mesh",
+    "Add the final RFS mesh as a new wireframe object to inspect it",
     False,
 )
 
-POINTS = (AUTO_AMOUNT, POINT_ALPHA, POINT_BETA, ROUNDS, ITERATIONS_PER_ROUND, NEIGHBOURS, SPACING_FACTOR,
-          GAP_FACTOR, MIN_QUALITY, SWAP, POINT_VERTEX_GROUP, POINT_INVERT_VERTEX_GROUP, KEEP_RFS_MESH)
+POINTS = (
+    AUTO_AMOUNT,
+    POINT_ALPHA,
+    POINT_BETA,
+    ROUNDS,
+    ITERATIONS_PER_ROUND,
+    NEIGHBOURS,
+    SPACING_FACTOR,
+    GAP_FACTOR,
+    MIN_QUALITY,
+    SWAP,
+    POINT_VERTEX_GROUP,
+    POINT_INVERT_VERTEX_GROUP,
+    KEEP_RFS_MESH,
+)
 
 # --- the HC Smooth modifier: object.hc_smooth_modifier_add and the modifier's node group ------------------
 # The mesh settings a modifier can hold: it runs simultaneous mode and every iteration (no Mode, no

@@ -16,7 +16,8 @@ report alone (measuring the change: the enclosed volume before and after), the S
 mesh.hc_smooth in Edit mode (its first call, and the median). Then the HC Smooth modifier (the Geometry Nodes
 group of nodes/hc_group.py) on closed tori of each --modifier size: its evaluation per method against the
 Smooth modifier's, wall and CPU time, and what its parts cost (an umbrella step, Set Position, Blur
-Attribute per call, ...; see modifier_tables). It prints markdown tables and the ratios set as targets. Run it with either test environment (Blender 4.5 or 5.2 as the bpy module);
+Attribute per call, ...; see modifier_tables). It prints markdown tables and the ratios set as targets. Run
+it with either test environment (Blender 4.5 or 5.2 as the bpy module);
 it installs the extension itself.
 """
 
@@ -30,10 +31,9 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "scripts")]
 
-from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
-
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
+from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
 
 sys.path.insert(0, str(ROOT / "bench"))
 import meshes  # noqa: E402
@@ -151,11 +151,16 @@ def restore(obj, points):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=1000, help="grid subdivisions per side")
-    parser.add_argument("--torus", type=count,
-                        default=1_000_000, help="vertices of the closed triangle tori (1M; 0 skips them)")
+    parser.add_argument(
+        "--torus", type=count, default=1_000_000, help="vertices of the closed triangle tori (1M; 0 skips them)"
+    )
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--modifier", type=lambda text: [count(part) for part in text.split(",") if count(part)],
-                        default="100k,1M", help="vertices of the tori for the HC Smooth modifier (0 skips it)")
+    parser.add_argument(
+        "--modifier",
+        type=lambda text: [count(part) for part in text.split(",") if count(part)],
+        default="100k,1M",
+        help="vertices of the tori for the HC Smooth modifier (0 skips it)",
+    )
     parser.add_argument("--only-modifier", action="store_true", help="run the modifier section alone")
     args = parser.parse_args()
     install_extension(ROOT / "build" / "bench")
@@ -179,12 +184,24 @@ def main():
 
     rows.append(("object.hc_smooth (Object mode, HC, simultaneous)", median_time(hc_object, repeats, reset)))
     rows.append(("object.hc_smooth, sequential", median_time(lambda: hc_object(mode="SEQUENTIAL"), repeats, reset)))
-    rows.append(("object.hc_smooth with a fixed vertex group (30 %)",
-                 median_time(lambda: hc_object(vertex_group="Fixed"), repeats, reset)))
-    rows.append(("  vertex group read alone (bulk path)",
-                 median_time(lambda: mesh_io.vertex_group_members(obj, group.index), repeats)))
-    rows.append(("  vertex group read alone (per-vertex loop)",
-                 median_time(lambda: mesh_io._vertex_group_weights_loop(obj.data, group.index), 1)))
+    rows.append(
+        (
+            "object.hc_smooth with a fixed vertex group (30 %)",
+            median_time(lambda: hc_object(vertex_group="Fixed"), repeats, reset),
+        )
+    )
+    rows.append(
+        (
+            "  vertex group read alone (bulk path)",
+            median_time(lambda: mesh_io.vertex_group_members(obj, group.index), repeats),
+        )
+    )
+    rows.append(
+        (
+            "  vertex group read alone (per-vertex loop)",
+            median_time(lambda: mesh_io._vertex_group_weights_loop(obj.data, group.index), 1),
+        )
+    )
 
     reset()
     modifier = obj.modifiers.new("Smooth", "SMOOTH")
@@ -205,22 +222,35 @@ def main():
         bpy.ops.object.mode_set(mode="EDIT")
         bpy.ops.mesh.select_all(action="SELECT")
 
-    rows.append(("mesh.vertices_smooth (Smooth Vertices, repeat=10, Edit mode)",
-                 median_time(lambda: bpy.ops.mesh.vertices_smooth(factor=0.5, repeat=ITERATIONS), repeats,
-                             enter_edit_mode_all_selected)))
+    rows.append(
+        (
+            "mesh.vertices_smooth (Smooth Vertices, repeat=10, Edit mode)",
+            median_time(
+                lambda: bpy.ops.mesh.vertices_smooth(factor=0.5, repeat=ITERATIONS),
+                repeats,
+                enter_edit_mode_all_selected,
+            ),
+        )
+    )
 
     def hc_edit():
         assert bpy.ops.mesh.hc_smooth(auto_amount=False, iterations=ITERATIONS) == {"FINISHED"}
         assert obj.mode == "EDIT"
 
-    rows.append(("mesh.hc_smooth (Edit mode, all selected, end to end)",
-                 median_time(hc_edit, repeats, enter_edit_mode_all_selected)))
+    rows.append(
+        (
+            "mesh.hc_smooth (Edit mode, all selected, end to end)",
+            median_time(hc_edit, repeats, enter_edit_mode_all_selected),
+        )
+    )
     reset()
 
     times = dict(rows)
     hc = times["object.hc_smooth (Object mode, HC, simultaneous)"]
-    print(f"\n# HC Smooth in Blender {bpy.app.version_string}, {platform.python_version()}, {n:,} vertices, "
-          f"{len(obj.data.polygons):,} faces, {ITERATIONS} iterations, median of {repeats}\n")
+    print(
+        f"\n# HC Smooth in Blender {bpy.app.version_string}, {platform.python_version()}, {n:,} vertices, "
+        f"{len(obj.data.polygons):,} faces, {ITERATIONS} iterations, median of {repeats}\n"
+    )
     print("| what | median time (s) |\n|---|---:|")
     for name, seconds in rows:
         print(f"| {name} | {seconds:.3f} |")
@@ -233,8 +263,12 @@ def main():
         ("Object mode HC / Smooth modifier", f"{hc / modifier_time:.2f}×", "≤ 2×", hc <= 2 * modifier_time),
         ("Smooth Vertices / Object mode HC", f"{vertices_smooth / hc:.2f}×", "≥ 5×", vertices_smooth >= 5 * hc),
         ("Edit mode HC, end to end", f"{edit:.2f} s", "≤ 2.5 s", edit <= 2.5),
-        ("vertex group read / run with the group", f"{group_read / with_group:.1%}", "not dominant",
-         group_read < 0.25 * with_group),
+        (
+            "vertex group read / run with the group",
+            f"{group_read / with_group:.1%}",
+            "not dominant",
+            group_read < 0.25 * with_group,
+        ),
     ]
     print("\n| check | value | target | |\n|---|---:|---:|---|")
     for name, value, target, ok in checks:
@@ -251,24 +285,28 @@ def count(text):
 
 
 def closed_tables(n_vertices, repeats):
-    results = {order: bench_closed(n_vertices, order == "random order", repeats)
-               for order in ("grid order", "random order")}
+    results = {
+        order: bench_closed(n_vertices, order == "random order", repeats) for order in ("grid order", "random order")
+    }
     print(f"\n# Closed triangle torus, {n_vertices:,} vertices, {ITERATIONS} iterations, median of {repeats}\n")
-    print("| vertex order | object.hc_smooth | report (volume before/after) | Smooth modifier "
-          "| Edit mode, first call | Edit mode |\n|---|---:|---:|---:|---:|---:|")
+    print(
+        "| vertex order | object.hc_smooth | report (volume before/after) | Smooth modifier "
+        "| Edit mode, first call | Edit mode |\n|---|---:|---:|---:|---:|---:|"
+    )
     for order, times in results.items():
-        print(f"| {order} | {times['object']:.3f} s | {times['report']:.3f} s | {times['modifier']:.3f} s "
-              f"| {times['edit first']:.2f} s | {times['edit']:.2f} s |")
+        print(
+            f"| {order} | {times['object']:.3f} s | {times['report']:.3f} s | {times['modifier']:.3f} s "
+            f"| {times['edit first']:.2f} s | {times['edit']:.2f} s |"
+        )
     print("\n| check | value | target | |\n|---|---:|---:|---|")
     for order, times in results.items():
         ratio, share = times["object"] / times["modifier"], times["report"] / times["object"]
         for name, value, target, ok in (
-                (f"{order}: Object mode HC / Smooth modifier", f"{ratio:.2f}×", "≤ 2×", ratio <= 2),
-                (f"{order}: report / Object mode run", f"{share:.1%}", "≤ 10 %", share <= 0.1),
-                (f"{order}: Edit mode, first call", f"{times['edit first']:.2f} s", "≤ 2.5 s",
-                 times["edit first"] <= 2.5)):
+            (f"{order}: Object mode HC / Smooth modifier", f"{ratio:.2f}×", "≤ 2×", ratio <= 2),
+            (f"{order}: report / Object mode run", f"{share:.1%}", "≤ 10 %", share <= 0.1),
+            (f"{order}: Edit mode, first call", f"{times['edit first']:.2f} s", "≤ 2.5 s", times["edit first"] <= 2.5),
+        ):
             print(f"| {name} | {value} | {target} | {'ok' if ok else 'MISSED'} |")
-
 
 
 # --- the HC Smooth modifier -------------------------------------------------------------------------------
@@ -355,18 +393,25 @@ def part_trees():
         return t.set_position(geometry, value)
 
     return {
-        "Set Position (q + c)": looped("part: set position", lambda t, g, _: t.set_position(g, t.add(t.position(), shift))),
+        "Set Position (q + c)": looped(
+            "part: set position", lambda t, g, _: t.set_position(g, t.add(t.position(), shift))
+        ),
         "Capture Attribute + Set Position from it": looped("part: capture", lambda t, g, _: captured_shift(t, g)),
         "umbrella of the positions (Edge Vertices, Evaluate on Domain) + Set Position": looped(
-            "part: umbrella", lambda t, g, _: t.set_position(g, t.umbrella_of_positions())),
+            "part: umbrella", lambda t, g, _: t.set_position(g, t.umbrella_of_positions())
+        ),
         "umbrella of an attribute (2 × Evaluate at Index) + Set Position": looped(
-            "part: gathered umbrella", lambda t, g, x: t.set_position(g, gathered_umbrella(t, x)), capture_position),
+            "part: gathered umbrella", lambda t, g, x: t.set_position(g, gathered_umbrella(t, x)), capture_position
+        ),
         "umbrella, nested Evaluate on Domain (point → edge → point) + Set Position": looped(
-            "part: nested umbrella", lambda t, g, _: t.set_position(g, nested_umbrella(t))),
+            "part: nested umbrella", lambda t, g, _: t.set_position(g, nested_umbrella(t))
+        ),
         "umbrella, each end position averaged onto the points alone + Set Position": looped(
-            "part: split umbrella", lambda t, g, _: t.set_position(g, split_umbrella(t))),
+            "part: split umbrella", lambda t, g, _: t.set_position(g, split_umbrella(t))
+        ),
         "Blur Attribute, 1 iteration per call + Set Position": looped(
-            "part: blur", lambda t, g, _: t.set_position(g, blur(t, 1))),
+            "part: blur", lambda t, g, _: t.set_position(g, blur(t, 1))
+        ),
     }
 
 
@@ -374,9 +419,11 @@ def modifier_tables(sizes, repeats):
     """The HC Smooth modifier against the Smooth modifier on closed tori, and the price of its parts."""
     inputs = sys.modules[ADDON + ".nodes.inputs"]
     method_names = sys.modules[ADDON + ".nodes.hc_group"].METHOD_NAMES
-    print(f"\n# HC Smooth modifier, closed triangle tori, {ITERATIONS} iterations, Blender {bpy.app.version_string}, "
-          f"median of {repeats}; wall / CPU seconds (CPU: all threads), ratio to the Smooth modifier of the same "
-          "run\n")
+    print(
+        f"\n# HC Smooth modifier, closed triangle tori, {ITERATIONS} iterations, Blender {bpy.app.version_string}, "
+        f"median of {repeats}; wall / CPU seconds (CPU: all threads), ratio to the Smooth modifier of the same "
+        "run\n"
+    )
     print("| vertices | Smooth modifier | " + " | ".join(METHODS) + " |\n|---:|---:|" + "---:|" * len(METHODS))
     checks, parts = [], {}
     for n_vertices in sizes:
@@ -397,12 +444,23 @@ def modifier_tables(sizes, repeats):
         print(f"| {len(obj.data.vertices):,} | {reference[0]:.3f} / {reference[1]:.3f} | " + " | ".join(cells) + " |")
         obj.modifiers.remove(modifier)
         if n_vertices >= 1_000_000:
-            checks.append((f"{n_vertices:,}: HC / Smooth modifier (wall, CPU)",
-                           f"{hc[0] / reference[0]:.1f}× / {hc[1] / reference[1]:.1f}×", "≤ 4×",
-                           hc[0] <= 4 * reference[0]))
+            checks.append(
+                (
+                    f"{n_vertices:,}: HC / Smooth modifier (wall, CPU)",
+                    f"{hc[0] / reference[0]:.1f}× / {hc[1] / reference[1]:.1f}×",
+                    "≤ 4×",
+                    hc[0] <= 4 * reference[0],
+                )
+            )
         if n_vertices <= 100_000:
-            checks.append((f"{n_vertices:,}: HC, one evaluation (wall, CPU)", f"{hc[0]:.3f} / {hc[1]:.3f} s",
-                           "≤ 0.15 s", hc[0] <= 0.15))
+            checks.append(
+                (
+                    f"{n_vertices:,}: HC, one evaluation (wall, CPU)",
+                    f"{hc[0]:.3f} / {hc[1]:.3f} s",
+                    "≤ 0.15 s",
+                    hc[0] <= 0.15,
+                )
+            )
         part = obj.modifiers.new("Part", "NODES")
         for name, tree in part_trees().items():
             part.node_group = tree
@@ -411,17 +469,25 @@ def modifier_tables(sizes, repeats):
         smooth = obj.modifiers.new("Smooth", "SMOOTH")  # the price of one Smooth iteration, same object
         smooth.factor, smooth.iterations = 0.5, ITERATIONS
         obj.modifiers.remove(part)
-        parts.setdefault("Smooth modifier, one of its iterations (for scale)", {})[n_vertices] = \
-            timed_evaluation(obj, repeats)
+        parts.setdefault("Smooth modifier, one of its iterations (for scale)", {})[n_vertices] = timed_evaluation(
+            obj, repeats
+        )
     print("\n| check | value | target | |\n|---|---:|---:|---|")
     for name, value, target, ok in checks:
         print(f"| {name} | {value} | {target} | {'ok' if ok else 'MISSED'} |")
-    print(f"\nWhere the time goes: each part repeated {ITERATIONS}× in a Repeat zone, milliseconds per repetition, "
-          "wall / CPU\n")
+    print(
+        f"\nWhere the time goes: each part repeated {ITERATIONS}× in a Repeat zone, milliseconds per repetition, "
+        "wall / CPU\n"
+    )
     print("| part | " + " | ".join(f"{n:,}" for n in sizes) + " |\n|---|" + "---:|" * len(sizes))
     for name, by_size in parts.items():
-        print(f"| {name} | " + " | ".join(f"{1000 * by_size[n][0] / ITERATIONS:.1f} / "
-                                         f"{1000 * by_size[n][1] / ITERATIONS:.1f}" for n in sizes) + " |")
+        print(
+            f"| {name} | "
+            + " | ".join(
+                f"{1000 * by_size[n][0] / ITERATIONS:.1f} / {1000 * by_size[n][1] / ITERATIONS:.1f}" for n in sizes
+            )
+            + " |"
+        )
 
 
 if __name__ == "__main__":

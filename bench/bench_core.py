@@ -21,8 +21,8 @@ import sys
 import time
 import tracemalloc
 import warnings
-from importlib import metadata
 from datetime import datetime
+from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -33,8 +33,9 @@ from scipy.sparse.linalg import spsolve_triangular
 HERE = Path(__file__).resolve().parent
 sys.path[:0] = [str(HERE.parent), str(HERE)]  # the repository root holds `core`; meshes.py is beside us
 
-import core  # noqa: E402
 import meshes  # noqa: E402
+
+import core  # noqa: E402
 
 RATIO, MINOR = 2.5, 0.4  # torus shape (R = RATIO * MINOR)
 TARGET_SPEEDUP = 3.0  # HC simultaneous vs filter_humphrey at 1M vertices
@@ -115,8 +116,9 @@ def peer_methods(alpha, beta, iterations):
         import open3d as o3d
 
         def o3d_mesh(vertices, faces):
-            return o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(vertices),
-                                             o3d.utility.Vector3iVector(faces.astype(np.int32)))
+            return o3d.geometry.TriangleMesh(
+                o3d.utility.Vector3dVector(vertices), o3d.utility.Vector3iVector(faces.astype(np.int32))
+            )
 
         def laplacian(vertices, faces):
             smoothed = o3d_mesh(vertices, faces).filter_smooth_laplacian(number_of_iterations=iterations)
@@ -212,8 +214,10 @@ def machine_line():
     except (OSError, StopIteration):
         pass
     load = ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
-    return (f"{cpu}, {os.cpu_count()} cores, load average at start {load}; Python {platform.python_version()}, "
-            f"NumPy {np.__version__}, SciPy {scipy.__version__}")
+    return (
+        f"{cpu}, {os.cpu_count()} cores, load average at start {load}; Python {platform.python_version()}, "
+        f"NumPy {np.__version__}, SciPy {scipy.__version__}"
+    )
 
 
 # --- One mesh size -------------------------------------------------------------------------------------
@@ -254,25 +258,32 @@ def bench_size(n_target, args, peers, out):
     repeats = args.repeats or (5 if n < 500_000 else 3)
     hc = dict(alpha=args.alpha, beta=args.beta, iterations=args.iterations)
     order = "random" if args.shuffle else "grid"
-    out(f"\n## {n_target:,} vertices requested ({n:,} vertices, {edges.shape[0]:,} edges, {faces.shape[0]:,} triangles)\n")
-    out(f"Noisy torus (σ = 1 % of bbox diagonal, seed {args.seed}, vertex order: {order}); "
+    out(
+        f"\n## {n_target:,} vertices requested ({n:,} vertices, {edges.shape[0]:,} edges, "
+        f"{faces.shape[0]:,} triangles)\n"
+    )
+    out(
+        f"Noisy torus (σ = 1 % of bbox diagonal, seed {args.seed}, vertex order: {order}); "
         f"{args.iterations} iterations; median of {repeats} runs. Input RMS distance to the true torus: "
         f"{torus_rms(noisy, diagonal):.3f} % of diagonal; its volume vs the true torus: "
-        f"{core.measure_change(noisy, noisy, faces).volume_before / true_volume - 1:+.3%}.\n")
+        f"{core.measure_change(noisy, noisy, faces).volume_before / true_volume - 1:+.3%}.\n"
+    )
 
     rows = []  # (method, variant, seconds, cpu/wall, result)
     core_times = {}
     for mode in ("simultaneous", "sequential"):
         for dtype in (np.float32, np.float64):
             start = noisy.astype(dtype)
-            seconds, cpu, result = timed(lambda: core.hc_smooth(start, edges, mode=mode, **hc), repeats)
+            seconds, cpu, result = timed(
+                lambda start=start, mode=mode: core.hc_smooth(start, edges, mode=mode, **hc), repeats
+            )
             core_times[mode, dtype] = seconds
             rows.append(("core.hc_smooth", f"{mode}, {np.dtype(dtype).name}", seconds, cpu, result))
     for name, (description, run) in peers.items():
         if run is None:
             rows.append((name, description, None, None, None))
             continue
-        seconds, cpu, result = timed(lambda: run(noisy, faces), repeats)
+        seconds, cpu, result = timed(lambda run=run: run(noisy, faces), repeats)
         rows.append((name, description, seconds, cpu, result))
 
     if not args.shuffle:
@@ -282,18 +293,28 @@ def bench_size(n_target, args, peers, out):
         scattered_edges = meshes.edges_from_faces(scattered_faces).astype(np.int32)
         for dtype in (np.float32, np.float64):
             start = scattered.astype(dtype)
-            seconds, cpu, result = timed(lambda: core.hc_smooth(start, scattered_edges, **hc), repeats)
-            rows.append(("core.hc_smooth", f"simultaneous, {np.dtype(dtype).name}, random vertex order", seconds,
-                         cpu, _unshuffle(result, noisy, scattered)))
+            seconds, cpu, result = timed(lambda start=start: core.hc_smooth(start, scattered_edges, **hc), repeats)
+            rows.append(
+                (
+                    "core.hc_smooth",
+                    f"simultaneous, {np.dtype(dtype).name}, random vertex order",
+                    seconds,
+                    cpu,
+                    _unshuffle(result, noisy, scattered),
+                )
+            )
         description, run = peers.get("trimesh filter_humphrey", (None, None))
         if run is not None:
             seconds, cpu, result = timed(lambda: run(scattered, scattered_faces), repeats)
-            rows.append(("trimesh filter_humphrey", "random vertex order", seconds, cpu,
-                         _unshuffle(result, noisy, scattered)))
+            rows.append(
+                ("trimesh filter_humphrey", "random vertex order", seconds, cpu, _unshuffle(result, noisy, scattered))
+            )
 
     humphrey = next((row[2] for row in rows if row[0] == "trimesh filter_humphrey"), None)
-    out("| method | variant | median time (s) | CPU / wall | speed-up vs filter_humphrey | volume change | "
-        "volume vs true torus | RMS to true torus (% diag) |")
+    out(
+        "| method | variant | median time (s) | CPU / wall | speed-up vs filter_humphrey | volume change | "
+        "volume vs true torus | RMS to true torus (% diag) |"
+    )
     out("|---|---|---:|---:|---:|---:|---:|---:|")
     for method, variant, seconds, cpu, result in rows:
         if seconds is None:
@@ -303,8 +324,10 @@ def bench_size(n_target, args, peers, out):
         volume = f"{change.volume_change:+.3%}" if change.volume_change is not None else "n/a"
         truth = f"{change.volume_after / true_volume - 1:+.3%}" if change.volume_after is not None else "n/a"
         speedup = f"{humphrey / seconds:.2f}×" if humphrey else "–"
-        out(f"| {method} | {variant} | {seconds:.3f} | {cpu:.2f} | {speedup} | {volume} | {truth} | "
-            f"{torus_rms(result, diagonal):.3f} |")
+        out(
+            f"| {method} | {variant} | {seconds:.3f} | {cpu:.2f} | {speedup} | {volume} | {truth} | "
+            f"{torus_rms(result, diagonal):.3f} |"
+        )
 
     # Exactness: float64 against the independent matrix form, both modes; trimesh's HC as a bonus.
     out("\n| check | value | target | |")
@@ -319,8 +342,12 @@ def bench_size(n_target, args, peers, out):
         expected = reference_hc(noisy, edges, args.alpha, args.beta, args.iterations, mode)
         got = core.hc_smooth(noisy, edges, mode=mode, **hc)
         deviation = float(np.abs(got - expected).max()) / diagonal
-        check(f"float64 {mode} vs matrix form of Algorithm 1 (max dev / diag)", f"{deviation:.1e}",
-              f"≤ {TARGET_AGREEMENT:.0e}", deviation <= TARGET_AGREEMENT)
+        check(
+            f"float64 {mode} vs matrix form of Algorithm 1 (max dev / diag)",
+            f"{deviation:.1e}",
+            f"≤ {TARGET_AGREEMENT:.0e}",
+            deviation <= TARGET_AGREEMENT,
+        )
         if mode == "simultaneous":
             core_result = got
     humphrey_result = next((row[4] for row in rows if row[0] == "trimesh filter_humphrey"), None)
@@ -329,14 +356,21 @@ def bench_size(n_target, args, peers, out):
         out(f"| trimesh filter_humphrey vs core, same α, β (max dev / diag) | {deviation:.1e} | (info) | |")
     for dtype in (np.float32, np.float64):
         ratio = core_times["sequential", dtype] / core_times["simultaneous", dtype]
-        check(f"sequential / simultaneous time, {np.dtype(dtype).name}", f"{ratio:.2f}", f"≤ {TARGET_SEQUENTIAL}",
-              ratio <= TARGET_SEQUENTIAL)
+        check(
+            f"sequential / simultaneous time, {np.dtype(dtype).name}",
+            f"{ratio:.2f}",
+            f"≤ {TARGET_SEQUENTIAL}",
+            ratio <= TARGET_SEQUENTIAL,
+        )
     for dtype in (np.float32, np.float64):
         # The floor of the sequential mode: its triangular solves alone (SciPy's SuperLU, one call per
         # iteration with every coordinate; SciPy runs one SuperLU call at a time, so no threads help).
         floor = sequential_solve_floor(noisy.astype(dtype), edges, args.iterations, repeats)
-        out(f"| SuperLU solves alone ({args.iterations} × 3 coordinates) / simultaneous run, "
-            f"{np.dtype(dtype).name} | {floor / core_times['simultaneous', dtype]:.2f} | (info: the floor of the ratio above) | |")
+        out(
+            f"| SuperLU solves alone ({args.iterations} × 3 coordinates) / simultaneous run, "
+            f"{np.dtype(dtype).name} | {floor / core_times['simultaneous', dtype]:.2f} "
+            "| (info: the floor of the ratio above) | |"
+        )
     if humphrey:
         for dtype in (np.float32, np.float64):
             speedup = humphrey / core_times["simultaneous", dtype]
@@ -349,14 +383,19 @@ def bench_size(n_target, args, peers, out):
         for dtype in (np.float32, np.float64):
             start = noisy.astype(dtype)
 
-            def run():
+            def run(start=start, mode=mode):
                 return core.hc_smooth(start, edges, mode=mode, **hc)
 
             traced = traced_extra_bytes(run, n)
             resident = rss_extra_bytes(run, n)
             resident_text = f", peak RSS {resident:.0f}" if resident is not None else ""
-            check(f"peak extra memory per vertex, {mode} {np.dtype(dtype).name} (tracemalloc{resident_text})",
-                  f"{traced:.1f}", f"≤ {TARGET_BYTES:g}", traced <= TARGET_BYTES, " B")
+            check(
+                f"peak extra memory per vertex, {mode} {np.dtype(dtype).name} (tracemalloc{resident_text})",
+                f"{traced:.1f}",
+                f"≤ {TARGET_BYTES:g}",
+                traced <= TARGET_BYTES,
+                " B",
+            )
     return all(verdicts)
 
 
@@ -387,8 +426,10 @@ def main(argv=None):
 
     out(f"# core.hc_smooth benchmark, {datetime.now():%Y-%m-%d %H:%M}\n")
     out(f"Machine: {machine_line()}.")
-    out(f"HC α = {args.alpha}, β = {args.beta}; core timings include input checks and building the "
-        "operator from the edge list; peer timings include building their mesh objects and operators.\n")
+    out(
+        f"HC α = {args.alpha}, β = {args.beta}; core timings include input checks and building the "
+        "operator from the edge list; peer timings include building their mesh objects and operators.\n"
+    )
     peers = {} if args.no_peers else peer_methods(args.alpha, args.beta, args.iterations)
     # Warm up imports and code paths on a tiny mesh so the first timed run is not penalised.
     tiny, tiny_faces = meshes.torus(100)

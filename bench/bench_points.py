@@ -31,8 +31,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 import core  # noqa: E402
 
-
 # --- shapes: sampling and exact distance --------------------------------------------------------------
+
 
 def _sphere_dirs(rng, n):
     v = rng.normal(size=(n, 3))
@@ -113,6 +113,7 @@ def noisy(shape, n, sigma_fraction, seed=0):
 
 # --- methods -----------------------------------------------------------------------------------------
 
+
 def pca_projection(points, k=24):
     """Baseline: project each point onto the PCA plane of its k nearest neighbours."""
     _, neighbours = cKDTree(points).query(points, k, workers=-1)
@@ -189,8 +190,7 @@ def meshlab_rimls(points):
 
 def amount(report):
     """The noise estimate and the amount of smoothing a run used, for the tables."""
-    return (f"r {report.noise.ratio:.2f}: {report.rounds}×{report.iterations_per_round}, "
-            f"α {report.alpha:.2g}")
+    return f"r {report.noise.ratio:.2f}: {report.rounds}×{report.iterations_per_round}, α {report.alpha:.2g}"
 
 
 def hc_rfs(points, **options):
@@ -206,13 +206,16 @@ def timed(function):
         start = time.perf_counter()
         out = function(points)
         return out, time.perf_counter() - start
+
     return run
 
 
 def available_methods(hc_options):
-    methods = {"HC on RFS (ours, defaults)": lambda p: hc_rfs(p, **hc_options),
-               "HC on RFS (ours, no swapping)": lambda p: hc_rfs(p, **{**hc_options, "swap": False}),
-               "PCA projection k=24": timed(pca_projection)}
+    methods = {
+        "HC on RFS (ours, defaults)": lambda p: hc_rfs(p, **hc_options),
+        "HC on RFS (ours, no swapping)": lambda p: hc_rfs(p, **{**hc_options, "swap": False}),
+        "PCA projection k=24": timed(pca_projection),
+    }
     missing = []
     try:
         import CGAL.CGAL_Point_set_processing_3  # noqa: F401
@@ -232,7 +235,7 @@ def available_methods(hc_options):
 
 
 def rms(values):
-    return float(np.sqrt(np.mean(values ** 2)))
+    return float(np.sqrt(np.mean(values**2)))
 
 
 def size_of(points, centre):
@@ -253,8 +256,10 @@ def quality(args, out):
     out("## Point-cloud smoothing quality\n")
     if missing:
         out("Not installed: " + ", ".join(missing) + "\n")
-    out("RMS distance to the true surface as % of the bounding-box diagonal (before → after), size change "
-        "(mean distance to the centre, after vs before), wall time of the smoothing call.\n")
+    out(
+        "RMS distance to the true surface as % of the bounding-box diagonal (before → after), size change "
+        "(mean distance to the centre, after vs before), wall time of the smoothing call.\n"
+    )
     out("| shape | points | σ | method | RMS before | RMS after | after/before | size change | time (s) |")
     out("|---|---|---|---|---|---|---|---|---|")
     for n in [parse_count(s) for s in args.sizes.split(",")]:
@@ -275,13 +280,18 @@ def quality(args, out):
                     after = rms(distance(result)) / diagonal
                     size = size_of(result, centre) / size_of(points[finite], centre) - 1
                     note = f" [{note[0]}]" if note else ""
-                    out(f"| {shape} | {n} | {sigma:.1%} | {name}{note}{lost} | {before:.3%} | {after:.3%} | "
-                        f"{after / before:.2f} | {size:+.2%} | {seconds:.2f} |")
+                    out(
+                        f"| {shape} | {n} | {sigma:.1%} | {name}{note}{lost} | {before:.3%} | {after:.3%} | "
+                        f"{after / before:.2f} | {size:+.2%} | {seconds:.2f} |"
+                    )
 
 
 def timing(args, out):
     out("## End-to-end time of core.smooth_point_cloud (noisy sphere, σ 0.5 %, float32)\n")
-    out("| points | total (s) | neighbours | noise | EMST | SDG | RFS | HC | swapping | amount | faces | points without faces |")
+    out(
+        "| points | total (s) | neighbours | noise | EMST | SDG | RFS | HC | swapping | amount | faces "
+        "| points without faces |"
+    )
     out("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for n in [parse_count(s) for s in args.timing.split(",")]:
         points, _ = noisy("sphere", n, 0.005, seed=args.seed)
@@ -292,9 +302,11 @@ def timing(args, out):
             _, report = core.smooth_point_cloud(points, return_mesh=True, **hc_options(args))
             totals.append(time.perf_counter() - start)
             s = report.seconds
-            out(f"| {n} | {totals[-1]:.1f} | {s.get('neighbours', 0):.1f} | {s.get('noise', 0):.2f} | "
+            out(
+                f"| {n} | {totals[-1]:.1f} | {s.get('neighbours', 0):.1f} | {s.get('noise', 0):.2f} | "
                 + " | ".join(f"{s.get(k, 0):.1f}" for k in ("emst", "sdg", "rfs", "hc", "swap"))
-                + f" | {amount(report)} | {len(report.mesh.faces)} | {report.isolated} |")
+                + f" | {amount(report)} | {len(report.mesh.faces)} | {report.isolated} |"
+            )
         if len(totals) > 1:
             out(f"| {n} | median {np.median(totals):.1f} | | | | | | | | | | |")
 
@@ -363,8 +375,11 @@ def main():
     parser.add_argument("--methods", default="", help="comma-separated name fragments, e.g. 'ours,jet'")
     parser.add_argument("--timing", default="", help="sizes for the end-to-end timing table instead, e.g. 100k,1M")
     parser.add_argument("--emst", default="", help="time the exact EMST of scan rings instead, e.g. 200x5000")
-    parser.add_argument("--sparse", default="", help="noise removed from a sparse, nearly clean sphere of this many "
-                                                     "points instead, e.g. 1500")
+    parser.add_argument(
+        "--sparse",
+        default="",
+        help="noise removed from a sparse, nearly clean sphere of this many points instead, e.g. 1500",
+    )
     parser.add_argument("--repeat", type=int, default=1, help="timing runs per size (the table gives each)")
     parser.add_argument("--rounds", type=int, default=None, help="for our rows (default: the core's)")
     parser.add_argument("--alpha", type=float, default=None)
@@ -377,9 +392,11 @@ def main():
     results.mkdir(exist_ok=True)
     report = results / f"bench_points-{time.strftime('%Y%m%d-%H%M%S')}.md"
     with report.open("w") as handle:
+
         def out(line):
             print(line, flush=True)
             handle.write(line + "\n")
+
         (emst_timing if args.emst else timing if args.timing else sparse if args.sparse else quality)(args, out)
     print(f"\n(written to {report})")
 

@@ -38,10 +38,11 @@ import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
-import core  # noqa: E402
-import settings_spec  # noqa: E402
 import bench_quality_inputs as inputs  # noqa: E402
 import meshes  # noqa: E402
+
+import core  # noqa: E402
+import settings_spec  # noqa: E402
 
 SIGMAS = "0.001,0.002,0.004,0.01"
 HC_ALPHAS = (0.0, 0.01, 0.03, 0.1, 0.3)
@@ -52,6 +53,7 @@ GRID_GIVE_UP = 1.25  # a path of the grid stops once its error rises above this 
 
 
 # --- one input ----------------------------------------------------------------------------------------
+
 
 @dataclass
 class Case:
@@ -84,9 +86,12 @@ class Case:
     def measure(self, positions):
         distance = self.surface.distance(positions) / self.diagonal
         volume = inputs.signed_volume(positions, self.faces) if self.closed else None
-        return {"rms": float(np.sqrt(np.mean(distance ** 2))), "max": float(distance.max()),
-                "dv": volume / self.volume - 1.0 if self.closed else None,
-                "dv_input": volume / self.noisy_volume - 1.0 if self.closed else None}
+        return {
+            "rms": float(np.sqrt(np.mean(distance**2))),
+            "max": float(distance.max()),
+            "dv": volume / self.volume - 1.0 if self.closed else None,
+            "dv_input": volume / self.noisy_volume - 1.0 if self.closed else None,
+        }
 
 
 def make_case(mesh, kind, sigma, seed):
@@ -99,6 +104,7 @@ def make_case(mesh, kind, sigma, seed):
 
 # --- HC Smooth ----------------------------------------------------------------------------------------
 
+
 def quiet(function, *args, **kwargs):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)
@@ -107,8 +113,11 @@ def quiet(function, *args, **kwargs):
 
 def hc_default_settings():
     """HC Smooth's mesh defaults, as the operator, the scene settings and the command line get them."""
-    return {"alpha": settings_spec.ALPHA.default, "beta": settings_spec.BETA.default,
-            "iterations": settings_spec.ITERATIONS.default}
+    return {
+        "alpha": settings_spec.ALPHA.default,
+        "beta": settings_spec.BETA.default,
+        "iterations": settings_spec.ITERATIONS.default,
+    }
 
 
 def hc_default(case):
@@ -120,8 +129,13 @@ def hc_default(case):
     if automatic is None or not automatic.default:
         return hc_fixed(case, settings), settings
     amount = core.choose_amount(case.noisy, case.edges, beta=settings["beta"])
-    settings = {"alpha": amount.alpha, "beta": amount.beta, "iterations": amount.iterations,
-                "noise": amount.sigma / case.diagonal, "noise_over_edge": amount.ratio}
+    settings = {
+        "alpha": amount.alpha,
+        "beta": amount.beta,
+        "iterations": amount.iterations,
+        "noise": amount.sigma / case.diagonal,
+        "noise_over_edge": amount.ratio,
+    }
     result = hc_fixed(case, settings)
     if case.closed:  # as the operator: closed parts get their volume back
         result = core.volume.restore_volume(case.noisy, result, case.faces)[0]
@@ -129,8 +143,14 @@ def hc_default(case):
 
 
 def hc_fixed(case, params):
-    return quiet(core.hc_smooth, case.noisy, case.edges, alpha=params["alpha"], beta=params["beta"],
-                 iterations=params["iterations"])
+    return quiet(
+        core.hc_smooth,
+        case.noisy,
+        case.edges,
+        alpha=params["alpha"],
+        beta=params["beta"],
+        iterations=params["iterations"],
+    )
 
 
 def hc_grid(case, seed):
@@ -142,8 +162,16 @@ def hc_grid(case, seed):
     grid = np.full((len(HC_ALPHAS), len(HC_BETAS), len(HC_CHECKPOINTS)), np.nan)
     for ia, alpha in enumerate(HC_ALPHAS):
         for ib, beta in enumerate(HC_BETAS):
-            run = quiet(core.Smoothing, case.noisy, None, method="hc", alpha=alpha, beta=beta,
-                        iterations=HC_CHECKPOINTS[-1], operator=operator)
+            run = quiet(
+                core.Smoothing,
+                case.noisy,
+                None,
+                method="hc",
+                alpha=alpha,
+                beta=beta,
+                iterations=HC_CHECKPOINTS[-1],
+                operator=operator,
+            )
             done = 0
             for ic, checkpoint in enumerate(HC_CHECKPOINTS):
                 try:
@@ -167,6 +195,7 @@ def hc_grid(case, seed):
 
 
 # --- peers --------------------------------------------------------------------------------------------
+
 
 def _trimesh(case):
     import trimesh
@@ -193,8 +222,9 @@ def trimesh_laplacian(case, p):
 def _open3d(case):
     import open3d as o3d
 
-    return o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(case.noisy),
-                                     o3d.utility.Vector3iVector(case.faces.astype(np.int32)))
+    return o3d.geometry.TriangleMesh(
+        o3d.utility.Vector3dVector(case.noisy), o3d.utility.Vector3iVector(case.faces.astype(np.int32))
+    )
 
 
 def open3d_taubin(case, p):
@@ -250,28 +280,61 @@ class Peer:
 
 
 def label(params):
-    return ", ".join(f"{k} {v:g}" if isinstance(v, (int, float)) and not isinstance(v, bool) else f"{k} {v}"
-                     for k, v in params.items())
+    return ", ".join(
+        f"{k} {v:g}" if isinstance(v, (int, float)) and not isinstance(v, bool) else f"{k} {v}"
+        for k, v in params.items()
+    )
 
 
 PEERS = [
-    Peer("Laplacian (HC Smooth, 10 it.)", {"iterations": settings_spec.ITERATIONS.default},
-         [{"iterations": k} for k in (1, 2, 3, 5, 20)], laplacian_plain),
-    Peer("trimesh Laplacian (vol.)", {"lamb": 0.5, "iterations": 10},
-         [{"lamb": 0.5, "iterations": k} for k in (1, 3, 30)], trimesh_laplacian, needs="trimesh"),
-    Peer("trimesh Taubin", {"lamb": 0.5, "nu": 0.5, "iterations": 10},
-         [{"lamb": 0.5, "nu": 0.5, "iterations": k} for k in (3, 30, 100, 300)], trimesh_taubin, needs="trimesh"),
-    Peer("Open3D Laplacian", {"iterations": 1}, [{"iterations": k} for k in (3, 10, 30)], open3d_laplacian,
-         needs="open3d"),
-    Peer("Open3D Taubin", {"iterations": 1}, [{"iterations": k} for k in (3, 10, 30, 100, 300)], open3d_taubin,
-         needs="open3d"),
+    Peer(
+        "Laplacian (HC Smooth, 10 it.)",
+        {"iterations": settings_spec.ITERATIONS.default},
+        [{"iterations": k} for k in (1, 2, 3, 5, 20)],
+        laplacian_plain,
+    ),
+    Peer(
+        "trimesh Laplacian (vol.)",
+        {"lamb": 0.5, "iterations": 10},
+        [{"lamb": 0.5, "iterations": k} for k in (1, 3, 30)],
+        trimesh_laplacian,
+        needs="trimesh",
+    ),
+    Peer(
+        "trimesh Taubin",
+        {"lamb": 0.5, "nu": 0.5, "iterations": 10},
+        [{"lamb": 0.5, "nu": 0.5, "iterations": k} for k in (3, 30, 100, 300)],
+        trimesh_taubin,
+        needs="trimesh",
+    ),
+    Peer(
+        "Open3D Laplacian",
+        {"iterations": 1},
+        [{"iterations": k} for k in (3, 10, 30)],
+        open3d_laplacian,
+        needs="open3d",
+    ),
+    Peer(
+        "Open3D Taubin",
+        {"iterations": 1},
+        [{"iterations": k} for k in (3, 10, 30, 100, 300)],
+        open3d_taubin,
+        needs="open3d",
+    ),
     Peer("MeshLab two-step", {"steps": 3}, [{"steps": k} for k in (1, 10, 30)], meshlab_two_step, needs="pymeshlab"),
     Peer("MeshLab HC", {"calls": 1}, [{"calls": k} for k in (3, 10, 30)], meshlab_hc, needs="pymeshlab"),
-    Peer("Blender Smooth", {}, [{"factor": f, "iterations": k} for f in (0.5, 1.0) for k in (1, 3, 10, 30)
-                                if (f, k) != (0.5, 1)], modifier="SMOOTH"),
-    Peer("Blender Laplacian Smooth", {},
-         [{"lambda_factor": f, "iterations": k} for f in (0.1, 1.0) for k in (1, 10)] + [{"iterations": 10}],
-         modifier="LAPLACIANSMOOTH"),
+    Peer(
+        "Blender Smooth",
+        {},
+        [{"factor": f, "iterations": k} for f in (0.5, 1.0) for k in (1, 3, 10, 30) if (f, k) != (0.5, 1)],
+        modifier="SMOOTH",
+    ),
+    Peer(
+        "Blender Laplacian Smooth",
+        {},
+        [{"lambda_factor": f, "iterations": k} for f in (0.1, 1.0) for k in (1, 10)] + [{"iterations": 10}],
+        modifier="LAPLACIANSMOOTH",
+    ),
 ]
 
 
@@ -306,19 +369,30 @@ def run_blender(cases, peers, repeats, out):
         for peer in peers:
             for params in peer.settings():
                 i = len(index)
-                jobs.update({f"vertices_{i}": case.noisy, f"faces_{i}": case.faces, f"modifier_{i}": peer.modifier,
-                             f"settings_{i}": json.dumps(params), f"repeats_{i}": repeats if params == peer.default else 1})
+                jobs.update(
+                    {
+                        f"vertices_{i}": case.noisy,
+                        f"faces_{i}": case.faces,
+                        f"modifier_{i}": peer.modifier,
+                        f"settings_{i}": json.dumps(params),
+                        f"repeats_{i}": repeats if params == peer.default else 1,
+                    }
+                )
                 index.append((case.key, peer.name, json.dumps(params, sort_keys=True)))
     with tempfile.TemporaryDirectory() as folder:
         job_file, result_file = pathlib.Path(folder, "jobs.npz"), pathlib.Path(folder, "results.npz")
         np.savez(job_file, count=len(index), **jobs)
-        subprocess.run([str(python), str(ROOT / "bench" / "bench_quality_blender.py"), str(job_file), str(result_file)],
-                       check=True, timeout=3600)
+        subprocess.run(
+            [str(python), str(ROOT / "bench" / "bench_quality_blender.py"), str(job_file), str(result_file)],
+            check=True,
+            timeout=3600,
+        )
         results = np.load(result_file)
         return {key: (results[f"positions_{i}"], float(results[f"seconds_{i}"])) for i, key in enumerate(index)}
 
 
 # --- report -------------------------------------------------------------------------------------------
+
 
 def pct(value, digits=3):
     return "–" if value is None else f"{100 * value:.{digits}f}"
@@ -329,8 +403,12 @@ def signed_pct(value):
 
 
 def quality(args, out, record):
-    cases = [make_case(m, k, s, args.seed) for m in inputs.parse_list(args.meshes)
-             for k in inputs.parse_list(args.kinds) for s in inputs.parse_list(args.sigmas, float)]
+    cases = [
+        make_case(m, k, s, args.seed)
+        for m in inputs.parse_list(args.meshes)
+        for k in inputs.parse_list(args.kinds)
+        for s in inputs.parse_list(args.sigmas, float)
+    ]
     peers = [p for p in PEERS if (p.modifier is None or args.blender) and available(p)]
     if args.no_peers:
         peers = []
@@ -343,24 +421,37 @@ def quality(args, out, record):
         extra = {"alpha": float(a), "beta": float(b), "iterations": int(k)}
 
     out("## Mesh smoothing quality on real scans\n")
-    out(f"Load average at start: {' '.join(f'{x:.2f}' for x in __import__('os').getloadavg())}. "
+    out(
+        f"Load average at start: {' '.join(f'{x:.2f}' for x in __import__('os').getloadavg())}. "
         + (f"Not installed: {', '.join(missing)}. " if missing else "")
-        + ("" if args.blender else "Blender's modifiers not run (add --blender). "))
+        + ("" if args.blender else "Blender's modifiers not run (add --blender). ")
+    )
     out("RMS distance to the clean surface, % of the bounding-box diagonal (lower is better).\n")
     columns = ["HC Smooth default", "best HC"] + [p.name for p in peers] + (["HC " + label(extra)] if extra else [])
     out("| mesh | noise | σ | input | " + " | ".join(columns) + " | default / best HC | best peer default |")
     out("|---" * (len(columns) + 6) + "|")
     volume_rows, peer_best_rows, time_rows = [], [], []
     for case in cases:
-        cell = {"mesh": case.mesh, "kind": case.kind, "sigma": case.sigma, "vertices": len(case.noisy),
-                "closed": case.closed, "edge_over_diagonal": inputs.mean_edge_length(case.clean, case.faces) / case.diagonal,
-                "input": case.measure(case.noisy), "methods": {}}
+        cell = {
+            "mesh": case.mesh,
+            "kind": case.kind,
+            "sigma": case.sigma,
+            "vertices": len(case.noisy),
+            "closed": case.closed,
+            "edge_over_diagonal": inputs.mean_edge_length(case.clean, case.faces) / case.diagonal,
+            "input": case.measure(case.noisy),
+            "methods": {},
+        }
         (ours, chosen), seconds = timed(hc_default, case, repeats=args.repeats)
         cell["methods"]["HC Smooth default"] = {"params": chosen, **case.measure(ours), "seconds": seconds}
         if not args.no_grid:
             grid, best = hc_grid(case, zlib.crc32(case.key.encode()))
-            cell["hc_grid"] = {"alphas": HC_ALPHAS, "betas": HC_BETAS, "iterations": HC_CHECKPOINTS,
-                               "rms_on_subset": grid.tolist()}
+            cell["hc_grid"] = {
+                "alphas": HC_ALPHAS,
+                "betas": HC_BETAS,
+                "iterations": HC_CHECKPOINTS,
+                "rms_on_subset": grid.tolist(),
+            }
             cell["methods"]["best HC"] = best
         if extra:
             result, seconds = timed(hc_fixed, case, extra)
@@ -376,7 +467,10 @@ def quality(args, out, record):
                         result, seconds = timed(peer.run, case, params, repeats=args.repeats if is_default else 1)
                     measured = case.measure(result)
                 except Exception as error:  # a peer failing is a result too
-                    measured, seconds = {"rms": None, "max": None, "dv": None, "error": f"{type(error).__name__}: {error}"}, None
+                    measured, seconds = (
+                        {"rms": None, "max": None, "dv": None, "error": f"{type(error).__name__}: {error}"},
+                        None,
+                    )
                 runs.append({"params": params, "default": is_default, **measured, "seconds": seconds})
             cell["methods"][peer.name] = runs[0]
             cell.setdefault("peer_grids", {})[peer.name] = runs
@@ -388,8 +482,10 @@ def quality(args, out, record):
         peer_defaults = {p.name: m[p.name]["rms"] for p in peers if m[p.name]["rms"] is not None}
         best_peer = min(peer_defaults, key=peer_defaults.get) if peer_defaults else None
         chosen = m["HC Smooth default"]["params"]
-        cells = [pct(ours_rms) + (f" ({chosen['iterations']} it.)" if "noise" in chosen else ""),
-                 f"{pct(best['rms'])} ({label(best['params'])})" if best else "–"]
+        cells = [
+            pct(ours_rms) + (f" ({chosen['iterations']} it.)" if "noise" in chosen else ""),
+            f"{pct(best['rms'])} ({label(best['params'])})" if best else "–",
+        ]
         cells += [pct(m[p.name]["rms"]) for p in peers]
         if extra:
             cells.append(pct(m["HC " + label(extra)]["rms"]))
@@ -398,28 +494,44 @@ def quality(args, out, record):
         if best_peer:
             won = ours_rms < peer_defaults[best_peer]
             verdict = f"{'won' if won else '**LOST**'} ({best_peer} {pct(peer_defaults[best_peer])})"
-        out(f"| {case.mesh} | {case.kind} | {case.sigma:.1%} | {pct(cell['input']['rms'])} | " + " | ".join(cells)
-            + f" | {ratio} | {verdict} |")
-        volume_rows.append((case, [m[c]["dv_input"] if c in m and m[c].get("dv_input") is not None else None for c in columns],
-                            [m[c]["max"] if c in m and m[c].get("max") is not None else None for c in columns]))
+        out(
+            f"| {case.mesh} | {case.kind} | {case.sigma:.1%} | {pct(cell['input']['rms'])} | "
+            + " | ".join(cells)
+            + f" | {ratio} | {verdict} |"
+        )
+        volume_rows.append(
+            (
+                case,
+                [m[c]["dv_input"] if c in m and m[c].get("dv_input") is not None else None for c in columns],
+                [m[c]["max"] if c in m and m[c].get("max") is not None else None for c in columns],
+            )
+        )
         peer_best_rows.append((case, cell))
         time_rows.append((case, [m[c].get("seconds") if c in m else None for c in columns]))
 
-    out("\nVolume change against the noisy input, % (closed meshes; Suzanne is open): the smoother's own change. "
+    out(
+        "\nVolume change against the noisy input, % (closed meshes; Suzanne is open): the smoother's own change. "
         "The noisy input's volume differs from the clean mesh's by chance (column 'input', against the clean "
-        "mesh: up to ±2 % on the small meshes at σ 1 %):\n")
+        "mesh: up to ±2 % on the small meshes at σ 1 %):\n"
+    )
     out("| mesh | noise | σ | input | " + " | ".join(columns) + " |")
     out("|---" * (len(columns) + 4) + "|")
-    for (case, volumes, _), cell in zip(volume_rows, record[-len(volume_rows):]):
+    for (case, volumes, _), cell in zip(volume_rows, record[-len(volume_rows) :]):
         if case.closed:
-            out(f"| {case.mesh} | {case.kind} | {case.sigma:.1%} | {signed_pct(cell['input']['dv'])} | "
-                + " | ".join(signed_pct(v) for v in volumes) + " |")
+            out(
+                f"| {case.mesh} | {case.kind} | {case.sigma:.1%} | {signed_pct(cell['input']['dv'])} | "
+                + " | ".join(signed_pct(v) for v in volumes)
+                + " |"
+            )
     out("\nMax distance to the clean surface, % of the diagonal:\n")
     out("| mesh | noise | σ | input | " + " | ".join(columns) + " |")
     out("|---" * (len(columns) + 4) + "|")
-    for (case, _, maxima), cell in zip(volume_rows, record[-len(volume_rows):]):
-        out(f"| {case.mesh} | {case.kind} | {case.sigma:.1%} | {pct(cell['input']['max'], 2)} | "
-            + " | ".join(pct(v, 2) for v in maxima) + " |")
+    for (case, _, maxima), cell in zip(volume_rows, record[-len(volume_rows) :]):
+        out(
+            f"| {case.mesh} | {case.kind} | {case.sigma:.1%} | {pct(cell['input']['max'], 2)} | "
+            + " | ".join(pct(v, 2) for v in maxima)
+            + " |"
+        )
     if peers:
         out("\nPeers at the best setting of their grid (RMS, setting; the grids are in the JSON file):\n")
         out("| mesh | noise | σ | " + " | ".join(p.name for p in peers) + " |")
@@ -429,32 +541,51 @@ def quality(args, out, record):
             for peer in peers:
                 runs = [r for r in cell["peer_grids"][peer.name] if r["rms"] is not None]
                 best_run = min(runs, key=lambda r: r["rms"]) if runs else None
-                texts.append(f"{pct(best_run['rms'])} ({label(best_run['params']) or 'defaults'})" if best_run else "failed")
+                texts.append(
+                    f"{pct(best_run['rms'])} ({label(best_run['params']) or 'defaults'})" if best_run else "failed"
+                )
             out(f"| {case.mesh} | {case.kind} | {case.sigma:.1%} | " + " | ".join(texts) + " |")
     out(f"\nTime of the smoothing call, s (median of {args.repeats} at defaults; best HC: not timed):\n")
     out("| mesh | vertices | noise | σ | " + " | ".join(columns) + " |")
     out("|---" * (len(columns) + 4) + "|")
     for case, seconds in time_rows:
-        out(f"| {case.mesh} | {len(case.noisy)} | {case.kind} | {case.sigma:.1%} | "
-            + " | ".join("–" if s is None else f"{s:.3f}" for s in seconds) + " |")
+        out(
+            f"| {case.mesh} | {len(case.noisy)} | {case.kind} | {case.sigma:.1%} | "
+            + " | ".join("–" if s is None else f"{s:.3f}" for s in seconds)
+            + " |"
+        )
     if not args.no_grid and record:
         ratios = [c["methods"]["HC Smooth default"]["rms"] / c["methods"]["best HC"]["rms"] for c in record]
-        out(f"\nHC Smooth default / best HC: median {np.median(ratios):.2f}, worst {max(ratios):.2f} "
-            f"({sum(r <= 1.1 for r in ratios)} of {len(ratios)} cells within 10 %).")
+        out(
+            f"\nHC Smooth default / best HC: median {np.median(ratios):.2f}, worst {max(ratios):.2f} "
+            f"({sum(r <= 1.1 for r in ratios)} of {len(ratios)} cells within 10 %)."
+        )
     if peers and record:
-        lost = [c for c in record if any(
-            r["rms"] is not None and r["default"] and r["rms"] <= c["methods"]["HC Smooth default"]["rms"]
-            for runs in c["peer_grids"].values() for r in runs)]
+        lost = [
+            c
+            for c in record
+            if any(
+                r["rms"] is not None and r["default"] and r["rms"] <= c["methods"]["HC Smooth default"]["rms"]
+                for runs in c["peer_grids"].values()
+                for r in runs
+            )
+        ]
         out(f"Cells where a peer's default beat HC Smooth's default: {len(lost)} of {len(record)}.")
-    dvs = [(abs(c["methods"]["HC Smooth default"]["dv"]), abs(c["methods"]["HC Smooth default"]["dv_input"]))
-           for c in record if c["closed"]]
+    dvs = [
+        (abs(c["methods"]["HC Smooth default"]["dv"]), abs(c["methods"]["HC Smooth default"]["dv_input"]))
+        for c in record
+        if c["closed"]
+    ]
     if dvs:
-        out(f"Largest |ΔV| of HC Smooth's default on closed meshes: {100 * max(d[1] for d in dvs):.2f} % against "
+        out(
+            f"Largest |ΔV| of HC Smooth's default on closed meshes: {100 * max(d[1] for d in dvs):.2f} % against "
             f"the noisy input ({sum(d[1] <= 0.005 for d in dvs)} of {len(dvs)} cells within 0.5 %), "
-            f"{100 * max(d[0] for d in dvs):.2f} % against the clean mesh.")
+            f"{100 * max(d[0] for d in dvs):.2f} % against the clean mesh."
+        )
 
 
 # --- error versus iterations --------------------------------------------------------------------------
+
 
 def plot(args, out):
     import matplotlib
@@ -477,8 +608,12 @@ def plot(args, out):
             values.append(case.rms(run.result().positions))
         curves[name] = (steps, np.array(values))
 
-    follow(f"HC (α {defaults['alpha']:g}, β {defaults['beta']:g}: the fixed amount)", "hc", alpha=defaults["alpha"],
-           beta=defaults["beta"])
+    follow(
+        f"HC (α {defaults['alpha']:g}, β {defaults['beta']:g}: the fixed amount)",
+        "hc",
+        alpha=defaults["alpha"],
+        beta=defaults["beta"],
+    )
     follow(f"HC (α 0, β {defaults['beta']:g}: the Automatic Amount's path)", "hc", alpha=0.0, beta=defaults["beta"])
     amount = core.choose_amount(case.noisy, case.edges, beta=defaults["beta"])
     follow("Laplacian (paper 3.1)", "plain")
@@ -491,35 +626,55 @@ def plot(args, out):
     styles = [("#7f8c8d", "-"), ("#c0392b", "-"), ("#2c3e50", "--"), ("#2980b9", "-.")]  # in the order followed
     for (name, (x, y)), (colour, line) in zip(curves.items(), styles):
         axes.plot(x, 100 * y, line, color=colour, lw=2, label=name)
-    chosen = quiet(core.hc_smooth, case.noisy, case.edges, alpha=0.0, beta=defaults["beta"], iterations=amount.iterations)
+    chosen = quiet(
+        core.hc_smooth, case.noisy, case.edges, alpha=0.0, beta=defaults["beta"], iterations=amount.iterations
+    )
     if case.closed:
         chosen = core.volume.restore_volume(case.noisy, chosen, case.faces)[0]
-    axes.plot([amount.iterations], [100 * case.rms(chosen)], "o", color="#c0392b", ms=9, mfc="white", mew=2,
-              label=f"HC Smooth's default: {amount.iterations} iterations chosen, volume kept")
+    axes.plot(
+        [amount.iterations],
+        [100 * case.rms(chosen)],
+        "o",
+        color="#c0392b",
+        ms=9,
+        mfc="white",
+        mew=2,
+        label=f"HC Smooth's default: {amount.iterations} iterations chosen, volume kept",
+    )
     axes.axhline(100 * case.rms(case.noisy), color="grey", lw=1, ls=":", label="noisy input")
     axes.set_xscale("log")
     axes.set_yscale("log")
-    ticks = [t for t in (0.05, 0.07, 0.1, 0.15, 0.2, 0.3, 0.5, 0.7, 1, 1.5, 2, 3, 5)
-             if 0.8 * min(100 * y.min() for _, y in curves.values()) <= t <= 1.2 * max(100 * y.max() for _, y in curves.values())]
+    ticks = [
+        t
+        for t in (0.05, 0.07, 0.1, 0.15, 0.2, 0.3, 0.5, 0.7, 1, 1.5, 2, 3, 5)
+        if 0.8 * min(100 * y.min() for _, y in curves.values())
+        <= t
+        <= 1.2 * max(100 * y.max() for _, y in curves.values())
+    ]
     axes.set_yticks(ticks, [f"{t:g}" for t in ticks])
     axes.set_xticks([1, 2, 5, 10, 20, 50, 100, 200], ["1", "2", "5", "10", "20", "50", "100", "200"])
     axes.minorticks_off()
     axes.set_xlabel("iterations")
     axes.set_ylabel("RMS distance to the clean scan (% of the diagonal)")
-    axes.set_title(f"{case.mesh} ({len(case.noisy):,} vertices), noise σ = {case.sigma:.1%} of the diagonal "
-                   f"{'along the normals' if case.kind == 'normal' else 'per coordinate'}", fontsize=10)
+    axes.set_title(
+        f"{case.mesh} ({len(case.noisy):,} vertices), noise σ = {case.sigma:.1%} of the diagonal "
+        f"{'along the normals' if case.kind == 'normal' else 'per coordinate'}",
+        fontsize=10,
+    )
     axes.grid(True, alpha=0.3)
     axes.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
     figure.tight_layout()
     path = ROOT / args.plot if not pathlib.Path(args.plot).is_absolute() else pathlib.Path(args.plot)
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path)
-    out(f"| iterations | " + " | ".join(curves) + " |")
+    out("| iterations | " + " | ".join(curves) + " |")
     out("|---" * (len(curves) + 1) + "|")
     for i, k in enumerate(steps):
         out(f"| {k} | " + " | ".join(pct(y[i]) for _, y in curves.values()) + " |")
-    out(f"\nHC Smooth's default (Automatic Amount): {amount.iterations} iterations (noise estimate "
-        f"{amount.sigma / case.diagonal:.3%} of the diagonal), RMS {pct(case.rms(chosen))} %")
+    out(
+        f"\nHC Smooth's default (Automatic Amount): {amount.iterations} iterations (noise estimate "
+        f"{amount.sigma / case.diagonal:.3%} of the diagonal), RMS {pct(case.rms(chosen))} %"
+    )
     out(f"\nwritten {path}")
 
 
@@ -544,9 +699,11 @@ def main():
     report = results / f"bench_quality-{stamp}.md"
     record = []
     with report.open("w") as handle:
+
         def out(line):
             print(line, flush=True)
             handle.write(line + "\n")
+
         out(f"`{' '.join(['bench/bench_quality.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
         if args.plot:
             plot(args, out)

@@ -40,8 +40,9 @@ def _load_file(path):
     import trimesh
 
     mesh = trimesh.load(str(path), process=False, force="mesh")
-    mesh = trimesh.Trimesh(np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64),
-                           process=True, validate=False)
+    mesh = trimesh.Trimesh(
+        np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64), process=True, validate=False
+    )
     return np.asarray(mesh.vertices, np.float64).copy(), np.asarray(mesh.faces, np.int64).copy()
 
 
@@ -68,8 +69,7 @@ def suzanne():
         if not BPY45.exists():
             raise FileNotFoundError(f"Suzanne comes from Blender's bpy module: {BPY45} is missing")
         RESULTS.mkdir(exist_ok=True)
-        subprocess.run([str(BPY45), "-c", SUZANNE_SCRIPT, str(cache)], check=True, capture_output=True,
-                       timeout=300)
+        subprocess.run([str(BPY45), "-c", SUZANNE_SCRIPT, str(cache)], check=True, capture_output=True, timeout=300)
     data = np.load(cache)
     return data["vertices"].astype(np.float64), data["faces"].astype(np.int64)
 
@@ -124,6 +124,7 @@ def load_mesh(name):
 
 # --- measures -----------------------------------------------------------------------------------------
 
+
 def is_closed(faces):
     """Every edge has exactly two faces."""
     pairs = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
@@ -148,7 +149,9 @@ def mean_edge_length(vertices, faces):
 
 def vertex_normals(vertices, faces):
     """Area-weighted unit vertex normals."""
-    face_normals = np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]], vertices[faces[:, 2]] - vertices[faces[:, 0]])
+    face_normals = np.cross(
+        vertices[faces[:, 1]] - vertices[faces[:, 0]], vertices[faces[:, 2]] - vertices[faces[:, 0]]
+    )
     normals = np.zeros_like(vertices)
     for k in range(3):
         np.add.at(normals, faces[:, k], face_normals)
@@ -175,8 +178,10 @@ class Surface:
 
         self._o3d = o3d
         self.scene = o3d.t.geometry.RaycastingScene()
-        self.scene.add_triangles(o3d.core.Tensor(np.ascontiguousarray(vertices, np.float32)),
-                                 o3d.core.Tensor(np.ascontiguousarray(faces, np.uint32)))
+        self.scene.add_triangles(
+            o3d.core.Tensor(np.ascontiguousarray(vertices, np.float32)),
+            o3d.core.Tensor(np.ascontiguousarray(faces, np.uint32)),
+        )
 
     def distance(self, points):
         query = self._o3d.core.Tensor(np.ascontiguousarray(points, np.float32))

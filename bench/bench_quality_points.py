@@ -77,16 +77,22 @@ def main():
     report = results / f"bench_quality_points-{stamp}.md"
     record = []
     with report.open("w") as handle:
+
         def out(line):
             print(line, flush=True)
             handle.write(line + "\n")
 
         import os
 
-        out(f"`{' '.join(['bench/bench_quality_points.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}, "
-            f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}\n")
-        out("Each cell: noise removed (1 − RMS after / RMS before; higher is better), RMS after in % of the "
-            "diagonal, mean-radius change against the clean sample, time (s). Ours adds its noise estimate and amount.\n")
+        out(
+            f"`{' '.join(['bench/bench_quality_points.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}, "
+            f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}\n"
+        )
+        out(
+            "Each cell: noise removed (1 − RMS after / RMS before; higher is better), RMS after in % of the "
+            "diagonal, mean-radius change against the clean sample, time (s). "
+            "Ours adds its noise estimate and amount.\n"
+        )
         names = [name for name, _ in methods.values()]
         out("| object | points | noise | σ | input RMS (radius) | " + " | ".join(names) + " | ours − jet |")
         out("|---" * (len(names) + 6) + "|")
@@ -103,11 +109,16 @@ def main():
                         centre = clean.mean(axis=0)
                         radius = mean_radius(clean, centre)
                         before = float(np.sqrt(np.mean(surface.distance(noisy) ** 2)))
-                        cell = {"object": name, "points": size, "kind": kind, "sigma": sigma,
-                                "input": {"rms": before / diagonal, "radius": mean_radius(noisy, centre) / radius - 1},
-                                "methods": {}}
+                        cell = {
+                            "object": name,
+                            "points": size,
+                            "kind": kind,
+                            "sigma": sigma,
+                            "input": {"rms": before / diagonal, "radius": mean_radius(noisy, centre) / radius - 1},
+                            "methods": {},
+                        }
                         texts = []
-                        for key, (label, method) in methods.items():
+                        for key, (_label, method) in methods.items():
                             try:
                                 result, seconds, *note = method(noisy)
                             except Exception as error:  # a peer failing is a result too
@@ -116,29 +127,46 @@ def main():
                                 continue
                             finite = np.isfinite(result).all(axis=1)  # MeshLab APSS can return NaN points
                             distance = surface.distance(result[finite])
-                            after = float(np.sqrt(np.mean(distance ** 2)))
-                            entry = {"rms": after / diagonal, "max": float(distance.max()) / diagonal,
-                                     "removed": 1 - after / before, "radius": mean_radius(result[finite], centre) / radius - 1,
-                                     "seconds": seconds, "nan_points": int((~finite).sum())}
+                            after = float(np.sqrt(np.mean(distance**2)))
+                            entry = {
+                                "rms": after / diagonal,
+                                "max": float(distance.max()) / diagonal,
+                                "removed": 1 - after / before,
+                                "radius": mean_radius(result[finite], centre) / radius - 1,
+                                "seconds": seconds,
+                                "nan_points": int((~finite).sum()),
+                            }
                             if note:
                                 entry["note"] = note[0]
                             cell["methods"][key] = entry
                             extra = f"; {note[0]}" if note else ""
                             lost = f"; {entry['nan_points']} NaN" if entry["nan_points"] else ""
-                            texts.append(f"{entry['removed']:.0%} ({100 * entry['rms']:.3f}, {100 * entry['radius']:+.2f}%, "
-                                         f"{seconds:.1f} s{extra}{lost})")
+                            texts.append(
+                                f"{entry['removed']:.0%} ({100 * entry['rms']:.3f}, {100 * entry['radius']:+.2f}%, "
+                                f"{seconds:.1f} s{extra}{lost})"
+                            )
                         m = cell["methods"]
-                        versus = (f"{m['ours']['removed'] - m['jet']['removed']:+.0%}"
-                                  if "removed" in m.get("ours", {}) and "removed" in m.get("jet", {}) else "–")
-                        out(f"| {name} | {size} | {kind} | {sigma:.2%} | {100 * before / diagonal:.3f} "
-                            f"({100 * cell['input']['radius']:+.2f}%) | " + " | ".join(texts) + f" | {versus} |")
+                        versus = (
+                            f"{m['ours']['removed'] - m['jet']['removed']:+.0%}"
+                            if "removed" in m.get("ours", {}) and "removed" in m.get("jet", {})
+                            else "–"
+                        )
+                        out(
+                            f"| {name} | {size} | {kind} | {sigma:.2%} | {100 * before / diagonal:.3f} "
+                            f"({100 * cell['input']['radius']:+.2f}%) | " + " | ".join(texts) + f" | {versus} |"
+                        )
                         record.append(cell)
         if any("ours" in c["methods"] and "jet" in c["methods"] for c in record):
-            pairs = [(c["methods"]["ours"], c["methods"]["jet"]) for c in record
-                     if "removed" in c["methods"].get("ours", {}) and "removed" in c["methods"].get("jet", {})]
+            pairs = [
+                (c["methods"]["ours"], c["methods"]["jet"])
+                for c in record
+                if "removed" in c["methods"].get("ours", {}) and "removed" in c["methods"].get("jet", {})
+            ]
             won = sum(o["removed"] >= j["removed"] for o, j in pairs)
-            out(f"\nOurs removed at least jet's share of the noise in {won} of {len(pairs)} cells; largest |radius "
-                f"change| of ours {100 * max(abs(o['radius']) for o, _ in pairs):.2f} %.")
+            out(
+                f"\nOurs removed at least jet's share of the noise in {won} of {len(pairs)} cells; largest |radius "
+                f"change| of ours {100 * max(abs(o['radius']) for o, _ in pairs):.2f} %."
+            )
     (results / f"bench_quality_points-{stamp}.json").write_text(json.dumps(record))
     print(f"\n(written to {report})")
 

@@ -32,8 +32,10 @@ def signed_distance(vertices, faces, points):
     import open3d as o3d
 
     scene = o3d.t.geometry.RaycastingScene()
-    scene.add_triangles(o3d.core.Tensor(np.ascontiguousarray(vertices, np.float32)),
-                        o3d.core.Tensor(np.ascontiguousarray(faces, np.uint32)))
+    scene.add_triangles(
+        o3d.core.Tensor(np.ascontiguousarray(vertices, np.float32)),
+        o3d.core.Tensor(np.ascontiguousarray(faces, np.uint32)),
+    )
     query = o3d.core.Tensor(np.ascontiguousarray(points, np.float32))
     return scene.compute_signed_distance(query).numpy().astype(np.float64)
 
@@ -63,8 +65,9 @@ def draw_cloud(ax, points, colours, rotation, centre, spacing, pixels_per_unit, 
     order = np.argsort(screen[:, 2])
     # In points; 3 spacings: discs that close an evenly spread sample, so a gap shows points that left it.
     diameter = 3.0 * spacing * pixels_per_unit * 72 / dpi
-    ax.scatter(screen[order, 0], screen[order, 1], s=diameter**2, c=colours[order], marker="o", linewidths=0,
-               rasterized=True)
+    ax.scatter(
+        screen[order, 0], screen[order, 1], s=diameter**2, c=colours[order], marker="o", linewidths=0, rasterized=True
+    )
 
 
 def main():
@@ -93,12 +96,16 @@ def main():
     jet, jet_seconds = bench_points.cgal_jet(noisy)
     ours, ours_seconds, note = bench_points.hc_rfs(noisy)
     along = "along the normals" if args.kind == "normal" else "on every coordinate"
-    clouds = [("Noisy", f"σ = {100 * args.sigma:.2g} % of the diagonal, {along}", noisy, None),
-              ("CGAL jet smoothing", "k = 24 neighbours", jet, jet_seconds),
-              ("HC Smooth", "defaults (automatic amount)", ours, ours_seconds)]
+    clouds = [
+        ("Noisy", f"σ = {100 * args.sigma:.2g} % of the diagonal, {along}", noisy, None),
+        ("CGAL jet smoothing", "k = 24 neighbours", jet, jet_seconds),
+        ("HC Smooth", "defaults (automatic amount)", ours, ours_seconds),
+    ]
 
-    print(f"{args.object}: {args.points} points, noise σ = {args.sigma:.2%} of the diagonal ({args.kind}), seed "
-          f"{args.seed}; HC Smooth's automatic amount: {note}")
+    print(
+        f"{args.object}: {args.points} points, noise σ = {args.sigma:.2%} of the diagonal ({args.kind}), seed "
+        f"{args.seed}; HC Smooth's automatic amount: {note}"
+    )
     print(f"{'':<20} {'RMS distance':>12} {'mean (signed)':>13} {'max distance':>12} {'noise removed':>13} {'time':>7}")
     distances = []
     for name, _, points, seconds in clouds:
@@ -106,9 +113,11 @@ def main():
         distances.append(signed)
         rms = float(np.sqrt(np.mean(signed**2)))
         removed = "" if seconds is None else f"{1 - rms / np.sqrt(np.mean(distances[0] ** 2)):.0%}"
-        print(f"{name:<20} {100 * rms / diagonal:>10.3f} % {100 * signed.mean() / diagonal:>+11.3f} % "
-              f"{100 * np.abs(signed).max() / diagonal:>10.3f} % {removed:>13} "
-              f"{'' if seconds is None else f'{seconds:.1f} s':>7}")
+        print(
+            f"{name:<20} {100 * rms / diagonal:>10.3f} % {100 * signed.mean() / diagonal:>+11.3f} % "
+            f"{100 * np.abs(signed).max() / diagonal:>10.3f} % {removed:>13} "
+            f"{'' if seconds is None else f'{seconds:.1f} s':>7}"
+        )
     print("distances to the clean surface in % of the bounding-box diagonal; mean signed: negative = inside")
 
     rotation = view_rotation(*(float(v) for v in args.view.split(",")))
@@ -117,8 +126,13 @@ def main():
     half = np.abs(screen[:, :2]).max(axis=0) * 1.08
     dpi, panel_px = 100, 520
     pixels_per_unit = panel_px / (2 * half[0])
-    area = float(np.linalg.norm(np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]],
-                                         vertices[faces[:, 2]] - vertices[faces[:, 0]]), axis=1).sum() / 2)
+    area = float(
+        np.linalg.norm(
+            np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]], vertices[faces[:, 2]] - vertices[faces[:, 0]]),
+            axis=1,
+        ).sum()
+        / 2
+    )
     spacing = np.sqrt(area / args.points)
     # White on the surface, deepening red away from it: unsigned, since in any view the points in front
     # (pushed outwards) hide those pushed inwards, and a signed map would show only the first.
@@ -142,28 +156,43 @@ def main():
         result = f"RMS distance {100 * rms / diagonal:.2f} %"
         if index:
             result += f", {100 * (1 - rms / np.sqrt(np.mean(distances[0] ** 2))):.0f} % of the noise removed"
-        figure.text((index + 0.5) / 3, top + 8 / height, f"{name}\n{detail}", ha="center", va="bottom",
-                    color="white", fontsize=13, linespacing=1.4)
-        figure.text((index + 0.5) / 3, bottom - 8 / height, result, ha="center", va="top", color="white",
-                    fontsize=13)
+        figure.text(
+            (index + 0.5) / 3,
+            top + 8 / height,
+            f"{name}\n{detail}",
+            ha="center",
+            va="bottom",
+            color="white",
+            fontsize=13,
+            linespacing=1.4,
+        )
+        figure.text((index + 0.5) / 3, bottom - 8 / height, result, ha="center", va="top", color="white", fontsize=13)
     bar_bottom, bar_height = 55 / height, 16 / height
     bar = figure.add_axes((0.35, bar_bottom, 0.3, bar_height))
     colourbar = figure.colorbar(plt.cm.ScalarMappable(norm, colour_map), cax=bar, orientation="horizontal")
     ticks = np.linspace(0.0, args.limit, 5)
     colourbar.set_ticks(ticks)
-    colourbar.ax.set_xticklabels([f"{v:.2g} %" if v else "0" for v in ticks[:-1]] + [f"≥ {args.limit:.2g} %"],
-                                 color="white", fontsize=11)
+    colourbar.ax.set_xticklabels(
+        [f"{v:.2g} %" if v else "0" for v in ticks[:-1]] + [f"≥ {args.limit:.2g} %"], color="white", fontsize=11
+    )
     colourbar.outline.set_visible(False)
     bar.tick_params(colors="white")
-    figure.text(0.5, bar_bottom + bar_height + 10 / height,
-                f"distance to the clean surface, % of the bounding-box diagonal ({args.object} scan from the "
-                f"pymeshlab wheel, {args.points:,} points)", ha="center", va="bottom", color="white", fontsize=11)
+    figure.text(
+        0.5,
+        bar_bottom + bar_height + 10 / height,
+        f"distance to the clean surface, % of the bounding-box diagonal ({args.object} scan from the "
+        f"pymeshlab wheel, {args.points:,} points)",
+        ha="center",
+        va="bottom",
+        color="white",
+        fontsize=11,
+    )
 
     buffer = io.BytesIO()
     figure.savefig(buffer, dpi=dpi, facecolor=BACKGROUND)
     # 256 colours keep the PNG small: 192 chosen for the picture, 64 exact steps of the colour bar.
     image = Image.open(buffer).convert("RGB")
-    chosen = image.quantize(192, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE).getpalette()[:192 * 3]
+    chosen = image.quantize(192, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE).getpalette()[: 192 * 3]
     steps = np.round(255 * colour_map(np.linspace(0.0, 1.0, 64))[:, :3]).astype(int).ravel().tolist()
     palette = Image.new("P", (1, 1))
     palette.putpalette(chosen + steps)

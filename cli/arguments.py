@@ -24,8 +24,15 @@ POINT_OPTIONS = {s.flag.replace("-", "_"): s for s in settings_spec.POINTS if s.
 POINT_FIELDS = {name: setting.name for name, setting in POINT_OPTIONS.items()}
 POINT_ONLY = tuple(name for name in POINT_OPTIONS if name not in MESH_OPTIONS)
 # Mesh-only options, and the value each may keep with --points because it describes what runs anyway.
-MESH_ONLY = {"iterations": None, "mode": "SIMULTANEOUS", "tolerance": 0.0, "method": "HC", "pin_boundary": False,
-             "influence_group": "", "invert_influence": False}
+MESH_ONLY = {
+    "iterations": None,
+    "mode": "SIMULTANEOUS",
+    "tolerance": 0.0,
+    "method": "HC",
+    "pin_boundary": False,
+    "influence_group": "",
+    "invert_influence": False,
+}
 
 
 def _option(name):
@@ -51,10 +58,16 @@ and, with --overwrite, existing results (and their .mtl for OBJ). --in-place wit
 new file beside the input and keeps the input. Everything is checked before anything runs.
 
 """
-DESCRIPTION += textwrap.fill(
-    f"--points smooths point clouds (meshes without edges) with the Object > HC Smooth Points code. They take "
-    f"{_listed(POINT_OPTIONS)}; the mesh-only options ({', '.join(map(_option, MESH_ONLY))}) are refused with "
-    "--points, and the point options without it.", width=100, break_on_hyphens=False) + "\n"
+DESCRIPTION += (
+    textwrap.fill(
+        f"--points smooths point clouds (meshes without edges) with the Object > HC Smooth Points code. They take "
+        f"{_listed(POINT_OPTIONS)}; the mesh-only options ({', '.join(map(_option, MESH_ONLY))}) are refused with "
+        "--points, and the point options without it.",
+        width=100,
+        break_on_hyphens=False,
+    )
+    + "\n"
+)
 
 EPILOG = """\
 exit status: 0 when every file was smoothed, 1 when any file failed (the reason is printed),
@@ -67,6 +80,7 @@ examples:
   blender -b -c hc_smooth points.ply --points --rounds 4 -o out/
   ls scans/*.ply | xargs -P 4 -n 1 blender -b -c hc_smooth -o smoothed/    (one process per file)
 """
+
 
 class UsageError(Exception):
     """A bad command line: nothing has been read or written."""
@@ -97,6 +111,7 @@ def _checked(setting):
         if high is not None and value > high:
             raise argparse.ArgumentTypeError(f"{text} is above {high:g}")
         return value
+
     parse.__name__ = "whole number" if setting.kind == "int" else "number"  # argparse: "invalid ... value"
     return parse
 
@@ -111,8 +126,7 @@ def setting_help(setting, point=None, mesh_only=False):
     defaults = [_default_text(setting)] if setting.kind not in ("bool", "string") else []
     if point is not None and defaults and (point.default != setting.default or point.cli_default):
         defaults.append("point clouds: " + _default_text(point))
-    return (setting.help + (f" ({'; '.join(defaults)})" if defaults else "")
-            + ("; meshes only" if mesh_only else ""))
+    return setting.help + (f" ({'; '.join(defaults)})" if defaults else "") + ("; meshes only" if mesh_only else "")
 
 
 def add_setting(group, setting, text):
@@ -131,37 +145,61 @@ def add_setting(group, setting, text):
 
 
 def make_parser():
-    parser = _Parser(prog="blender -b -c hc_smooth", description=DESCRIPTION, epilog=EPILOG,
-                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = _Parser(
+        prog="blender -b -c hc_smooth",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("inputs", nargs="+", metavar="INPUT", help="PLY, OBJ, STL or .blend files, or directories")
     where = parser.add_argument_group("where results go")
     where.add_argument("-o", "--output-dir", metavar="OUTDIR", help="folder for the results (created if missing)")
-    where.add_argument("--in-place", action="store_true",
-                       help="write each result beside its input, replacing the input file (with --format: a new "
-                            "file beside the input, which is kept)")
-    where.add_argument("--format", choices=("ply", "obj", "stl"), type=str.lower,
-                       help="write mesh files in this format (default: the input's); .blend stays .blend")
-    where.add_argument("--overwrite", action="store_true",
-                       help="replace results that already exist (and the .mtl beside an OBJ result); without it "
-                            "an existing file that is not the input of --in-place stops the run before it starts")
+    where.add_argument(
+        "--in-place",
+        action="store_true",
+        help="write each result beside its input, replacing the input file (with --format: a new "
+        "file beside the input, which is kept)",
+    )
+    where.add_argument(
+        "--format",
+        choices=("ply", "obj", "stl"),
+        type=str.lower,
+        help="write mesh files in this format (default: the input's); .blend stays .blend",
+    )
+    where.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace results that already exist (and the .mtl beside an OBJ result); without it "
+        "an existing file that is not the input of --in-place stops the run before it starts",
+    )
     smoothing = parser.add_argument_group("smoothing (as the operators' properties)")
     for name, setting in MESH_OPTIONS.items():
         add_setting(smoothing, setting, setting_help(setting, POINT_OPTIONS.get(name), name not in POINT_OPTIONS))
-    smoothing.add_argument("--object", dest="objects", action="append", default=[], metavar="NAME",
-                           help=".blend inputs: smooth this object (repeatable; default: every mesh object, with "
-                                "--points every point cloud)")
+    smoothing.add_argument(
+        "--object",
+        dest="objects",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help=".blend inputs: smooth this object (repeatable; default: every mesh object, with "
+        "--points every point cloud)",
+    )
     points = parser.add_argument_group("point clouds (as Object > HC Smooth Points)")
-    points.add_argument("--points", action="store_true",
-                        help="smooth point clouds (meshes without edges; .blend: also point cloud objects) "
-                             "instead of meshes")
+    points.add_argument(
+        "--points",
+        action="store_true",
+        help="smooth point clouds (meshes without edges; .blend: also point cloud objects) instead of meshes",
+    )
     for name in POINT_ONLY:
         add_setting(points, POINT_OPTIONS[name], setting_help(POINT_OPTIONS[name]))
     return parser
 
 
 Settings = settings_spec.settings_class(
-    "Settings", settings_spec.MESH,
-    "The operator properties jobs.make_job/run/write read, filled from the command line.")
+    "Settings",
+    settings_spec.MESH,
+    "The operator properties jobs.make_job/run/write read, filled from the command line.",
+)
 
 
 @dataclass
@@ -186,31 +224,47 @@ def parse(argv):
     if args.invert_influence and not args.influence_group:
         raise UsageError("--invert-influence needs --influence-group NAME")
     if args.points:
-        refused = [_option(name) for name, keeps in MESH_ONLY.items()
-                   if getattr(args, name) not in (None, keeps)]
+        refused = [_option(name) for name, keeps in MESH_ONLY.items() if getattr(args, name) not in (None, keeps)]
         if refused:
-            raise UsageError(f"{', '.join(refused)} {'does' if len(refused) == 1 else 'do'} not apply to point "
-                             f"clouds (--points): they take {_listed(POINT_OPTIONS)}")
+            raise UsageError(
+                f"{', '.join(refused)} {'does' if len(refused) == 1 else 'do'} not apply to point "
+                f"clouds (--points): they take {_listed(POINT_OPTIONS)}"
+            )
     else:
         given = [_option(name) for name in POINT_ONLY if getattr(args, name) is not None]
         if given:
-            raise UsageError(f"{', '.join(given)} {'applies' if len(given) == 1 else 'apply'} to point clouds "
-                             "only: add --points")
-    settings = Settings(**{setting.name: getattr(args, name) for name, setting in MESH_OPTIONS.items()
-                           if getattr(args, name) is not None})
+            raise UsageError(
+                f"{', '.join(given)} {'applies' if len(given) == 1 else 'apply'} to point clouds only: add --points"
+            )
+    settings = Settings(
+        **{
+            setting.name: getattr(args, name)
+            for name, setting in MESH_OPTIONS.items()
+            if getattr(args, name) is not None
+        }
+    )
     if args.alpha is not None or args.iterations is not None:
         settings.auto_amount = False  # as the operator with Automatic Amount off: explicit numbers run as given
-    point_options = {POINT_FIELDS[name]: getattr(args, name) for name in POINT_FIELDS
-                     if getattr(args, name) is not None}
+    point_options = {
+        POINT_FIELDS[name]: getattr(args, name) for name in POINT_FIELDS if getattr(args, name) is not None
+    }
     if "alpha" in point_options or "iterations_per_round" in point_options:
         point_options["auto_amount"] = False  # as the operator: a manual amount uses alpha and steps as set
     inputs, notes = expand_inputs(args.inputs)
     if args.objects and not any(os.path.splitext(path)[1].lower() == BLEND for path in inputs):
-        raise UsageError("--object names objects inside .blend files, and no input is a .blend file "
-                         "(PLY, OBJ and STL inputs are smoothed whole)")
+        raise UsageError(
+            "--object names objects inside .blend files, and no input is a .blend file "
+            "(PLY, OBJ and STL inputs are smoothed whole)"
+        )
     files = plan_outputs(inputs, args.output_dir, args.format, args.in_place, args.overwrite)
-    return Plan(settings=settings, files=files, points=args.points, point_options=point_options,
-                objects=args.objects, notes=notes)
+    return Plan(
+        settings=settings,
+        files=files,
+        points=args.points,
+        point_options=point_options,
+        objects=args.objects,
+        notes=notes,
+    )
 
 
 def _key(path):
@@ -224,9 +278,13 @@ def expand_inputs(paths):
     found, notes, first = [], [], {}
     for path in paths:
         if os.path.isdir(path):
-            entries = sorted(entry.path for entry in os.scandir(path) if entry.is_file()
-                             and not entry.name.startswith(".")
-                             and os.path.splitext(entry.name)[1].lower() in MESH_FORMATS + (BLEND,))
+            entries = sorted(
+                entry.path
+                for entry in os.scandir(path)
+                if entry.is_file()
+                and not entry.name.startswith(".")
+                and os.path.splitext(entry.name)[1].lower() in MESH_FORMATS + (BLEND,)
+            )
             if not entries:
                 raise UsageError(f"{path}: no PLY, OBJ, STL or .blend files in this folder")
         else:
@@ -261,8 +319,10 @@ def material_libraries(obj_path):
     folder = os.path.dirname(os.path.abspath(obj_path))
     try:
         with open(obj_path, "rb") as source, mmap.mmap(source.fileno(), 0, access=mmap.ACCESS_READ) as data:
-            lines = [match.group(1).decode("utf-8", "replace").strip()
-                     for match in re.finditer(rb"^mtllib[ \t]+([^\r\n]+)", data, re.M)]
+            lines = [
+                match.group(1).decode("utf-8", "replace").strip()
+                for match in re.finditer(rb"^mtllib[ \t]+([^\r\n]+)", data, re.M)
+            ]
     except (OSError, ValueError):  # unreadable or empty: it names none (reading it fails that file later)
         return set()
     names = {name for line in lines for name in (line, *line.split())}  # one name with spaces, or several
@@ -278,13 +338,19 @@ def plan_outputs(inputs, output_dir, fmt, in_place, overwrite=False):
         target = output_path(path, output_dir, fmt, in_place)
         key = _key(target)
         if key in taken:
-            raise UsageError(f"{path} and {taken[key]} would both be written to {target}: "
-                             "smooth them into different folders")
+            raise UsageError(
+                f"{path} and {taken[key]} would both be written to {target}: smooth them into different folders"
+            )
         same = key == _key(path)
         if key in sources and not (in_place and same):
-            raise UsageError(f"{path}: the result would overwrite an input ({target}); "
-                             + ("choose another -o OUTDIR or pass --in-place" if not in_place
-                                else "smooth it into a folder with -o OUTDIR"))
+            raise UsageError(
+                f"{path}: the result would overwrite an input ({target}); "
+                + (
+                    "choose another -o OUTDIR or pass --in-place"
+                    if not in_place
+                    else "smooth it into a folder with -o OUTDIR"
+                )
+            )
         taken[key] = path
         plan.append((path, target))
         if overwrite:
@@ -298,6 +364,8 @@ def plan_outputs(inputs, output_dir, fmt, in_place, overwrite=False):
     if existing:
         names = "".join(f"\n  {name}" for name in existing)
         where = "move them away or smooth into a folder with -o OUTDIR" if in_place else "choose another -o OUTDIR"
-        raise UsageError(f"these files exist and would be replaced:{names}\n{where}, or pass --overwrite to replace "
-                         "them (nothing was read or written)")
+        raise UsageError(
+            f"these files exist and would be replaced:{names}\n{where}, or pass --overwrite to replace "
+            "them (nothing was read or written)"
+        )
     return plan

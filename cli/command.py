@@ -43,8 +43,11 @@ class Outcome:
         if not self.changes:
             return "-"
         worst = max(self.changes, key=lambda c: abs(c.volume_change if c.volume_change is not None else c.bbox_change))
-        text = (f"volume {worst.volume_change:+.3%}" if worst.volume_change is not None
-                else f"size {worst.bbox_change:+.3%}")
+        text = (
+            f"volume {worst.volume_change:+.3%}"
+            if worst.volume_change is not None
+            else f"size {worst.bbox_change:+.3%}"
+        )
         return text if len(self.changes) == 1 else f"{text} (largest of {len(self.changes)})"
 
     def amount_text(self):
@@ -53,7 +56,7 @@ class Outcome:
             return f"{self.iterations} iterations"
         kinds = sorted(set(self.rounds))
         if len(kinds) == 1:
-            (rounds, steps), = kinds
+            ((rounds, steps),) = kinds
             return f"{rounds} rounds of {steps} steps ({rounds * steps} steps)"
         totals = [rounds * steps for rounds, steps in kinds]
         return f"{min(totals)} to {max(totals)} steps in {' / '.join(f'{r}x{s}' for r, s in kinds)}"
@@ -110,8 +113,10 @@ def point_settings(plan):
     """The point operator's settings with what the command line gave; refuses an inconsistent set."""
     settings = point_cloud.PointSettings(**plan.point_options)
     if settings.spacing_factor > settings.gap_factor:
-        raise arguments.UsageError(f"--reach ({settings.spacing_factor:g}) must not exceed --gap "
-                                   f"({settings.gap_factor:g}): a neighbour within reach would be cut off as a gap")
+        raise arguments.UsageError(
+            f"--reach ({settings.spacing_factor:g}) must not exceed --gap "
+            f"({settings.gap_factor:g}): a neighbour within reach would be cut off as a gap"
+        )
     return settings
 
 
@@ -139,8 +144,9 @@ def process(source, target, plan, settings):
     if bug:
         print(bug, end="", file=sys.stderr, flush=True)
     # Python's warnings would have gone to the collected stderr: they are the file's warnings.
-    outcome.warnings.extend(str(warning.message) for warning in caught
-                            if not issubclass(warning.category, core.ConvergenceWarning))  # said at the start
+    outcome.warnings.extend(
+        str(warning.message) for warning in caught if not issubclass(warning.category, core.ConvergenceWarning)
+    )  # said at the start
     if outcome.error:
         outcome.blender_lines = [line for line in printed if line.strip() not in outcome.error]
     outcome.seconds = time.perf_counter() - start
@@ -159,8 +165,7 @@ def smooth_mesh_file(source, target, plan, settings, outcome):
 
 
 def is_point_cloud(obj):
-    return obj.type == "POINTCLOUD" or (obj.type == "MESH" and bool(len(obj.data.vertices))
-                                        and not len(obj.data.edges))
+    return obj.type == "POINTCLOUD" or (obj.type == "MESH" and bool(len(obj.data.vertices)) and not len(obj.data.edges))
 
 
 def smooth_blend_file(source, target, plan, settings, outcome):
@@ -182,14 +187,21 @@ def smooth_blend_file(source, target, plan, settings, outcome):
         objects = [obj for obj in local if is_point_cloud(obj) == plan.points]  # --points: the clouds, else the meshes
         others = [obj.name for obj in local if obj not in objects]
         if not objects:
-            raise FileError("no local point clouds (meshes without edges, point cloud objects) in this file"
-                            + (" (it has meshes: smooth them without --points)" if others else "")
-                            if plan.points else "no local mesh objects in this file"
-                            + (" (it has point clouds: pass --points)" if others else ""))
+            raise FileError(
+                "no local point clouds (meshes without edges, point cloud objects) in this file"
+                + (" (it has meshes: smooth them without --points)" if others else "")
+                if plan.points
+                else "no local mesh objects in this file" + (" (it has point clouds: pass --points)" if others else "")
+            )
         if others:
-            outcome.warnings.append(f"left as they are: {', '.join(sorted(others))} ("
-                                    + ("meshes: smooth them without --points)" if plan.points
-                                       else "point clouds: smooth them with --points)"))
+            outcome.warnings.append(
+                f"left as they are: {', '.join(sorted(others))} ("
+                + (
+                    "meshes: smooth them without --points)"
+                    if plan.points
+                    else "point clouds: smooth them with --points)"
+                )
+            )
     smooth_objects(objects, plan, settings, outcome)
     files.save_blend_copy(target)
 
@@ -207,8 +219,10 @@ def smooth_meshes(objects, settings, outcome):
     """A mesh shared by several objects is smoothed once."""
     for obj in objects:
         if obj.type != "MESH":
-            raise FileError(f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object, not a mesh"
-                            + (" (pass --points to smooth it)" if obj.type == "POINTCLOUD" else ""))
+            raise FileError(
+                f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object, not a mesh"
+                + (" (pass --points to smooth it)" if obj.type == "POINTCLOUD" else "")
+            )
         if is_point_cloud(obj):
             raise FileError(f"'{obj.name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
     jobs = [jobs_module.make_job(obj, settings) for obj in unique_data(objects)]
@@ -242,8 +256,10 @@ def smooth_point_clouds(objects, settings, outcome):
 def progress_line(outcome):
     if outcome.error:
         return f"{outcome.source}: FAILED: {outcome.error}"
-    return (f"{outcome.source} -> {outcome.target}: {outcome.size_text()}, {outcome.amount_text()}, "
-            f"{outcome.seconds:.2f} s, {outcome.change_text()}")
+    return (
+        f"{outcome.source} -> {outcome.target}: {outcome.size_text()}, {outcome.amount_text()}, "
+        f"{outcome.seconds:.2f} s, {outcome.change_text()}"
+    )
 
 
 def summary_table(outcomes):
@@ -253,8 +269,16 @@ def summary_table(outcomes):
         if outcome.error:
             rows.append((outcome.source, "-", "-", f"{outcome.seconds:.2f} s", "-", "FAILED: " + outcome.error))
         else:
-            rows.append((outcome.source, str(outcome.vertices), outcome.amount_text(), f"{outcome.seconds:.2f} s",
-                         outcome.change_text(), outcome.target))
+            rows.append(
+                (
+                    outcome.source,
+                    str(outcome.vertices),
+                    outcome.amount_text(),
+                    f"{outcome.seconds:.2f} s",
+                    outcome.change_text(),
+                    outcome.target,
+                )
+            )
     widths = [max(len(row[i]) for row in rows) for i in range(len(header) - 1)]
     lines = ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)) + "  " + row[-1] for row in rows]
     done = sum(1 for outcome in outcomes if not outcome.error)

@@ -187,11 +187,17 @@ def export_options(ext, layout, objects):
     if ext == ".ply":
         # Vertices without faces have no surface normal: Blender would write made-up ones (see _point_normals).
         surface = any(len(mesh.polygons) for mesh in meshes)
-        return {"ascii_format": same and layout.ascii, "export_normals": layout.normals and surface,
-                "export_colors": "LINEAR" if same else "SRGB"}  # LINEAR: as import_file read them
+        return {
+            "ascii_format": same and layout.ascii,
+            "export_normals": layout.normals and surface,
+            "export_colors": "LINEAR" if same else "SRGB",
+        }  # LINEAR: as import_file read them
     if ext == ".obj":
-        return {"export_normals": layout.normals, "export_materials": layout.materials,
-                "export_colors": any(len(mesh.color_attributes) for mesh in meshes)}
+        return {
+            "export_normals": layout.normals,
+            "export_materials": layout.materials,
+            "export_colors": any(len(mesh.color_attributes) for mesh in meshes),
+        }
     return {"ascii_format": same and layout.ascii}
 
 
@@ -212,8 +218,12 @@ def _point_normals(objects):
     for obj in objects:
         mesh = obj.data
         normal = mesh.attributes.get("normal") if obj.type == "MESH" and not len(mesh.polygons) else None
-        if normal is None or normal.data_type != "FLOAT_VECTOR" or normal.domain != "POINT" \
-                or any(name in mesh.attributes for name in ("nx", "ny", "nz")):
+        if (
+            normal is None
+            or normal.data_type != "FLOAT_VECTOR"
+            or normal.domain != "POINT"
+            or any(name in mesh.attributes for name in ("nx", "ny", "nz"))
+        ):
             continue
         values = np.empty(3 * len(mesh.vertices), dtype=np.float32)
         normal.data.foreach_get("vector", values)
@@ -263,7 +273,7 @@ def export_file(objects, target, layout):
 
 def _export(name, options, target, ext):
     temporary = temporary_path(target)
-    companions = {temporary[:-len(ext)] + ".mtl": target[:-len(ext)] + ".mtl"} if ext == ".obj" else {}
+    companions = {temporary[: -len(ext)] + ".mtl": target[: -len(ext)] + ".mtl"} if ext == ".obj" else {}
     try:
         try:
             result = getattr(bpy.ops.wm, name)(filepath=temporary, **options)
@@ -285,7 +295,7 @@ def _export(name, options, target, ext):
 
 def _rename_material_library(obj_path, companions):
     """The OBJ exporter names its .mtl after the temporary file: point `mtllib` at the final name."""
-    (temp_mtl, final_mtl), = companions.items()
+    ((temp_mtl, final_mtl),) = companions.items()
     if not os.path.exists(temp_mtl):
         return
     old = f"mtllib {os.path.basename(temp_mtl)}".encode()
@@ -295,7 +305,7 @@ def _rename_material_library(obj_path, companions):
         with open(obj_path, "rb") as source, open(fixed, "wb") as out:
             for line in source:  # the mtllib line is in the header; the rest is copied as is
                 if line.startswith(old):
-                    out.write(new + line[len(old):])
+                    out.write(new + line[len(old) :])
                     out.write(source.read())
                     break
                 out.write(line)

@@ -12,7 +12,6 @@ from .noise import AmountChooser, MeshAmount, choose_amount
 from .pointcloud import smooth_point_cloud
 from .smoothing import METHODS, MODES, Cancelled, Smoothing, SmoothResult, hc_smooth, laplacian_smooth, smooth
 
-
 __all__ = [
     "Cancelled",
     "Change",
@@ -30,8 +29,11 @@ __all__ = [
     "hc_smooth",
     "in_convergence_region",
     "laplacian_smooth",
+    "metrics",
     "measure_change",
     "smooth",
     "smooth_point_cloud",
+    "topology",
     "umbrella_operator",
+    "volume",
 ]

@@ -13,7 +13,8 @@ import scipy.sparse as sp
 from .validation import check_edges
 
 try:  # the kernels behind coo -> csr and csr -> csc; private, so pairs_in_order has a public fallback
-    from scipy.sparse._sparsetools import coo_tocsr as _coo_tocsr, csr_tocsc as _csr_tocsc
+    from scipy.sparse._sparsetools import coo_tocsr as _coo_tocsr
+    from scipy.sparse._sparsetools import csr_tocsc as _csr_tocsc
 except ImportError:  # SciPy without them
     _coo_tocsr = _csr_tocsc = None
 

@@ -47,8 +47,10 @@ def renumbering(operator):
         if not is_scattered(operator):
             operator._renumbering = False
         else:
-            pattern = sp.csr_matrix((np.ones(operator.indices.size, dtype=np.int8), operator.indices,
-                                     operator.indptr), shape=(operator.n_vertices,) * 2)
+            pattern = sp.csr_matrix(
+                (np.ones(operator.indices.size, dtype=np.int8), operator.indices, operator.indptr),
+                shape=(operator.n_vertices,) * 2,
+            )
             order = reverse_cuthill_mckee(pattern, symmetric_mode=True)
             operator._renumbering = Renumbering(order, operator.renumbered(order))
     return operator._renumbering or None

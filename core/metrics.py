@@ -25,8 +25,10 @@ class Change:
     volume_change: float | None  # relative; None when not closed (or no faces)
 
     def summary(self):
-        parts = [f"{self.moved} of {self.n_vertices} vertices moved (mean {self.mean_displacement:.3g}, "
-                 f"max {self.max_displacement:.3g})"]
+        parts = [
+            f"{self.moved} of {self.n_vertices} vertices moved (mean {self.mean_displacement:.3g}, "
+            f"max {self.max_displacement:.3g})"
+        ]
         if self.volume_change is not None:
             parts.append(f"volume {self.volume_change:+.2%}")
         else:
@@ -42,10 +44,16 @@ def fan_triangles(faces):
     """
     if isinstance(faces, tuple):
         offsets, corners = (_indices(a) for a in faces)
-        if offsets.ndim != 1 or offsets.size == 0 or offsets[0] != 0 or offsets[-1] != corners.size \
-                or np.any(np.diff(offsets) < 3):
-            raise ValueError("faces as (offsets, corner_verts) need offsets from 0 to len(corner_verts), "
-                             "at least 3 corners per face")
+        if (
+            offsets.ndim != 1
+            or offsets.size == 0
+            or offsets[0] != 0
+            or offsets[-1] != corners.size
+            or np.any(np.diff(offsets) < 3)
+        ):
+            raise ValueError(
+                "faces as (offsets, corner_verts) need offsets from 0 to len(corner_verts), at least 3 corners per face"
+            )
         if corners.size == 3 * (offsets.size - 1):  # no face has fewer than three corners: all are triangles
             return corners.reshape(-1, 3)
     else:
@@ -117,7 +125,7 @@ def _signed_volume(points, corners, centre, unit):
     a_all, b_all, c_all = corners
     total = 0.0
     for start in range(0, a_all.size, _VOLUME_BLOCK):
-        a, b, c = (index[start:start + _VOLUME_BLOCK] for index in (a_all, b_all, c_all))
+        a, b, c = (index[start : start + _VOLUME_BLOCK] for index in (a_all, b_all, c_all))
         bx, by, bz, cx, cy, cz = x[b], y[b], z[b], x[c], y[c], z[c]
         term = by * cz
         term -= bz * cy

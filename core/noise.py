@@ -88,8 +88,16 @@ class _Run:
     """An HC run (alpha = 0) whose state can be read at a few vertices, in the caller's vertex order."""
 
     def __init__(self, positions, operator, fixed, beta):
-        self.smoothing = Smoothing(positions, None, method="hc", alpha=0.0, beta=beta, iterations=MAX_ITERATIONS,
-                                   fixed=fixed, operator=operator)
+        self.smoothing = Smoothing(
+            positions,
+            None,
+            method="hc",
+            alpha=0.0,
+            beta=beta,
+            iterations=MAX_ITERATIONS,
+            fixed=fixed,
+            operator=operator,
+        )
         self.order = self.smoothing.order  # None, or the cache-friendly vertex order the run works in
         self.position_of = None
         if self.order is not None:
@@ -146,8 +154,11 @@ class AmountChooser:
         surface_rows = movable[operator.degree[movable] >= _MIN_NEIGHBOURS]
         self.use_normals = surface_rows.size >= 8  # else (lines, tiny meshes): the whole residual
         candidates = surface_rows if self.use_normals else movable
-        self.rows = candidates[np.unique(np.linspace(0, candidates.size - 1, min(candidates.size, SAMPLE_VERTICES))
-                                         .round().astype(np.int64))]
+        self.rows = candidates[
+            np.unique(
+                np.linspace(0, candidates.size - 1, min(candidates.size, SAMPLE_VERTICES)).round().astype(np.int64)
+            )
+        ]
         self.y = np.asarray(start[self.rows], dtype=np.float64)
 
         self.probe_count = probe_count = int(min(24, max(3, 3 * math.ceil(PROBE_ENTRIES / (3 * movable.size)))))
@@ -155,12 +166,13 @@ class AmountChooser:
         probes[fixed_mask] = 0.0  # the trace over the movable vertices only
         with warnings.catch_warnings():  # alpha = 0 lies outside Theorem 5.2's region: on purpose, see above
             warnings.simplefilter("ignore", ConvergenceWarning)
-            self.runs = [_Run(probes[:, i:i + 3], operator, fixed_mask, beta) for i in range(0, probe_count, 3)]
+            self.runs = [_Run(probes[:, i : i + 3], operator, fixed_mask, beta) for i in range(0, probe_count, 3)]
             self.data = _Run(start, operator, fixed_mask, beta)
         # Each probe block as its run holds it: (3, n), in the run's vertex order.
         self.planar_probes = [
-            np.ascontiguousarray((probes[:, i:i + 3] if run.order is None else probes[run.order, i:i + 3]).T)
-            for i, run in zip(range(0, probe_count, 3), self.runs)]
+            np.ascontiguousarray((probes[:, i : i + 3] if run.order is None else probes[run.order, i : i + 3]).T)
+            for i, run in zip(range(0, probe_count, 3), self.runs)
+        ]
         self.n = n
 
     def steps(self):
@@ -182,8 +194,9 @@ class AmountChooser:
             except DivergenceError:
                 break
             done = k
-            trace = sum(float(np.einsum("ij,ij->", run.planar(), planar))
-                        for run, planar in zip(runs, self.planar_probes))
+            trace = sum(
+                float(np.einsum("ij,ij->", run.planar(), planar)) for run, planar in zip(runs, self.planar_probes)
+            )
             t = min(trace / (probe_count * movable.size), 0.999)
             state = data.at(rows)
             residual = self.y - state

@@ -87,8 +87,9 @@ class RowBlocks:
             workers = 1
         self.n_rows, self.n_columns = indptr.size - 1, n_columns
         bounds = _row_blocks(indptr, workers) if self.n_rows else np.array([0, 0])
-        self.blocks = [_Block(indptr, indices, n_columns, int(start), int(stop))
-                       for start, stop in zip(bounds[:-1], bounds[1:])]
+        self.blocks = [
+            _Block(indptr, indices, n_columns, int(start), int(stop)) for start, stop in zip(bounds[:-1], bounds[1:])
+        ]
 
     def run(self, task):
         run_all([lambda block=block: task(block) for block in self.blocks])
@@ -107,12 +108,11 @@ class _Block:
         # from memory once instead of once per coordinate.
         # Views of the pattern (no copy); only each chunk's indptr is rebased.
         count = max(1, -(-(self._last - self._first) // CHUNK_NONZEROS))
-        bounds = start + _row_blocks(indptr[start:stop + 1] - self._first, count)
+        bounds = start + _row_blocks(indptr[start : stop + 1] - self._first, count)
         self._chunks = []
         for low, high in zip(bounds[:-1], bounds[1:]):
             first, last = int(indptr[low]), int(indptr[high])
-            self._chunks.append((int(low), int(high), first, last, indptr[low:high + 1] - first,
-                                 indices[first:last]))
+            self._chunks.append((int(low), int(high), first, last, indptr[low : high + 1] - first, indices[first:last]))
         self._longest_chunk = max((chunk[3] - chunk[2] for chunk in self._chunks), default=0)
         self._widest_chunk = max((chunk[1] - chunk[0] for chunk in self._chunks), default=0)
 
@@ -128,13 +128,15 @@ class _Block:
         ones = _ones(x.dtype, self._longest_chunk)
         buffer = np.empty((x_rows.shape[0], self._widest_chunk), dtype=x.dtype)
         for low, high, first, last, chunk_indptr, chunk_indices in self._chunks:
-            sums = buffer[:, :high - low]
+            sums = buffer[:, : high - low]
             sums[...] = 0.0
-            if not _private_sums(high - low, self._n_columns, chunk_indptr, chunk_indices, ones[:last - first],
-                                 x_rows, sums):
+            if not _private_sums(
+                high - low, self._n_columns, chunk_indptr, chunk_indices, ones[: last - first], x_rows, sums
+            ):
                 # The public product: per row the same sum in the same order, so the same bits.
-                part = sp.csr_matrix((ones[:last - first], chunk_indices, chunk_indptr),
-                                     shape=(high - low, self._n_columns))
+                part = sp.csr_matrix(
+                    (ones[: last - first], chunk_indices, chunk_indptr), shape=(high - low, self._n_columns)
+                )
                 sums += (part @ x_rows.T).T
             combine(slice(low, high), sums)
 

@@ -15,8 +15,8 @@ import scipy.sparse as sp
 
 from . import locality, parallel
 from .adjacency import Umbrella, umbrella_operator
-from .triangular import triangular_solver
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, divergence_message
+from .triangular import triangular_solver
 from .validation import (
     bbox_diagonal,
     check_choice,
@@ -66,9 +66,21 @@ def smooth(
     ``alpha`` weights q (central) or o (original, hc); ``beta`` is HC's weight of b_i in d_i.
     Raises ``DivergenceError`` instead of returning a result that is not finite or has blown up.
     """
-    run = Smoothing(positions, edges, method=method, alpha=alpha, beta=beta, iterations=iterations, mode=mode,
-                    fixed=fixed, tolerance=tolerance, original=original, operator=operator, influence=influence,
-                    stacklevel=4)
+    run = Smoothing(
+        positions,
+        edges,
+        method=method,
+        alpha=alpha,
+        beta=beta,
+        iterations=iterations,
+        mode=mode,
+        fixed=fixed,
+        tolerance=tolerance,
+        original=original,
+        operator=operator,
+        influence=influence,
+        stacklevel=4,
+    )
     if progress is None:
         run.advance()
     else:
@@ -90,8 +102,23 @@ class Smoothing:
     in chunks and gets the same result bit for bit (the tolerance is measured against the input's
     bounding box whatever the chunk). Arguments as for ``smooth``; everything is checked here."""
 
-    def __init__(self, positions, edges, *, method="hc", alpha=0.0, beta=0.5, iterations, mode="simultaneous",
-                 fixed=None, tolerance=0.0, original=None, operator=None, influence=None, stacklevel=2):
+    def __init__(
+        self,
+        positions,
+        edges,
+        *,
+        method="hc",
+        alpha=0.0,
+        beta=0.5,
+        iterations,
+        mode="simultaneous",
+        fixed=None,
+        tolerance=0.0,
+        original=None,
+        operator=None,
+        influence=None,
+        stacklevel=2,
+    ):
         self.method = method = check_choice(method, "method", METHODS)
         mode = check_choice(mode, "mode", MODES)
         self.alpha = check_unit_interval(alpha, "alpha")
@@ -121,7 +148,8 @@ class Smoothing:
         self.shape, self.dtype = start.shape, start.dtype
         self.threshold = tolerance * bbox_diagonal(start) if tolerance > 0.0 else 0.0
         self.plain_squares = squares_are_safe(self.threshold, start.dtype) and squares_are_safe(
-            bbox_diagonal(start), start.dtype)
+            bbox_diagonal(start), start.dtype
+        )
         # What "blown up" is measured against: the box around the input and the originals.
         self.reference_box = _box(start) if origin is start else _box(np.concatenate([start, origin]))
         renumbered = locality.renumbering(operator) if mode == "simultaneous" and self.iterations > 0 else None
@@ -136,9 +164,16 @@ class Smoothing:
         self.partial_weight = weights[partial].astype(start.dtype) if partial.size else None
         # The iterations work on planar copies, one contiguous row per coordinate (see core.parallel).
         self.current = _planar(start, self.order)
-        self.step = _step_for(operator, fixed_mask,
-                              self.current if origin is start else _planar(origin, self.order),
-                              method, mode, self.alpha, self.beta, start.dtype)  # (keeps α o, never o itself)
+        self.step = _step_for(
+            operator,
+            fixed_mask,
+            self.current if origin is start else _planar(origin, self.order),
+            method,
+            mode,
+            self.alpha,
+            self.beta,
+            start.dtype,
+        )  # (keeps α o, never o itself)
         # A step that writes into ``spare`` swaps it with ``current`` every iteration.
         self.spare = np.empty_like(self.current) if self.step.writes_out else None
         self.done = 0
@@ -227,8 +262,10 @@ def _box(points):
     """(low, high) corners of the bounding box of (n, 3) points, in float64."""
     if points.shape[0] == 0:
         return np.zeros(3), np.zeros(3)
-    return (np.array([points[:, k].min() for k in range(3)], dtype=np.float64),
-            np.array([points[:, k].max() for k in range(3)], dtype=np.float64))
+    return (
+        np.array([points[:, k].min() for k in range(3)], dtype=np.float64),
+        np.array([points[:, k].max() for k in range(3)], dtype=np.float64),
+    )
 
 
 def _planar(points, order=None):
@@ -268,8 +305,18 @@ def hc_smooth(
     Converges for alpha > 0 and beta > 0.5 (Theorem 5.2); elsewhere it runs and warns.
     """
     return smooth(
-        positions, edges, method="hc", alpha=alpha, beta=beta, iterations=iterations, mode=mode,
-        fixed=fixed, tolerance=tolerance, original=original, operator=operator, progress=progress,
+        positions,
+        edges,
+        method="hc",
+        alpha=alpha,
+        beta=beta,
+        iterations=iterations,
+        mode=mode,
+        fixed=fixed,
+        tolerance=tolerance,
+        original=original,
+        operator=operator,
+        progress=progress,
         influence=influence,
     ).positions
 
@@ -293,8 +340,18 @@ def laplacian_smooth(
     (3.3, alpha weights o_i). Other arguments as for ``hc_smooth``."""
     variant = check_choice(variant, "variant", METHODS[1:])
     return smooth(
-        positions, edges, method=variant, alpha=alpha, iterations=iterations, mode=mode, fixed=fixed,
-        tolerance=tolerance, original=original, operator=operator, progress=progress, influence=influence,
+        positions,
+        edges,
+        method=variant,
+        alpha=alpha,
+        iterations=iterations,
+        mode=mode,
+        fixed=fixed,
+        tolerance=tolerance,
+        original=original,
+        operator=operator,
+        progress=progress,
+        influence=influence,
     ).positions
 
 
@@ -344,10 +401,12 @@ class _SimultaneousStep(_Step):
         dtype = np.dtype(dtype)
         self.blocks = parallel.RowBlocks(operator.indptr, operator.indices, operator.n_vertices)
         # Each block resets its own fixed rows.
-        bounds = np.searchsorted(self.fixed_index, [block.rows.start for block in self.blocks.blocks]
-                                 + [operator.n_vertices])
-        self.block_fixed = {id(block): self.fixed_index[bounds[k]:bounds[k + 1]]
-                            for k, block in enumerate(self.blocks.blocks)}
+        bounds = np.searchsorted(
+            self.fixed_index, [block.rows.start for block in self.blocks.blocks] + [operator.n_vertices]
+        )
+        self.block_fixed = {
+            id(block): self.fixed_index[bounds[k] : bounds[k + 1]] for k, block in enumerate(self.blocks.blocks)
+        }
         # T x = (sum of x over adj(i)) / |adj(i)|: the products sum over the pattern, and each row's
         # factor (with the step's constants folded in) is applied to the sums while they are in cache.
         inverse_degree = np.zeros(operator.n_vertices, dtype=dtype)

@@ -43,8 +43,20 @@ def triangular_solver(lower_unit):
         # Planar rows (k, n) are the columns of a Fortran (n, k) array, the same memory, which is
         # SuperLU's layout; it hands back a Fortran (n, k) array, whose transpose is planar again.
         try:
-            x, info = _gstrs("N", n, matrix.nnz, matrix.data, indices, indptr,
-                             n, 0, empty_data, empty_indices, empty_indptr, b.reshape(-1, n).T)
+            x, info = _gstrs(
+                "N",
+                n,
+                matrix.nnz,
+                matrix.data,
+                indices,
+                indptr,
+                n,
+                0,
+                empty_data,
+                empty_indices,
+                empty_indptr,
+                b.reshape(-1, n).T,
+            )
             if info:
                 raise ValueError(f"SuperLU gstrs returned {info}")
         except (TypeError, ValueError):  # the private kernel changed or failed: the public path from now on

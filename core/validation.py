@@ -72,9 +72,7 @@ def check_edges(edges, n_vertices):
     low, high = array.min(), array.max()
     if low < 0 or high >= n_vertices:
         bad = low if low < 0 else high
-        raise ValueError(
-            f"edges refer to vertex {bad}, but there are only {n_vertices} vertices (0..{n_vertices - 1})"
-        )
+        raise ValueError(f"edges refer to vertex {bad}, but there are only {n_vertices} vertices (0..{n_vertices - 1})")
     return array
 
 
@@ -139,10 +137,13 @@ def check_influence(influence, n_vertices):
     if influence is None:
         return None
     array = np.asarray(influence)
-    if array.shape != (n_vertices,) or not (np.issubdtype(array.dtype, np.floating)
-                                            or np.issubdtype(array.dtype, np.integer)):
-        raise ValueError(f"influence must be {n_vertices} numbers between 0 and 1, one per vertex, "
-                         f"got {array.dtype} of shape {array.shape}")
+    if array.shape != (n_vertices,) or not (
+        np.issubdtype(array.dtype, np.floating) or np.issubdtype(array.dtype, np.integer)
+    ):
+        raise ValueError(
+            f"influence must be {n_vertices} numbers between 0 and 1, one per vertex, "
+            f"got {array.dtype} of shape {array.shape}"
+        )
     weights = array.astype(np.float64)
     if not np.all((weights >= 0.0) & (weights <= 1.0)):  # NaN fails both
         bad = int(np.flatnonzero(~((weights >= 0.0) & (weights <= 1.0)))[0])

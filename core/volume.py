@@ -26,16 +26,20 @@ def vertex_normals(positions, triangles):
     n = positions.shape[0]
     a, b, c = (positions[triangles[:, k]] for k in range(3))
     face = _cross(b - a, c - a)
-    normals = np.stack([sum(np.bincount(triangles[:, k], weights=face[j], minlength=n) for k in range(3))
-                        for j in range(3)], axis=1)
+    normals = np.stack(
+        [sum(np.bincount(triangles[:, k], weights=face[j], minlength=n) for k in range(3)) for j in range(3)], axis=1
+    )
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     return normals / np.where(length > 0.0, length, 1.0)
 
 
 def _cross(b, c):
     """Row-wise b x c of (k, 3) arrays, as three columns."""
-    return (b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1], b[:, 2] * c[:, 0] - b[:, 0] * c[:, 2],
-            b[:, 0] * c[:, 1] - b[:, 1] * c[:, 0])
+    return (
+        b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1],
+        b[:, 2] * c[:, 0] - b[:, 0] * c[:, 2],
+        b[:, 0] * c[:, 1] - b[:, 1] * c[:, 0],
+    )
 
 
 def _det(a, b, c):
@@ -49,17 +53,19 @@ def _volume_cubics(positions, normals, triangles, part_of_triangle, parts, centr
     ``normals`` None: the volume alone, (c0,)."""
     cubics = np.zeros((4 if normals is not None else 1, parts))
     for start in range(0, len(triangles), _BLOCK):
-        block = triangles[start:start + _BLOCK]
+        block = triangles[start : start + _BLOCK]
         a, b, c = (positions[block[:, k]] - centre for k in range(3))
-        owner = part_of_triangle[start:start + _BLOCK]
+        owner = part_of_triangle[start : start + _BLOCK]
         if normals is None:
             cubics[0] += np.bincount(owner, weights=_det(a, b, c) / 6.0, minlength=parts)
             continue
         na, nb, nc = (normals[block[:, k]] for k in range(3))
-        terms = (_det(a, b, c),
-                 _det(na, b, c) + _det(a, nb, c) + _det(a, b, nc),
-                 _det(na, nb, c) + _det(na, b, nc) + _det(a, nb, nc),
-                 _det(na, nb, nc))
+        terms = (
+            _det(a, b, c),
+            _det(na, b, c) + _det(a, nb, c) + _det(a, b, nc),
+            _det(na, nb, c) + _det(na, b, nc) + _det(a, nb, nc),
+            _det(na, nb, nc),
+        )
         for degree, term in enumerate(terms):
             cubics[degree] += np.bincount(owner, weights=term / 6.0, minlength=parts)
     return cubics

@@ -45,8 +45,9 @@ COLOUR_LIMIT = 1.0  # the colour scale spans ±1 % of the diagonal: about 2.5 σ
 
 
 def operator_defaults():
-    return {prop.identifier: getattr(prop, "default", None)
-            for prop in bpy.ops.object.hc_smooth.get_rna_type().properties}
+    return {
+        prop.identifier: getattr(prop, "default", None) for prop in bpy.ops.object.hc_smooth.get_rna_type().properties
+    }
 
 
 def smooth_copy(source, name, location, **operator_args):
@@ -86,8 +87,11 @@ def least_error_count(noisy, mesh_edges, surface, most):
 def distances(signed, diagonal):
     """RMS, mean (signed: negative = inside) and max distance to the clean surface, in % of the diagonal."""
     scale = 100 / diagonal
-    return (scale * float(np.sqrt(np.mean(signed**2))), scale * float(signed.mean()),
-            scale * float(np.abs(signed).max()))
+    return (
+        scale * float(np.sqrt(np.mean(signed**2))),
+        scale * float(signed.mean()),
+        scale * float(np.abs(signed).max()),
+    )
 
 
 def print_table(rows):
@@ -95,26 +99,41 @@ def print_table(rows):
     lines = [header]
     for row in rows:
         rms, mean, worst = row["distances"]
-        lines.append((row["name"], str(row["iterations"]),
-                      "" if row["change"] is None else f"{100 * row['change']:+.2f} %",
-                      f"{100 * row['vs_clean']:+.2f} %", f"{rms:.3f} %", f"{mean:+.3f} %", f"{worst:.3f} %",
-                      "" if row["seconds"] is None else f"{row['seconds']:.2f} s"))
+        lines.append(
+            (
+                row["name"],
+                str(row["iterations"]),
+                "" if row["change"] is None else f"{100 * row['change']:+.2f} %",
+                f"{100 * row['vs_clean']:+.2f} %",
+                f"{rms:.3f} %",
+                f"{mean:+.3f} %",
+                f"{worst:.3f} %",
+                "" if row["seconds"] is None else f"{row['seconds']:.2f} s",
+            )
+        )
     widths = [max(len(line[i]) for line in lines) for i in range(len(header))]
     for index, line in enumerate(lines):
-        print("  ".join(cell.ljust(width) if i == 0 else cell.rjust(width)
-                        for i, (cell, width) in enumerate(zip(line, widths, strict=True))).rstrip())
+        print(
+            "  ".join(
+                cell.ljust(width) if i == 0 else cell.rjust(width)
+                for i, (cell, width) in enumerate(zip(line, widths, strict=True))
+            ).rstrip()
+        )
         if index == 0:
             print("  ".join("-" * width for width in widths))
-    print("volume change: against the noisy input, as the operator reports it; vs clean: against the clean shape.\n"
-          "distance: from each vertex to the clean surface (what the picture colours), in % of the bounding-box\n"
-          "diagonal; the mean is signed: negative = inside the clean surface (shrinkage).")
+    print(
+        "volume change: against the noisy input, as the operator reports it; vs clean: against the clean shape.\n"
+        "distance: from each vertex to the clean surface (what the picture colours), in % of the bounding-box\n"
+        "diagonal; the mean is signed: negative = inside the clean surface (shrinkage)."
+    )
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--output-dir", default=str(ROOT / "demo_output"))
-    parser.add_argument("--iterations", type=int, default=30,
-                        help="Laplacian and fixed-amount HC iterations (default 30)")
+    parser.add_argument(
+        "--iterations", type=int, default=30, help="Laplacian and fixed-amount HC iterations (default 30)"
+    )
     parser.add_argument("--noise", type=float, default=0.004, help="σ as a fraction of the bbox diagonal (0.004)")
     parser.add_argument("--samples", type=int, default=8, help="Cycles samples per pixel, denoised (8)")
     parser.add_argument("--scale", type=int, default=100, help="picture size in %% of 1300 x 471 (100)")
@@ -125,8 +144,10 @@ def main():
 
     with console.captured():
         zip_path = install_extension(output / "build")
-    print(f"HC Smooth {pathlib.Path(zip_path).stem.rpartition('-')[2]} installed into a throw-away Blender "
-          f"{bpy.app.version_string} user folder")
+    print(
+        f"HC Smooth {pathlib.Path(zip_path).stem.rpartition('-')[2]} installed into a throw-away Blender "
+        f"{bpy.app.version_string} user folder"
+    )
     defaults = operator_defaults()
 
     bpy.ops.wm.read_homefile(use_empty=True)
@@ -142,18 +163,22 @@ def main():
     noisy.location = (x, 0, 0)
     surface = scene_setup.CleanSurface(clean, faces)
     noisy_points = scene_setup.positions(noisy.data)
-    print(f"Suzanne, holes capped (closed), subdivided: {len(clean)} vertices, {len(faces[0]) - 1} faces; noise "
-          f"σ = {args.noise:.2%} of the diagonal along the normals (seed {SEED})\n")
+    print(
+        f"Suzanne, holes capped (closed), subdivided: {len(clean)} vertices, {len(faces[0]) - 1} faces; noise "
+        f"σ = {args.noise:.2%} of the diagonal along the normals (seed {SEED})\n"
+    )
 
     fixed = dict(iterations=args.iterations, mode="SIMULTANEOUS")
     hc_fixed = dict(method="HC", alpha=defaults["alpha"], beta=defaults["beta"], **fixed)
     if "auto_amount" in defaults:
         hc_fixed["auto_amount"] = False
     best = least_error_count(noisy_points, mesh_edges, surface, max(args.iterations, 1))
-    runs = [("Laplacian", dict(method="LAPLACIAN", **fixed), (2 * x, 0, 0)),
-            ("Laplacian, least error", dict(method="LAPLACIAN", iterations=best, mode="SIMULTANEOUS"), (5 * x, 0, 0)),
-            (f"HC, α {defaults['alpha']:g}, β {defaults['beta']:g}", hc_fixed, (6 * x, 0, 0)),
-            ("HC, operator defaults", dict(method="HC"), (3 * x, 0, 0))]
+    runs = [
+        ("Laplacian", dict(method="LAPLACIAN", **fixed), (2 * x, 0, 0)),
+        ("Laplacian, least error", dict(method="LAPLACIAN", iterations=best, mode="SIMULTANEOUS"), (5 * x, 0, 0)),
+        (f"HC, α {defaults['alpha']:g}, β {defaults['beta']:g}", hc_fixed, (6 * x, 0, 0)),
+        ("HC, operator defaults", dict(method="HC"), (3 * x, 0, 0)),
+    ]
     rows = [("Noisy", noisy, 0, None)]
     print("the operator reports:")
     for name, operator_args, location in runs:
@@ -172,9 +197,17 @@ def main():
         scene_setup.set_point_attribute(obj, scene_setup.ERROR_ATTRIBUTE, 100 * signed / diagonal)
         # The operator's own measure on the same arrays: its input (the noisy mesh) against its result.
         change = core.measure_change(noisy_points, points, faces=faces).volume_change if iterations else None
-        table.append({"name": name, "object": obj, "iterations": iterations, "seconds": seconds, "change": change,
-                      "vs_clean": core.metrics.enclosed_volume(points.astype(np.float64), triangles) / clean_volume - 1,
-                      "distances": distances(signed, diagonal)})
+        table.append(
+            {
+                "name": name,
+                "object": obj,
+                "iterations": iterations,
+                "seconds": seconds,
+                "change": change,
+                "vs_clean": core.metrics.enclosed_volume(points.astype(np.float64), triangles) / clean_volume - 1,
+                "distances": distances(signed, diagonal),
+            }
+        )
     scene_setup.set_point_attribute(clean_obj, scene_setup.ERROR_ATTRIBUTE, np.zeros(len(clean)))
     print_table(table)
 
@@ -196,19 +229,30 @@ def main():
     shown = [row["Laplacian"]["object"], row["HC, operator defaults"]["object"]]
     for obj in [r["object"] for r in table] + [clean_obj]:
         obj.hide_render = obj not in shown + [clean_obj, noisy]
-    panels = [(clean_obj, "Clean\nthe reference\n "),
-              (noisy, label(f"Noisy, σ = {100 * args.noise:.2g} %", "Noisy")),
-              (shown[0], label(f"Laplacian, {row['Laplacian']['iterations']} iterations", "Laplacian")),
-              (shown[1], label(f"HC, defaults: {row['HC, operator defaults']['iterations']} iterations",
-                               "HC, operator defaults"))]
+    panels = [
+        (clean_obj, "Clean\nthe reference\n "),
+        (noisy, label(f"Noisy, σ = {100 * args.noise:.2g} %", "Noisy")),
+        (shown[0], label(f"Laplacian, {row['Laplacian']['iterations']} iterations", "Laplacian")),
+        (
+            shown[1],
+            label(f"HC, defaults: {row['HC, operator defaults']['iterations']} iterations", "HC, operator defaults"),
+        ),
+    ]
     outline = scene_setup.outline_segments(surface, clean, faces)
     error = None
     with console.captured() as printed:
         try:
             scene_setup.render_error_figure(
-                panels, outline, shown, image, limit=COLOUR_LIMIT, samples=args.samples, percentage=args.scale,
+                panels,
+                outline,
+                shown,
+                image,
+                limit=COLOUR_LIMIT,
+                samples=args.samples,
+                percentage=args.scale,
                 legend_title="signed distance to the clean surface, % of the bounding-box diagonal; "
-                             "yellow line: outline of the clean shape")
+                "yellow line: outline of the clean shape",
+            )
         except Exception as raised:  # noqa: BLE001 - shown below with what Blender printed
             error = raised
     if error is not None or not image.exists():

@@ -95,7 +95,7 @@ class CleanSurface:
 
     def __init__(self, points, face_layout):
         offsets, corners = face_layout
-        polygons = [corners[offsets[i]:offsets[i + 1]].tolist() for i in range(len(offsets) - 1)]
+        polygons = [corners[offsets[i] : offsets[i + 1]].tolist() for i in range(len(offsets) - 1)]
         self.tree = BVHTree.FromPolygons([Vector(p) for p in points.tolist()], polygons)
 
     def signed_distance(self, points):
@@ -121,7 +121,7 @@ DIVERGING = ("#053061", "#2166ac", "#4393c3", "#92c5de", "#f7f7f7", "#f4a582", "
 
 def _linear(hex_colour):
     """An sRGB hex colour as scene-linear RGBA (what node sockets hold)."""
-    channels = [int(hex_colour[i:i + 2], 16) / 255 for i in (1, 3, 5)]
+    channels = [int(hex_colour[i : i + 2], 16) / 255 for i in (1, 3, 5)]
     return tuple(c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4 for c in channels) + (1.0,)
 
 
@@ -255,8 +255,9 @@ def _outline(segments, location, width, material):
     return obj
 
 
-def render_error_figure(panels, outline, outlined, filepath, *, limit, legend_title, samples=8,
-                        resolution=(1300, 471), percentage=100):
+def render_error_figure(
+    panels, outline, outlined, filepath, *, limit, legend_title, samples=8, resolution=(1300, 471), percentage=100
+):
     """Render ``panels`` [(object, label text)] (objects placed along +X, each with the point attribute
     ERROR_ATTRIBUTE) facing the camera, coloured on one scale [-limit, limit], a label under each, a
     legend under all, and the ``outline`` segments (from outline_segments) over the objects in ``outlined``."""
@@ -310,8 +311,22 @@ def render_error_figure(panels, outline, outlined, filepath, *, limit, legend_ti
     scene.render.image_settings.color_mode = "RGB"
     scene.render.image_settings.compression = 100
     scene.render.dither_intensity = 0.0  # dither noise would double the PNG's size
-    for field in ("date", "time", "render_time", "frame", "camera", "scene", "filename", "memory", "hostname",
-                  "lens", "marker", "frame_range", "sequencer_strip", "note"):
+    for field in (
+        "date",
+        "time",
+        "render_time",
+        "frame",
+        "camera",
+        "scene",
+        "filename",
+        "memory",
+        "hostname",
+        "lens",
+        "marker",
+        "frame_range",
+        "sequencer_strip",
+        "note",
+    ):
         setattr(scene.render, f"use_stamp_{field}", False)  # no file path, date or timings in the PNG
     scene.render.filepath = str(filepath)
     bpy.ops.render.render(write_still=True)

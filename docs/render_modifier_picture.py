@@ -14,12 +14,10 @@ import sys
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "scripts"), str(ROOT / "demo"), str(ROOT)]  # scene_setup imports core
 
-from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
-
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
-
 import scene_setup  # noqa: E402
+from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
 
 ITERATIONS = 10
 NOISE = 0.004  # of the bounding-box diagonal, along the normals
@@ -70,9 +68,15 @@ def main():
     outline = scene_setup.outline_segments(surface, clean, faces)  # the clean shape's contour, over the result
     bpy.context.scene.render.image_settings.compression = 100  # the smallest PNG: it goes into the repository
     scene_setup.render_error_figure(
-        [(obj, labels[obj]) for obj in (noisy, hc)], outline, [hc], args.output,
-        limit=COLOUR_LIMIT, samples=args.samples, resolution=(820, 520),
-        legend_title="signed distance to the clean surface, % of the diagonal; yellow: the clean outline")
+        [(obj, labels[obj]) for obj in (noisy, hc)],
+        outline,
+        [hc],
+        args.output,
+        limit=COLOUR_LIMIT,
+        samples=args.samples,
+        resolution=(820, 520),
+        legend_title="signed distance to the clean surface, % of the diagonal; yellow: the clean outline",
+    )
     print(f"picture: {args.output}")
 
 

@@ -26,14 +26,16 @@ def hc_smooth_package():
         if repo.enabled and os.path.isdir(os.path.join(repo.directory, "hc_smooth")):
             bpy.ops.preferences.addon_enable(module=f"bl_ext.{repo.module}.hc_smooth")
             return importlib.import_module(f"bl_ext.{repo.module}.hc_smooth")
-    raise SystemExit(f"HC Smooth is not installed in this Blender's user folder ({bpy.utils.resource_path('USER')}): "
-                     "install the zip (Preferences > Get Extensions > Install from Disk, or "
-                     "`python scripts/hc_smooth_bpy.py install ZIP` for the bpy module)")
+    raise SystemExit(
+        f"HC Smooth is not installed in this Blender's user folder ({bpy.utils.resource_path('USER')}): "
+        "install the zip (Preferences > Get Extensions > Install from Disk, or "
+        "`python scripts/hc_smooth_bpy.py install ZIP` for the bpy module)"
+    )
 
 
 def main():
     command = importlib.import_module(hc_smooth_package().__name__ + ".cli").main
-    args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else ["--help"]
+    args = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else ["--help"]
     status = command(args)
     if status:
         sys.exit(status)  # Blender exits with this status after a --python script raises SystemExit

@@ -32,14 +32,16 @@ def hc_smooth_package():
         if repo.enabled and os.path.isdir(os.path.join(repo.directory, "hc_smooth")):
             bpy.ops.preferences.addon_enable(module=f"bl_ext.{repo.module}.hc_smooth")
             return importlib.import_module(f"bl_ext.{repo.module}.hc_smooth")
-    raise SystemExit(f"HC Smooth is not installed in this Blender's user folder ({bpy.utils.resource_path('USER')}): "
-                     "install the zip (Preferences > Get Extensions > Install from Disk, or "
-                     "`python scripts/hc_smooth_bpy.py install ZIP` for the bpy module)")
+    raise SystemExit(
+        f"HC Smooth is not installed in this Blender's user folder ({bpy.utils.resource_path('USER')}): "
+        "install the zip (Preferences > Get Extensions > Install from Disk, or "
+        "`python scripts/hc_smooth_bpy.py install ZIP` for the bpy module)"
+    )
 
 
 def main():
     core = hc_smooth_package().core
-    args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    args = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
     if args:
         mesh = bpy.data.objects[args[0]].data
     else:

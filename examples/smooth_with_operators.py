@@ -35,13 +35,15 @@ def hc_smooth_package():
         if repo.enabled and os.path.isdir(os.path.join(repo.directory, "hc_smooth")):
             bpy.ops.preferences.addon_enable(module=f"bl_ext.{repo.module}.hc_smooth")
             return importlib.import_module(f"bl_ext.{repo.module}.hc_smooth")
-    raise SystemExit(f"HC Smooth is not installed in this Blender's user folder ({bpy.utils.resource_path('USER')}): "
-                     "install the zip (Preferences > Get Extensions > Install from Disk, or "
-                     "`python scripts/hc_smooth_bpy.py install ZIP` for the bpy module)")
+    raise SystemExit(
+        f"HC Smooth is not installed in this Blender's user folder ({bpy.utils.resource_path('USER')}): "
+        "install the zip (Preferences > Get Extensions > Install from Disk, or "
+        "`python scripts/hc_smooth_bpy.py install ZIP` for the bpy module)"
+    )
 
 
 def script_arguments():
-    return sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    return sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
 
 
 def noisy_sphere(name="Scan"):
@@ -62,8 +64,9 @@ def main():
     obj = bpy.data.objects[args[0]] if args else noisy_sphere()
 
     # 1. Object mode: the operator smooths every *selected* mesh object, so say which ones.
-    with bpy.context.temp_override(active_object=obj, object=obj, selected_objects=[obj],
-                                   selected_editable_objects=[obj]):
+    with bpy.context.temp_override(
+        active_object=obj, object=obj, selected_objects=[obj], selected_editable_objects=[obj]
+    ):
         bpy.ops.object.hc_smooth(method="HC", alpha=0.1, beta=0.6, iterations=10)
 
     # 2. Keep the top of the object in place: vertices of a group stay fixed (to the bit).
@@ -71,8 +74,9 @@ def main():
     top = [v.index for v in obj.data.vertices if v.co.z > 0.5]
     group.add(top, 1.0, "REPLACE")
     # ... and write the result into a new shape key instead of moving the mesh.
-    with bpy.context.temp_override(active_object=obj, object=obj, selected_objects=[obj],
-                                   selected_editable_objects=[obj]):
+    with bpy.context.temp_override(
+        active_object=obj, object=obj, selected_objects=[obj], selected_editable_objects=[obj]
+    ):
         bpy.ops.object.hc_smooth(iterations=20, vertex_group="Fixed", output="SHAPE_KEY")
     print("shape keys:", [key.name for key in obj.data.shape_keys.key_blocks])
     obj.shape_key_clear()

@@ -51,14 +51,25 @@ INPUTS = (  # (name, socket type, a setting to take description / default / limi
     ("Alpha", "NodeSocketFloat", settings_spec.ALPHA),
     ("Beta", "NodeSocketFloat", settings_spec.BETA),
     ("Iterations", "NodeSocketInt", settings_spec.ITERATIONS),
-    ("Fixed Group", "NodeSocketFloat", dict(
-        description="Vertices with a weight above 0 stay fixed: pick a vertex group with the button on "
-        "the right", default=0.0, min=0.0, max=1.0)),
+    (
+        "Fixed Group",
+        "NodeSocketFloat",
+        dict(
+            description="Vertices with a weight above 0 stay fixed: pick a vertex group with the button on the right",
+            default=0.0,
+            min=0.0,
+            max=1.0,
+        ),
+    ),
     ("Invert Fixed Group", "NodeSocketBool", settings_spec.INVERT_VERTEX_GROUP),
     ("Pin Boundary", "NodeSocketBool", settings_spec.PIN_BOUNDARY),
-    ("Influence", "NodeSocketFloat", dict(
-        description="Not used yet: painted influence will scale each vertex's move", default=1.0,
-        min=0.0, max=1.0)),
+    (
+        "Influence",
+        "NodeSocketFloat",
+        dict(
+            description="Not used yet: painted influence will scale each vertex's move", default=1.0, min=0.0, max=1.0
+        ),
+    ),
 )
 FIELD_INPUTS = ("Fixed Group", "Influence")  # per-vertex values (vertex groups); the rest are settings
 HIDDEN_INPUTS = ("Influence",)  # in the interface for scripts, not shown in the modifier until it works
@@ -70,10 +81,12 @@ def _interface(tree):
     interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
     sockets = {}
     for name, socket_type, source in INPUTS:
-        spec = source if isinstance(source, dict) else dict(
-            description=source.description, default=source.default, min=source.min, max=source.max)
-        socket = interface.new_socket(name, in_out="INPUT", socket_type=socket_type,
-                                      description=spec["description"])
+        spec = (
+            source
+            if isinstance(source, dict)
+            else dict(description=source.description, default=source.default, min=source.min, max=source.max)
+        )
+        socket = interface.new_socket(name, in_out="INPUT", socket_type=socket_type, description=spec["description"])
         if socket_type != "NodeSocketMenu":  # a menu's default is set once its items exist
             socket.default_value = spec["default"]
         if spec.get("min") is not None:
@@ -97,6 +110,7 @@ def _single_value(socket):
 
 
 # --- building nodes --------------------------------------------------------------------------------------
+
 
 class _Tree:
     """Small helpers over a node tree: add nodes, and feed a socket either a link or a constant."""
@@ -234,8 +248,9 @@ def build(tree):
 
     # HC and the Laplacian with the original point: a Repeat zone of simultaneous steps.
     position = t.position()
-    start, (original, movable) = t.capture(inputs["Geometry"], [("VECTOR", "Original", position),
-                                                                ("BOOLEAN", "Movable", movable)])
+    start, (original, movable) = t.capture(
+        inputs["Geometry"], [("VECTOR", "Original", position), ("BOOLEAN", "Movable", movable)]
+    )
     repeat_in = t.node("GeometryNodeRepeatInput")
     repeat_out = t.node("GeometryNodeRepeatOutput")
     repeat_in.pair_with_output(repeat_out)
@@ -267,15 +282,17 @@ def build(tree):
 
 # --- one group per file, rebuilt when the add-on's is newer -------------------------------------------------
 
+
 def find_group():
     """The file's HC Smooth group (found by its version marker, not its name), or None."""
-    groups = [group for group in bpy.data.node_groups
-              if group.bl_idname == "GeometryNodeTree" and VERSION_KEY in group]
+    groups = [group for group in bpy.data.node_groups if group.bl_idname == "GeometryNodeTree" and VERSION_KEY in group]
     if not groups:
         return None
     # Local before linked (a linked one cannot be rebuilt), the newest version, then the plain name.
-    return min(groups, key=lambda group: (group.library is not None, -int(group[VERSION_KEY]),
-                                          group.name != GROUP_NAME, group.name))
+    return min(
+        groups,
+        key=lambda group: (group.library is not None, -int(group[VERSION_KEY]), group.name != GROUP_NAME, group.name),
+    )
 
 
 def ensure_group():
@@ -295,8 +312,9 @@ def _fill(group):
     group[VERSION_KEY] = VERSION
     group.is_modifier = True  # offered in the Geometry Nodes modifier's group selector
     if hasattr(group, "description"):  # the tooltip in the Add Modifier menu (4.x and later)
-        group.description = ("Smooth away scan noise without shrinking (HC, Vollmer, Mencl, M\u00fcller 1999); "
-                             "simultaneous mode")
+        group.description = (
+            "Smooth away scan noise without shrinking (HC, Vollmer, Mencl, M\u00fcller 1999); simultaneous mode"
+        )
 
 
 def rebuild(group):
@@ -304,16 +322,22 @@ def rebuild(group):
     (by input name; inputs that no longer exist are dropped)."""
     from . import inputs
 
-    users = [modifier for obj in bpy.data.objects for modifier in obj.modifiers
-             if modifier.type == "NODES" and modifier.node_group == group]
+    users = [
+        modifier
+        for obj in bpy.data.objects
+        for modifier in obj.modifiers
+        if modifier.type == "NODES" and modifier.node_group == group
+    ]
     saved = []
     for modifier in users:
         values = {}
         for item in group.interface.items_tree:
             if item.item_type == "SOCKET" and item.in_out == "INPUT" and item.socket_type != "NodeSocketGeometry":
                 try:
-                    values[item.name] = (inputs.get_input(modifier, item.name),
-                                         inputs.get_input_attribute(modifier, item.name))
+                    values[item.name] = (
+                        inputs.get_input(modifier, item.name),
+                        inputs.get_input_attribute(modifier, item.name),
+                    )
                 except (KeyError, AttributeError, TypeError):
                     continue
         saved.append((modifier, values))

@@ -73,5 +73,7 @@ def get_input_attribute(modifier, name):
 
 
 def _is_menu(tree, identifier):
-    return any(item.item_type == "SOCKET" and item.identifier == identifier
-               and item.socket_type == "NodeSocketMenu" for item in tree.interface.items_tree)
+    return any(
+        item.item_type == "SOCKET" and item.identifier == identifier and item.socket_type == "NodeSocketMenu"
+        for item in tree.interface.items_tree
+    )

@@ -41,8 +41,13 @@ class Job:
 def settings_of(props):
     """The core arguments from operator, scene or command-line settings. Numbers are taken in single
     precision, as Blender's float properties hold them, so every route runs the same numbers."""
-    return dict(method=CORE_METHOD[props.method], alpha=as_property(props.alpha), beta=as_property(props.beta),
-                mode=props.mode.lower(), tolerance=as_property(props.tolerance))
+    return dict(
+        method=CORE_METHOD[props.method],
+        alpha=as_property(props.alpha),
+        beta=as_property(props.beta),
+        mode=props.mode.lower(),
+        tolerance=as_property(props.tolerance),
+    )
 
 
 def automatic(props):
@@ -65,8 +70,10 @@ def make_job(obj, props, extra_fixed=None):
     if n == 0:
         raise objects.InputError(f"Mesh '{mesh.name}' has no vertices: nothing to smooth")
     if len(mesh.edges) == 0:
-        raise objects.InputError(f"Mesh '{mesh.name}' has no edges: it is a point cloud. "
-                       "Use Object > HC Smooth Points (object.hc_smooth_points) instead")
+        raise objects.InputError(
+            f"Mesh '{mesh.name}' has no edges: it is a point cloud. "
+            "Use Object > HC Smooth Points (object.hc_smooth_points) instead"
+        )
     positions, key_block = objects.read_positions(obj)
     edges = mesh_io.read_edges(mesh)
     corner_verts, corner_edges = mesh_io.read_corners(mesh)
@@ -82,8 +89,9 @@ def make_job(obj, props, extra_fixed=None):
     if props.influence_group:
         group = obj.vertex_groups.get(props.influence_group)
         if group is None:
-            raise objects.InputError(f"Object '{obj.name}' has no vertex group '{props.influence_group}' "
-                                     "(the influence group)")
+            raise objects.InputError(
+                f"Object '{obj.name}' has no vertex group '{props.influence_group}' (the influence group)"
+            )
         influence = mesh_io.vertex_group_weights(obj, group.index)
         if props.invert_influence_group:
             influence = 1.0 - influence
@@ -92,8 +100,17 @@ def make_job(obj, props, extra_fixed=None):
         fixed |= core.topology.boundary_vertices(n, edges, corner_edges)
     # Triangulated once per mesh, for the volume in the report (only the positions change).
     faces = core.metrics.fan_triangles(mesh_io.read_faces(mesh, corner_verts)) if closed else None
-    return Job(obj=obj, mesh=mesh, positions=positions, edges=edges, faces=faces, fixed=fixed,
-               closed=closed, key_block=key_block, influence=influence)
+    return Job(
+        obj=obj,
+        mesh=mesh,
+        positions=positions,
+        edges=edges,
+        faces=faces,
+        fixed=fixed,
+        closed=closed,
+        key_block=key_block,
+        influence=influence,
+    )
 
 
 # Of a job with the Automatic Amount, the part of its progress bar the choice takes: its runs (the data
@@ -122,8 +139,15 @@ def run(jobs, props, chunk=None):
             iterations, job_settings = job.amount.iterations, {**settings, "alpha": job.amount.alpha}
         with warnings.catch_warnings():  # the operators report the convergence region themselves
             warnings.simplefilter("ignore", core.ConvergenceWarning)
-            smoothing = core.Smoothing(job.positions, None, operator=job.operator, iterations=iterations,
-                                       fixed=job.fixed, influence=job.influence, **job_settings)
+            smoothing = core.Smoothing(
+                job.positions,
+                None,
+                operator=job.operator,
+                iterations=iterations,
+                fixed=job.fixed,
+                influence=job.influence,
+                **job_settings,
+            )
         for fraction in smoothing.steps(chunk):
             if fraction < 1.0:
                 yield (number + share + (1.0 - share) * fraction) / len(jobs)
@@ -188,5 +212,7 @@ def summary(jobs, props):
             ran += ", volume kept"
     else:
         ran = f"{iterations} iterations"
-    return (f"{METHOD_LABEL[props.method]} on {names}{where}: {ran}, {moved} vertices moved, "
-            f"{seconds:.2f} s, " + ", ".join(changes))
+    return (
+        f"{METHOD_LABEL[props.method]} on {names}{where}: {ran}, {moved} vertices moved, "
+        f"{seconds:.2f} s, " + ", ".join(changes)
+    )

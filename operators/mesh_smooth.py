@@ -10,11 +10,18 @@ import bpy
 from .. import core, settings_spec
 from . import jobs as jobs_module
 from . import mesh_io
-from .objects import InputError, unique_data
 from .modal_progress import ModalProgress
 from .modifier import draw_add_as_modifier
-from .properties import (alpha_label, annotations, draw_convergence, draw_fixed_group, draw_influence_group, uses_alpha,
-                         uses_beta)
+from .objects import InputError, unique_data
+from .properties import (
+    alpha_label,
+    annotations,
+    draw_convergence,
+    draw_fixed_group,
+    draw_influence_group,
+    uses_alpha,
+    uses_beta,
+)
 
 # Above this many vertex-iterations, an interactive run becomes modal (progress, Esc cancels).
 MODAL_WORK = 5_000_000

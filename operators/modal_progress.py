@@ -55,8 +55,9 @@ class ModalProgress:
                 self.report({"ERROR"}, str(error))
             else:  # a bug: keep the traceback for the console
                 traceback.print_exc()
-                self.report({"ERROR"}, f"{self.progress_label} failed ({type(error).__name__}: {error}): "
-                                       "nothing was changed")
+                self.report(
+                    {"ERROR"}, f"{self.progress_label} failed ({type(error).__name__}: {error}): nothing was changed"
+                )
             return {"CANCELLED"}
         context.window_manager.progress_update(int(fraction * 100))
         if context.workspace is not None:

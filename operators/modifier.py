@@ -63,8 +63,9 @@ def draw_add_as_modifier(layout, smoothing):
     column = layout.column(align=True)
     for line in modifier_differences(smoothing):
         column.label(text=line, icon="INFO")
-    button = column.operator(OBJECT_OT_hc_smooth_modifier_add.bl_idname, text="Add as Modifier Instead",
-                             icon="MODIFIER")
+    button = column.operator(
+        OBJECT_OT_hc_smooth_modifier_add.bl_idname, text="Add as Modifier Instead", icon="MODIFIER"
+    )
     copy_settings(smoothing, button)
     button.replace_smoothing = True
 
@@ -106,8 +107,10 @@ class OBJECT_OT_hc_smooth_modifier_add(bpy.types.Operator):
         for obj in objects:
             add_modifier(obj, self)
             if self.vertex_group and obj.vertex_groups.get(self.vertex_group) is None:
-                self.report({"WARNING"}, f"Object '{obj.name}' has no vertex group '{self.vertex_group}': "
-                            "no vertex is fixed by it")
+                self.report(
+                    {"WARNING"},
+                    f"Object '{obj.name}' has no vertex group '{self.vertex_group}': no vertex is fixed by it",
+                )
         names = f"'{objects[0].name}'" if len(objects) == 1 else f"{len(objects)} objects"
         self.report({"INFO"}, f"Added the {MODIFIER_NAME} modifier to {names}")
         return {"FINISHED"}

@@ -5,8 +5,6 @@ once, the positions of the active shape key (or of the data), finite coordinates
 that keeps relative shape keys in step.
 """
 
-import numpy as np
-
 from .. import core
 from . import mesh_io
 
@@ -18,8 +16,10 @@ class InputError(Exception):
 def check_editable(obj):
     for what, datablock in (("Object", obj), ("Data", obj.data)):
         if datablock.library is not None:
-            raise InputError(f"{what} '{datablock.name}' is linked from library '{datablock.library.filepath}' "
-                             "and cannot be edited: make it local first (Object > Relations > Make Local)")
+            raise InputError(
+                f"{what} '{datablock.name}' is linked from library '{datablock.library.filepath}' "
+                "and cannot be edited: make it local first (Object > Relations > Make Local)"
+            )
         if not datablock.is_editable:
             raise InputError(f"{what} '{datablock.name}' cannot be edited (a library override?): make it local first")
 
@@ -49,8 +49,10 @@ def read_positions(obj, noun=("vertex", "vertices")):
     positions = mesh_io.read_shape_key(key_block) if key_block is not None else mesh_io.read_positions(obj.data)
     bad = core.validation.nonfinite_rows(positions)
     if bad.size:
-        raise InputError(f"'{obj.data.name}' has {bad.size} {noun[1]} with NaN or infinite coordinates "
-                         f"(first: {noun[0]} {int(bad[0])}): fix or delete them first")
+        raise InputError(
+            f"'{obj.data.name}' has {bad.size} {noun[1]} with NaN or infinite coordinates "
+            f"(first: {noun[0]} {int(bad[0])}): fix or delete them first"
+        )
     return positions, key_block
 
 

@@ -24,8 +24,10 @@ POINT_TYPES = ("MESH", "POINTCLOUD")
 
 # The point-cloud settings (settings_spec.POINTS) as plain values: an operator's snapshot or the command line's.
 PointSettings = settings_spec.settings_class(
-    "PointSettings", settings_spec.POINTS,
-    "The point-cloud settings: the operator's properties (their defaults are these) or the command line's.")
+    "PointSettings",
+    settings_spec.POINTS,
+    "The point-cloud settings: the operator's properties (their defaults are these) or the command line's.",
+)
 
 
 def _attribute_mask(data, name, count):
@@ -61,16 +63,20 @@ class Cloud:
 
     def __init__(self, obj, settings):
         if obj.type not in POINT_TYPES:
-            raise InputError(f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object: "
-                             "select a mesh of loose vertices or a point cloud")
+            raise InputError(
+                f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object: "
+                "select a mesh of loose vertices or a point cloud"
+            )
         objects.check_editable(obj)
         self.obj, self.data = obj, obj.data
         count = len(obj.data.vertices) if obj.type == "MESH" else len(obj.data.points)
         if count == 0:
             raise InputError(f"'{obj.data.name}' has no points: nothing to smooth")
         if obj.type == "MESH" and (len(obj.data.edges) or len(obj.data.polygons)):
-            raise InputError(f"Mesh '{obj.data.name}' has edges or faces: HC Smooth Points works on loose "
-                             "vertices. Use HC Smooth (object.hc_smooth) for meshes")
+            raise InputError(
+                f"Mesh '{obj.data.name}' has edges or faces: HC Smooth Points works on loose "
+                "vertices. Use HC Smooth (object.hc_smooth) for meshes"
+            )
         positions, self.key_block = objects.read_positions(obj, noun=("point", "points"))
         too_few = _too_few_points(obj.data.name, positions)
         if too_few:
@@ -92,8 +98,10 @@ class Cloud:
         else:  # point clouds have no vertex groups: a point attribute of that name plays the part
             members = _attribute_mask(self.data, settings.vertex_group, n)
             if members is None:
-                raise InputError(f"Point cloud '{self.data.name}' has no point attribute '{settings.vertex_group}' "
-                                 "(boolean, integer or float) to use as the fixed group")
+                raise InputError(
+                    f"Point cloud '{self.data.name}' has no point attribute '{settings.vertex_group}' "
+                    "(boolean, integer or float) to use as the fixed group"
+                )
         return ~members if settings.invert_vertex_group else members
 
     def write(self):
@@ -123,19 +131,28 @@ class Cloud:
 def read_clouds(selected, settings):
     """Read and check every object (an object data shared by several objects once); raises InputError. Reads only."""
     if settings.spacing_factor > settings.gap_factor:
-        raise InputError(f"Reach ({settings.spacing_factor:g}) must not exceed Gap ({settings.gap_factor:g}): "
-                         "a neighbour within reach would be cut off as a gap")
+        raise InputError(
+            f"Reach ({settings.spacing_factor:g}) must not exceed Gap ({settings.gap_factor:g}): "
+            "a neighbour within reach would be cut off as a gap"
+        )
     return [Cloud(obj, settings) for obj in unique_data(selected)]
 
 
 def make_smoother(cloud, settings):
     """The core's stepwise run for one cloud; raises ValueError for settings the core refuses."""
     return PointCloudSmoother(
-        cloud.positions, alpha="auto" if settings.auto_amount else settings.alpha, beta=settings.beta,
+        cloud.positions,
+        alpha="auto" if settings.auto_amount else settings.alpha,
+        beta=settings.beta,
         rounds=settings.rounds,
         iterations_per_round="auto" if settings.auto_amount else settings.iterations_per_round,
-        fixed=cloud.fixed, neighbours=settings.neighbours, spacing_factor=settings.spacing_factor,
-        gap_factor=settings.gap_factor, min_quality=settings.min_quality, swap=settings.swap)
+        fixed=cloud.fixed,
+        neighbours=settings.neighbours,
+        spacing_factor=settings.spacing_factor,
+        gap_factor=settings.gap_factor,
+        min_quality=settings.min_quality,
+        swap=settings.swap,
+    )
 
 
 def run(clouds, settings):
@@ -184,8 +201,10 @@ def stuck_warning(clouds):
     counted = "points" if distinct == sum(len(c.positions) for c in clouds) else "distinct points"
     # Typically scan lines much farther apart than the points along them: the graph keeps to the
     # lines and no faces form, so the points cannot move.
-    return (f"{still} of {distinct} {counted} have no RFS faces and did not move: the points are much farther "
-            "apart in one direction (scan lines?). Raise Reach, Gap and Neighbours to connect them")
+    return (
+        f"{still} of {distinct} {counted} have no RFS faces and did not move: the points are much farther "
+        "apart in one direction (scan lines?). Raise Reach, Gap and Neighbours to connect them"
+    )
 
 
 def summary(clouds, settings):
@@ -199,23 +218,28 @@ def summary(clouds, settings):
         noise = f"noise {report.noise.ratio:.2f}x spacing: " if automatic else ""
         return f"{noise}{amount(report)}, alpha {report.alpha:.3g}"
 
-    return (f"HC Smooth Points on {names}: {points} points, "
-            + "; ".join(described(c.report) for c in clouds) + f", {seconds:.2f} s"
-            + (f", {still} points without RFS faces stayed put" if still else ""))
+    return (
+        f"HC Smooth Points on {names}: {points} points, "
+        + "; ".join(described(c.report) for c in clouds)
+        + f", {seconds:.2f} s"
+        + (f", {still} points without RFS faces stayed put" if still else "")
+    )
 
 
 def messages(clouds, settings):
     """[(level, text)] to report after a finished run: the summary, then any warnings."""
     found = [("INFO", summary(clouds, settings))]
-    for level, text in (("WARNING", stuck_warning(clouds)),
-                        ("WARNING", core.convergence_message(min(c.report.alpha for c in clouds), settings.beta))):
+    for level, text in (
+        ("WARNING", stuck_warning(clouds)),
+        ("WARNING", core.convergence_message(min(c.report.alpha for c in clouds), settings.beta)),
+    ):
         if text:
             found.append((level, text))
     return found
 
 
 class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
-    """Smooth point clouds (meshes of loose vertices, point cloud objects) without shrinking them: HC steps on a temporary RFS mesh, alternating with edge swapping"""
+    """Smooth point clouds (meshes of loose vertices, point cloud objects) without shrinking them: HC steps on a temporary RFS mesh, alternating with edge swapping"""  # noqa: E501 - Blender's tooltip: one line
 
     bl_idname = "object.hc_smooth_points"
     bl_label = "HC Smooth Points"
@@ -248,8 +272,9 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
         objects = [obj for obj in context.selected_objects if obj.type in POINT_TYPES]
         if not objects:
             others = ", ".join(sorted({obj.type.lower() for obj in context.selected_objects}))
-            raise InputError("Select a mesh of loose vertices or a point cloud object"
-                             + (f" (selected: {others})" if others else ""))
+            raise InputError(
+                "Select a mesh of loose vertices or a point cloud object" + (f" (selected: {others})" if others else "")
+            )
         return read_clouds(objects, settings)
 
     def _finish(self, context, clouds, settings):

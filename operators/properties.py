@@ -9,8 +9,13 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, St
 
 from .. import core
 
-PROPERTY = {"enum": EnumProperty, "float": FloatProperty, "int": IntProperty, "bool": BoolProperty,
-            "string": StringProperty}
+PROPERTY = {
+    "enum": EnumProperty,
+    "float": FloatProperty,
+    "int": IntProperty,
+    "bool": BoolProperty,
+    "string": StringProperty,
+}
 LIMITS = ("min", "max", "soft_max", "step", "precision")
 
 

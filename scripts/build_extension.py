@@ -29,8 +29,15 @@ def build(output_dir, split_platforms=False):
     output_dir = pathlib.Path(output_dir).resolve()
     output_dir.mkdir(parents=True, exist_ok=True)
     before = set(output_dir.glob("*.zip"))
-    command = [sys.executable, str(blender_ext_tool()), "build", "--source-dir", str(ROOT),
-               "--output-dir", str(output_dir)]
+    command = [
+        sys.executable,
+        str(blender_ext_tool()),
+        "build",
+        "--source-dir",
+        str(ROOT),
+        "--output-dir",
+        str(output_dir),
+    ]
     if split_platforms:
         command.append("--split-platforms")
     subprocess.run(command, check=True)

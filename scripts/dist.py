@@ -37,8 +37,18 @@ PLATFORMS = {
     "linux-x64": ("manylinux_2_28_x86_64", "manylinux_2_27_x86_64", "manylinux_2_17_x86_64", "manylinux2014_x86_64"),
 }
 # Never copied into the staging folder (the manifest's paths_exclude_pattern filters the rest).
-STAGING_IGNORE = shutil.ignore_patterns(".git", ".envs", "build", "dist", "demo_output", ".hypothesis",
-                                        ".pytest_cache", ".benchmarks", "__pycache__", "*.zip")
+STAGING_IGNORE = shutil.ignore_patterns(
+    ".git",
+    ".envs",
+    "build",
+    "dist",
+    "demo_output",
+    ".hypothesis",
+    ".pytest_cache",
+    ".benchmarks",
+    "__pycache__",
+    "*.zip",
+)
 
 
 def download_wheels(cache, platforms=tuple(PLATFORMS)):
@@ -51,17 +61,34 @@ def download_wheels(cache, platforms=tuple(PLATFORMS)):
             found = sorted(folder.glob("scipy-*.whl"))
             if not found:
                 folder.mkdir(parents=True, exist_ok=True)
-                command = [sys.executable, "-m", "pip", "download", "--quiet", "--disable-pip-version-check",
-                           "--only-binary=:all:", "--no-deps", "--no-cache-dir", "--implementation", "cp",
-                           "--python-version", python, "--dest", str(folder), requirement]
+                command = [
+                    sys.executable,
+                    "-m",
+                    "pip",
+                    "download",
+                    "--quiet",
+                    "--disable-pip-version-check",
+                    "--only-binary=:all:",
+                    "--no-deps",
+                    "--no-cache-dir",
+                    "--implementation",
+                    "cp",
+                    "--python-version",
+                    python,
+                    "--dest",
+                    str(folder),
+                    requirement,
+                ]
                 for tag in tags:
                     command += ["--platform", tag]
                 print(f"dist: downloading {requirement} for Python {python} on {platform}", flush=True)
                 subprocess.run(command, check=True)
                 found = sorted(folder.glob("scipy-*.whl"))
             if len(found) != 1:
-                raise SystemExit(f"dist: expected one SciPy wheel in {folder}, found {[p.name for p in found]}: "
-                                 "delete the folder and run again")
+                raise SystemExit(
+                    f"dist: expected one SciPy wheel in {folder}, found {[p.name for p in found]}: "
+                    "delete the folder and run again"
+                )
             wheels.append(found[0])
     return wheels
 
@@ -73,9 +100,13 @@ def manifest_with_wheels(text, wheel_names, platforms=tuple(PLATFORMS)):
         raise SystemExit("dist: blender_manifest.toml already lists wheels or platforms; remove them (dist adds both)")
     lines = text.splitlines(keepends=True)
     first_table = next((i for i, line in enumerate(lines) if line.lstrip().startswith("[")), len(lines))
-    added = ["# Added by scripts/dist.py: SciPy for these platforms (NumPy comes with Blender).\n",
-             "platforms = [" + ", ".join(f'"{p}"' for p in platforms) + "]\n",
-             "wheels = [\n", *(f'  "./wheels/{name}",\n' for name in wheel_names), "]\n\n"]
+    added = [
+        "# Added by scripts/dist.py: SciPy for these platforms (NumPy comes with Blender).\n",
+        "platforms = [" + ", ".join(f'"{p}"' for p in platforms) + "]\n",
+        "wheels = [\n",
+        *(f'  "./wheels/{name}",\n' for name in wheel_names),
+        "]\n\n",
+    ]
     result = "".join(lines[:first_table] + added + lines[first_table:])
     parsed = tomllib.loads(result)
     assert parsed["wheels"] == [f"./wheels/{name}" for name in wheel_names] and parsed["platforms"] == list(platforms)
@@ -96,8 +127,19 @@ def build(staging, output_dir):
     for old in output_dir.glob("hc_smooth-*.zip"):
         old.unlink()
     tool = str(blender_ext_tool())
-    subprocess.run([sys.executable, tool, "build", "--split-platforms", "--source-dir", str(staging),
-                    "--output-dir", str(output_dir)], check=True)
+    subprocess.run(
+        [
+            sys.executable,
+            tool,
+            "build",
+            "--split-platforms",
+            "--source-dir",
+            str(staging),
+            "--output-dir",
+            str(output_dir),
+        ],
+        check=True,
+    )
     zips = sorted(output_dir.glob("hc_smooth-*.zip"))
     for path in zips:
         subprocess.run([sys.executable, tool, "validate", str(path)], check=True)
@@ -129,8 +171,12 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--output-dir", default=str(ROOT / "dist"))
     parser.add_argument("--cache", default=str(ROOT / "build" / "wheels"), help="downloaded wheels (reused)")
-    parser.add_argument("--platform", action="append", choices=list(PLATFORMS),
-                        help="build only this platform's zip (repeatable; default: all)")
+    parser.add_argument(
+        "--platform",
+        action="append",
+        choices=list(PLATFORMS),
+        help="build only this platform's zip (repeatable; default: all)",
+    )
     args = parser.parse_args()
     platforms = tuple(args.platform or PLATFORMS)
     wheels = download_wheels(pathlib.Path(args.cache), platforms)

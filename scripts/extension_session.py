@@ -28,12 +28,17 @@ def install_extension(build_dir):
     the zip (and ``build_dir`` if that leaves it empty): the installed copy is what runs. Returns the
     zip's path."""
     build_dir = pathlib.Path(build_dir)
-    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "build_extension.py"), "--output-dir",
-                          str(build_dir)], check=True, capture_output=True, text=True).stdout
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "build_extension.py"), "--output-dir", str(build_dir)],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
     zip_path = out.strip().splitlines()[-1]
     try:
-        result = bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default",
-                                                          enable_on_install=True)
+        result = bpy.ops.extensions.package_install_files(
+            filepath=zip_path, repo="user_default", enable_on_install=True
+        )
     finally:
         os.unlink(zip_path)
         if not any(build_dir.iterdir()):

@@ -78,9 +78,11 @@ def enable(bpy):
     the bpy module does not. Returns the module name; exits with a message when it is not installed."""
     module = installed_module(bpy)
     if module is None:
-        raise SystemExit(f"hc_smooth_bpy: HC Smooth is not installed in the Blender user folder "
-                         f"{os.environ['BLENDER_USER_RESOURCES']}: install it first with\n"
-                         f"  python {SELF} install hc_smooth-<version>.zip")
+        raise SystemExit(
+            f"hc_smooth_bpy: HC Smooth is not installed in the Blender user folder "
+            f"{os.environ['BLENDER_USER_RESOURCES']}: install it first with\n"
+            f"  python {SELF} install hc_smooth-<version>.zip"
+        )
     if module not in bpy.context.preferences.addons:
         bpy.ops.preferences.addon_enable(module=module)
     return module
@@ -92,8 +94,7 @@ def install(bpy, args):
     zip_path = os.path.abspath(args[0])
     if not os.path.isfile(zip_path):
         raise UsageError(f"{args[0]} does not exist (build it with `make build` or `make dist`)")
-    result = bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default",
-                                                      enable_on_install=True)
+    result = bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default", enable_on_install=True)
     module = f"bl_ext.user_default.{ADDON}"
     if result != {"FINISHED"} or module not in bpy.context.preferences.addons:
         raise SystemExit(f"hc_smooth_bpy: installing {zip_path} failed ({result})")

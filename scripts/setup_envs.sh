@@ -30,7 +30,9 @@ make_env() {  # make_env NAME PYTHON_VERSION REQUIREMENTS...
     "$(find_python "$version")" -m venv "$dir"
     "$dir/bin/python" -m pip install --quiet --no-cache-dir --upgrade pip 2>&1 | grep -v "is ignored: it is neither" || true
     "$dir/bin/python" -m pip install --quiet --no-cache-dir "$@" 2>&1 | grep -v "is ignored: it is neither" || true
-    "$dir/bin/python" -c "import bpy, numpy, scipy, pytest, hypothesis"  # fail here, not in the tests
+    if [ "$name" != lint ]; then
+        "$dir/bin/python" -c "import bpy, numpy, scipy, pytest, hypothesis"  # fail here, not in the tests
+    fi
     echo "$stamp" > "$dir/.stamp"
 }
 
@@ -40,6 +42,7 @@ for name in "$@"; do
     case $name in
         bpy45) make_env bpy45 3.11 "bpy==4.5.*" "numpy==1.26.*" "scipy==1.15.*" "${TEST_TOOLS[@]}" ;;
         bpy52) make_env bpy52 3.13 "bpy==5.2.*" "numpy>=2.2,<2.7" "scipy==1.17.*" "${TEST_TOOLS[@]}" ;;
-        *) echo "setup_envs: unknown environment $name (bpy45, bpy52)" >&2; exit 2 ;;
+        lint) make_env lint 3.11 "ruff==0.17.*" ;;
+        *) echo "setup_envs: unknown environment $name (bpy45, bpy52, lint)" >&2; exit 2 ;;
     esac
 done

@@ -22,8 +22,15 @@ _counts = {}  # key -> (n_fixed, n_vertices) or an error message
 def _key(obj, settings):
     mesh = obj.data
     group = obj.vertex_groups.get(settings.vertex_group) if settings.vertex_group else None
-    return (mesh.as_pointer(), len(mesh.vertices), len(mesh.edges), settings.vertex_group,
-            None if group is None else group.index, settings.invert_vertex_group, settings.pin_boundary)
+    return (
+        mesh.as_pointer(),
+        len(mesh.vertices),
+        len(mesh.edges),
+        settings.vertex_group,
+        None if group is None else group.index,
+        settings.invert_vertex_group,
+        settings.pin_boundary,
+    )
 
 
 def cached(obj, settings):

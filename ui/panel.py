@@ -117,9 +117,12 @@ class VIEW3D_PT_hc_smooth_fixed(bpy.types.Panel):
 
         column = layout.column(align=True)
         edit_mode = context.mode == "EDIT_MESH"
-        for rule in texts.fixed_rules(edit_mode=edit_mode, vertex_group=settings.vertex_group,
-                                      invert_vertex_group=settings.invert_vertex_group,
-                                      pin_boundary=settings.pin_boundary):
+        for rule in texts.fixed_rules(
+            edit_mode=edit_mode,
+            vertex_group=settings.vertex_group,
+            invert_vertex_group=settings.invert_vertex_group,
+            pin_boundary=settings.pin_boundary,
+        ):
             column.label(text=rule, icon="PINNED")
         if edit_mode:
             more_rules = bool(settings.vertex_group) or settings.pin_boundary

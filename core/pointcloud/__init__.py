@@ -12,5 +12,15 @@ from .smooth import PointCloudReport, PointCloudSmoother, smooth_point_cloud
 from .spanning_tree import emst
 from .swap import swap_pass
 
-__all__ = ["NoiseEstimate", "PointCloudReport", "PointCloudSmoother", "RFSMesh", "emst", "estimate_noise",
-           "rfs_mesh", "smooth_point_cloud", "surface_description_graph", "swap_pass"]
+__all__ = [
+    "NoiseEstimate",
+    "PointCloudReport",
+    "PointCloudSmoother",
+    "RFSMesh",
+    "emst",
+    "estimate_noise",
+    "rfs_mesh",
+    "smooth_point_cloud",
+    "surface_description_graph",
+    "swap_pass",
+]

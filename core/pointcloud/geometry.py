@@ -96,7 +96,7 @@ def triple_keys(x, y, z, n):
     middle = np.maximum(low, np.minimum(high, z, out=high), out=low)
     del high, low
     keep = (first != middle) & (middle != last)
-    if n ** 3 < 2 ** 62:
+    if n**3 < 2**62:
         keys = first * n
         keys += middle
         keys *= n
@@ -128,10 +128,11 @@ def group_by_edge(low, high, n):
     dividing int64 keys.
     """
     size = low.size
-    if n >= 2 ** 31 or size >= 2 ** 31:
+    if n >= 2**31 or size >= 2**31:
         return None
-    placed = pairs_in_order(low.astype(np.int32, copy=False), high.astype(np.int32, copy=False), n,
-                            np.arange(size, dtype=np.int32))
+    placed = pairs_in_order(
+        low.astype(np.int32, copy=False), high.astype(np.int32, copy=False), n, np.arange(size, dtype=np.int32)
+    )
     if placed is None:
         return None
     indptr, high_sorted, order = placed
@@ -165,7 +166,7 @@ class Incidence:
     def __init__(self, faces, n):
         f = faces.astype(np.int64)
         # Edge opposite vertex j: (f[(j+1)%3], f[(j+2)%3]).
-        narrow = f.astype(np.int32) if n < 2 ** 31 else f  # half the bytes to move before the grouping
+        narrow = f.astype(np.int32) if n < 2**31 else f  # half the bytes to move before the grouping
         first = narrow[:, [1, 2, 0]].ravel()
         second = narrow[:, [2, 0, 1]].ravel()
         low, high = np.minimum(first, second), np.maximum(first, second)

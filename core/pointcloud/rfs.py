@@ -23,7 +23,7 @@ from .threads import run_blocks
 
 _CHUNK = 1 << 18
 _PAIR_BLOCK = 1 << 16  # incidences per block of _best_pairs
-_INT32_LIMIT = 2 ** 31  # incidence and edge numbers below this are handled as int32
+_INT32_LIMIT = 2**31  # incidence and edge numbers below this are handled as int32
 
 
 @dataclass(frozen=True)
@@ -43,8 +43,9 @@ def _normals_from_offsets(offset, row, degree):
     for i in range(3):
         for j in range(i, 3):
             # Centre on the mean of the vertex and its neighbours (the vertex is the origin here).
-            cov[:, i, j] = cov[:, j, i] = (np.bincount(row, offset[i] * offset[j], minlength=n)
-                                           - total[i] * total[j] / (degree + 1.0))
+            cov[:, i, j] = cov[:, j, i] = np.bincount(row, offset[i] * offset[j], minlength=n) - total[i] * total[j] / (
+                degree + 1.0
+            )
     normal = np.empty((n, 3))
     for start in range(0, n, _CHUNK):
         block = slice(start, min(start + _CHUNK, n))
@@ -55,8 +56,8 @@ def _normals_from_offsets(offset, row, degree):
 def _corona_block(points, indptr, indices, first, last, max_gap, keys_of=None):
     """corona_faces for the vertices first..last-1 (their rows of the adjacency); with ``keys_of``
     (the number of points), their geometry.triple_keys instead."""
-    degree = np.diff(indptr[first:last + 1])
-    neighbours = indices[indptr[first]:indptr[last]]
+    degree = np.diff(indptr[first : last + 1])
+    neighbours = indices[indptr[first] : indptr[last]]
     row = np.repeat(np.arange(degree.size), degree)  # local vertex number
     columns = [points[:, j] for j in range(3)]
     here = [x[first:last] for x in columns]
@@ -102,8 +103,9 @@ def corona_faces(points, edges, max_gap=np.pi, keys=False):
     indptr = umbrella.indptr.astype(np.int64)
     indices = umbrella.indices.astype(np.int64)
     keys_of = max(n, 1) if keys else None
-    parts = run_blocks(lambda first, last: _corona_block(points, indptr, indices, first, last, max_gap, keys_of),
-                       n, share=0.2)
+    parts = run_blocks(
+        lambda first, last: _corona_block(points, indptr, indices, first, last, max_gap, keys_of), n, share=0.2
+    )
     if keys:
         return parts
     return np.concatenate(parts) if len(parts) > 1 else parts[0]
@@ -129,7 +131,7 @@ def _best_pairs(normals, forward, edges, order, start, count):
         # Blocks of edges small enough that the temporaries stay in cache and are reused.
         step = max(1, _PAIR_BLOCK // int(width))
         for lo in range(0, bucket.size, step):
-            rows = bucket[lo:lo + step]
+            rows = bucket[lo : lo + step]
             incidence = order[start[edges[rows]][:, None] + np.arange(width)[None, :]]  # (rows, width)
             face = incidence // 3
             sign = np.where(forward[incidence], 1.0, -1.0)
@@ -165,7 +167,7 @@ def _priority(best_cos, edge, n_edges):
         priority = np.empty(edge.size, dtype=np.int64)
         priority[np.lexsort((edge, -best_cos))] = np.arange(edge.size)
         return priority
-    level = np.round((1.0 - np.clip(best_cos, -1.0, 1.0)) * 2.0 ** 35).astype(np.int64)
+    level = np.round((1.0 - np.clip(best_cos, -1.0, 1.0)) * 2.0**35).astype(np.int64)
     return (level << _EDGE_BITS) | edge
 
 
@@ -229,8 +231,13 @@ def _prune(points, faces, normals=None, settled=None):
         start[over] = run
         stale = over[~known[over]]
         if stale.size:
-            parts = run_blocks(lambda lo, hi: _best_pairs(normals, forward, stale[lo:hi], order, start, count),
-                               stale.size, share=0.5)
+            parts = run_blocks(
+                lambda lo, hi, stale=stale, order=order: _best_pairs(
+                    normals, forward, stale[lo:hi], order, start, count
+                ),
+                stale.size,
+                share=0.5,
+            )
             first[stale], second[stale], best_cos[stale] = (np.concatenate(x) for x in zip(*parts))
             known[stale] = True
         # Priority: flatter best pair first, ties by edge number; distinct, so each face has one top edge.

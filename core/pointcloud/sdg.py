@@ -92,8 +92,8 @@ def surface_description_graph(index, emst_edges, *, spacing_factor=3.0, gap_fact
     """The SDG of the distinct points of ``index`` given their EMST (rows of ``index``)."""
     if not 0 < spacing_factor <= gap_factor:
         raise ValueError(
-            f"need 0 < spacing_factor <= gap_factor, got spacing_factor={spacing_factor}, "
-            f"gap_factor={gap_factor}")
+            f"need 0 < spacing_factor <= gap_factor, got spacing_factor={spacing_factor}, gap_factor={gap_factor}"
+        )
     m = index.n_points
     spacing = local_spacing(index)
     u, v = emst_edges[:, 0], emst_edges[:, 1]
@@ -103,6 +103,7 @@ def surface_description_graph(index, emst_edges, *, spacing_factor=3.0, gap_fact
     src = np.repeat(np.arange(m, dtype=np.int64), index.k)
     dst = index.neighbour.ravel()
     near = index.distance.ravel() <= spacing_factor * np.minimum(spacing[src], spacing[dst])
-    edges = unique_undirected(np.concatenate([u[consistent], src[near]]),
-                               np.concatenate([v[consistent], dst[near]]), max(m, 1))
+    edges = unique_undirected(
+        np.concatenate([u[consistent], src[near]]), np.concatenate([v[consistent], dst[near]]), max(m, 1)
+    )
     return SurfaceGraph(edges, spacing, int(consistent.sum()), int((~consistent).sum()))

@@ -113,10 +113,19 @@ def smooth_point_cloud(
     """
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable progress(done, total) or None")
-    run = PointCloudSmoother(points, alpha=alpha, beta=beta, rounds=rounds,
-                             iterations_per_round=iterations_per_round, fixed=fixed, neighbours=neighbours,
-                             spacing_factor=spacing_factor, gap_factor=gap_factor, min_quality=min_quality,
-                             swap=swap)
+    run = PointCloudSmoother(
+        points,
+        alpha=alpha,
+        beta=beta,
+        rounds=rounds,
+        iterations_per_round=iterations_per_round,
+        fixed=fixed,
+        neighbours=neighbours,
+        spacing_factor=spacing_factor,
+        gap_factor=gap_factor,
+        min_quality=min_quality,
+        swap=swap,
+    )
     for _ in run.steps():
         if run.stage == "round" and progress is not None and progress(run.rounds_done, run.rounds) is False:
             raise Cancelled(f"cancelled after {run.rounds_done} of {run.rounds} rounds")
@@ -128,11 +137,25 @@ class PointCloudSmoother:
     that shows progress and lets Esc cancel): checks everything on construction, then ``steps()``
     yields the fraction of the run done after each stage and round, as core.Smoothing.steps does
     (``stage`` names the stage just finished, ``rounds_done`` counts the rounds); once the generator
-    is exhausted ``result`` and ``report`` are set. ``alpha`` and ``iterations_per_round`` hold "auto" until the first stage has estimated
+    is exhausted ``result`` and ``report`` are set. ``alpha`` and ``iterations_per_round`` hold "auto" until the
+    first stage has estimated
     the noise, then the values in use. Abandoning the generator leaves the input untouched."""
 
-    def __init__(self, points, *, alpha=AUTO, beta=0.55, rounds=3, iterations_per_round=AUTO, fixed=None,
-                 neighbours=16, spacing_factor=2.5, gap_factor=3.0, min_quality=0.3, swap=True):
+    def __init__(
+        self,
+        points,
+        *,
+        alpha=AUTO,
+        beta=0.55,
+        rounds=3,
+        iterations_per_round=AUTO,
+        fixed=None,
+        neighbours=16,
+        spacing_factor=2.5,
+        gap_factor=3.0,
+        min_quality=0.3,
+        swap=True,
+    ):
         self.points = check_positions(points, "points")
         # Everything runs on points / scale (|coordinates| below 1): a power of two, so the division is
         # exact, a power-of-two change of unit changes no bit, and no squared distance over- or underflows.
@@ -148,8 +171,7 @@ class PointCloudSmoother:
         self.spacing_factor = _positive(spacing_factor, "spacing_factor")
         self.gap_factor = _positive(gap_factor, "gap_factor")
         if self.spacing_factor > self.gap_factor:
-            raise ValueError(f"spacing_factor ({self.spacing_factor}) must not exceed gap_factor "
-                             f"({self.gap_factor})")
+            raise ValueError(f"spacing_factor ({self.spacing_factor}) must not exceed gap_factor ({self.gap_factor})")
         self.min_quality = check_unit_interval(min_quality, "min_quality")
         self.fixed = check_fixed(fixed, self.points.shape[0])
         self.swap = bool(swap)
@@ -191,8 +213,7 @@ class PointCloudSmoother:
         tree, _ = boruvka_emst(index)
         lap("emst")
         yield self._finished("emst")
-        graph = surface_description_graph(index, tree, spacing_factor=self.spacing_factor,
-                                          gap_factor=self.gap_factor)
+        graph = surface_description_graph(index, tree, spacing_factor=self.spacing_factor, gap_factor=self.gap_factor)
         lap("sdg")
         yield self._finished("sdg")
         current = index.points  # float64 copy, ours to move
@@ -205,9 +226,17 @@ class PointCloudSmoother:
         for done in range(1, self.rounds + 1):
             if operator is None:
                 operator = umbrella_operator(mesh.edges, m)
-            current = smooth(current, None, method="hc", alpha=self.alpha, beta=self.beta,
-                             iterations=self.iterations_per_round, fixed=rows_fixed, original=index.points,
-                             operator=operator).positions
+            current = smooth(
+                current,
+                None,
+                method="hc",
+                alpha=self.alpha,
+                beta=self.beta,
+                iterations=self.iterations_per_round,
+                fixed=rows_fixed,
+                original=index.points,
+                operator=operator,
+            ).positions
             lap("hc")
             if swapper is not None and done < self.rounds:
                 count = swapper.swap_pass(current)
@@ -226,8 +255,16 @@ class PointCloudSmoother:
         has_face[mesh.faces.ravel()] = True
         self.report = PointCloudReport(
             mesh=RFSMesh(index.original[mesh.faces], index.original[mesh.edges]),
-            n_distinct=m, sdg_edges=int(graph.edges.shape[0]), emst_cut=graph.emst_cut,
-            isolated=int(m - has_face.sum()), swaps=swaps, seconds=seconds, noise=self.noise,
-            rounds=self.rounds, iterations_per_round=self.iterations_per_round, alpha=self.alpha,
-            automatic=self.automatic)
+            n_distinct=m,
+            sdg_edges=int(graph.edges.shape[0]),
+            emst_cut=graph.emst_cut,
+            isolated=int(m - has_face.sum()),
+            swaps=swaps,
+            seconds=seconds,
+            noise=self.noise,
+            rounds=self.rounds,
+            iterations_per_round=self.iterations_per_round,
+            alpha=self.alpha,
+            automatic=self.automatic,
+        )
         self.result = result

@@ -132,11 +132,12 @@ def _nearest_foreign_by_growing_k(tree, label_code, ask, bound, k, budget):
         step = max(1, _QUERY_ENTRIES // k)
         done_rows = []
         for start in range(0, todo.size, step):
-            rows = todo[start:start + step]
+            rows = todo[start : start + step]
             limit = bound[rows]
             upper = float(limit.max())
-            distance, found = tree.query(tree.data[ask[rows]], k, workers=-1,
-                                         distance_upper_bound=upper if np.isfinite(upper) else np.inf)
+            distance, found = tree.query(
+                tree.data[ask[rows]], k, workers=-1, distance_upper_bound=upper if np.isfinite(upper) else np.inf
+            )
             distance, found = distance.reshape(rows.size, k), found.reshape(rows.size, k)
             valid = np.isfinite(distance)
             foreign = valid & (label_code[np.where(valid, found, 0)] != label_code[ask[rows]][:, None])
@@ -180,14 +181,14 @@ def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16,
         # Few askers (the usual case on surfaces): growing-k queries on the one tree we have cost
         # far less than building two trees per code bit over all points.
         found_distance, found_index, resolved = _nearest_foreign_by_growing_k(
-            tree, label_code, ask, bound, k, budget=tree_points.shape[0])
+            tree, label_code, ask, bound, k, budget=tree_points.shape[0]
+        )
         best_distance[resolved], best_index[resolved] = found_distance[resolved], found_index[resolved]
         rest = rest[~resolved]
         tree = None  # whoever is left needs the bit search
     if rest.size > 4 * _SAMPLE_STRIDE:
         sample = rest[::_SAMPLE_STRIDE]
-        best_distance[sample], best_index[sample] = _query_by_bits(tree_points, label_code, ask[sample],
-                                                                   bound[sample])
+        best_distance[sample], best_index[sample] = _query_by_bits(tree_points, label_code, ask[sample], bound[sample])
         # No point of another code is nearer to a sample point than this (exact below its bound).
         sample_floor = np.minimum(best_distance[sample], bound[sample])
         code_bound = np.full(int(label_code.max()) + 1, np.inf)
@@ -208,7 +209,8 @@ def _exact_nearest_foreign(tree_points, label_code, ask, bound, tree=None, k=16,
                 continue
             rows = rest[position]
             found_distance, found_index, resolved = _nearest_foreign_by_growing_k(
-                tree, label_code, ask[rows], bound[rows], k, budget=4 * k * rows.size)  # k <= 4 k0
+                tree, label_code, ask[rows], bound[rows], k, budget=4 * k * rows.size
+            )  # k <= 4 k0
             best_distance[rows[resolved]] = found_distance[resolved]
             best_index[rows[resolved]] = found_index[resolved]
             left[position[resolved]] = False
@@ -267,8 +269,9 @@ def _query_by_bits(tree_points, label_code, ask, bound):
                 in_group = group == value
                 rows, limit = askers[in_group], current[in_group]
                 upper = float(limit.max())
-                distance, found = tree.query(tree_points[ask[rows]], 1, workers=-1,
-                                             distance_upper_bound=upper if np.isfinite(upper) else np.inf)
+                distance, found = tree.query(
+                    tree_points[ask[rows]], 1, workers=-1, distance_upper_bound=upper if np.isfinite(upper) else np.inf
+                )
                 better = (distance < limit) & (distance < best_distance[rows])
                 best_distance[rows[better]] = distance[better]
                 best_index[rows[better]] = targets[found[better]]
@@ -340,10 +343,13 @@ def boruvka_emst(index):
         cached = np.flatnonzero(cache_index >= 0)  # still foreign: still the exact nearest
         if cached.size:
             best, pick_u, pick_v = _per_component_pick(
-                n_components, np.concatenate([label_src, label[cached]]),
+                n_components,
+                np.concatenate([label_src, label[cached]]),
                 np.concatenate([label_dst, label[cache_index[cached]]]),
-                np.concatenate([weight, cache_distance[cached]]), np.concatenate([src, cached]),
-                np.concatenate([dst, cache_index[cached]]))
+                np.concatenate([weight, cache_distance[cached]]),
+                np.concatenate([src, cached]),
+                np.concatenate([dst, cache_index[cached]]),
+            )
         else:
             best, pick_u, pick_v = _per_component_pick(n_components, label_src, label_dst, weight, src, dst)
         inside = np.flatnonzero(exhausted & (cache_index < 0))  # exhausted, nearest foreign unknown
@@ -356,12 +362,14 @@ def boruvka_emst(index):
             code = np.zeros(n_components, dtype=np.int64)
             code[uncertain] = np.arange(1, int(uncertain.sum()) + 1)
             found_distance, found, searched = _exact_nearest_foreign(
-                points, code[label], ask, best[label[ask]], tree=index.tree, k=2 * max(k, 1), return_bound=True)
+                points, code[label], ask, best[label[ask]], tree=index.tree, k=2 * max(k, 1), return_bound=True
+            )
             hit = found >= 0
             cache_distance[ask[hit]], cache_index[ask[hit]] = found_distance[hit], found[hit]
             floor[ask[~hit]] = np.maximum(floor[ask[~hit]], searched[~hit])
             exact_best, exact_u, exact_v = _per_component_pick(
-                n_components, label[ask[hit]], label[ask[hit]], found_distance[hit], ask[hit], found[hit])
+                n_components, label[ask[hit]], label[ask[hit]], found_distance[hit], ask[hit], found[hit]
+            )
             improve = exact_best < best
             best[improve] = exact_best[improve]
             pick_u[improve], pick_v[improve] = exact_u[improve], exact_v[improve]

@@ -99,12 +99,18 @@ class EdgeSwapper:
                 new_b /= np.sqrt(_dot(new_b, new_b))[:, None]
             before = np.arccos(np.clip(incidence_cos(normals, faces, i1[part], i2[part], start), -1.0, 1.0))
             after = np.arccos(np.clip(_dot(new_a, new_b), -1.0, 1.0))  # both run c -> d
-            for incidence, new, new_start in ((f1_oa[part], new_b, b[part]), (f1_ob[part], new_a, a[part]),
-                                              (f2_oa[part], new_b, d[part]), (f2_ob[part], new_a, d[part])):
+            for incidence, new, new_start in (
+                (f1_oa[part], new_b, b[part]),
+                (f1_ob[part], new_a, a[part]),
+                (f2_oa[part], new_b, d[part]),
+                (f2_ob[part], new_a, d[part]),
+            ):
                 beyond = other[incidence]
                 has = beyond >= 0  # an outer edge without a face beyond counts the same before and after
                 far = np.where(has, beyond, incidence)
-                before += np.where(has, np.arccos(np.clip(incidence_cos(normals, faces, incidence, far, start), -1, 1)), 0.0)
+                before += np.where(
+                    has, np.arccos(np.clip(incidence_cos(normals, faces, incidence, far, start), -1, 1)), 0.0
+                )
                 fb = far // 3
                 dot = new[:, 0] * normals[0][fb] + new[:, 1] * normals[1][fb] + new[:, 2] * normals[2][fb]
                 cos = np.where(start[far] == new_start, dot, -dot)

@@ -8,8 +8,7 @@ ADDON = "bl_ext.user_default.hc_smooth"  # the module name Blender gives the ins
 
 def make_mesh_object(name, positions, faces=(), edges=(), link=True):
     mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata([tuple(map(float, p)) for p in positions], [tuple(e) for e in edges],
-                     [tuple(f) for f in faces])
+    mesh.from_pydata([tuple(map(float, p)) for p in positions], [tuple(e) for e in edges], [tuple(f) for f in faces])
     mesh.update()
     obj = bpy.data.objects.new(name, mesh)
     if link:

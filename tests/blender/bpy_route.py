@@ -12,16 +12,25 @@ import sys
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 ROUTE = "python scripts/hc_smooth_bpy.py"
 # Every file that shows the route: the README, the two docs, the examples' and the script's docstrings.
-DOCUMENTS = (ROOT / "README.md", ROOT / "docs" / "command_line.md", ROOT / "docs" / "python_api.md",
-             *sorted((ROOT / "examples").glob("*.py")), ROOT / "scripts" / "hc_smooth_bpy.py")
+DOCUMENTS = (
+    ROOT / "README.md",
+    ROOT / "docs" / "command_line.md",
+    ROOT / "docs" / "python_api.md",
+    *sorted((ROOT / "examples").glob("*.py")),
+    ROOT / "scripts" / "hc_smooth_bpy.py",
+)
 INSTALL = f"{ROUTE} install build/hc_smooth-0.1.0.zip"
 
 
 def documented_lines(path):
     """The command lines of ``path`` (code blocks, docstring usage lines) that use the route."""
-    return [line.strip() for line in path.read_text().splitlines()
-            if line.strip().startswith(ROUTE) or f"| xargs -0 -P 4 -n 1 {ROUTE}" in line
-            or line.strip().startswith(f"parallel -j 4 {ROUTE}")]
+    return [
+        line.strip()
+        for line in path.read_text().splitlines()
+        if line.strip().startswith(ROUTE)
+        or f"| xargs -0 -P 4 -n 1 {ROUTE}" in line
+        or line.strip().startswith(f"parallel -j 4 {ROUTE}")
+    ]
 
 
 def is_syntax(line):

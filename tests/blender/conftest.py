@@ -15,11 +15,11 @@ os.environ["BLENDER_USER_RESOURCES"] = USER_RESOURCES
 os.environ["XDG_CACHE_HOME"] = os.path.join(USER_RESOURCES, "cache")
 
 import bpy  # noqa: E402
-import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 from blender_scene import ADDON  # noqa: E402
+
 sys.path.insert(0, str(ROOT))  # `import core` (the same code, loaded outside Blender) for comparisons
 
 
@@ -32,16 +32,20 @@ def pytest_sessionfinish(session, exitstatus):
 @pytest.fixture(scope="session")
 def extension_zip(tmp_path_factory):
     out = tmp_path_factory.mktemp("build")
-    subprocess.run([sys.executable, str(ROOT / "scripts" / "build_extension.py"), "--output-dir", str(out)],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "build_extension.py"), "--output-dir", str(out)],
+        check=True,
+        capture_output=True,
+    )
     (path,) = out.glob("hc_smooth-*.zip")
     return path
 
 
 @pytest.fixture(scope="session")
 def addon(extension_zip):
-    result = bpy.ops.extensions.package_install_files(filepath=str(extension_zip), repo="user_default",
-                                                      enable_on_install=True)
+    result = bpy.ops.extensions.package_install_files(
+        filepath=str(extension_zip), repo="user_default", enable_on_install=True
+    )
     assert result == {"FINISHED"}
     yield sys.modules[ADDON]
     # bpy 4.5 can hang at interpreter exit while operator classes are still registered.

@@ -30,7 +30,8 @@ class HideEnvironmentSciPy(importlib.abc.MetaPathFinder):
         if name != "scipy":
             return None
         spec = importlib.machinery.PathFinder.find_spec(
-            name, [entry for entry in sys.path if entry not in ENV_SITE_PACKAGES])
+            name, [entry for entry in sys.path if entry not in ENV_SITE_PACKAGES]
+        )
         if spec is None:  # stop here: the finders after this one would find the environment's
             raise ModuleNotFoundError("No module named 'scipy' (the test environment's is hidden)", name=name)
         return spec
@@ -54,8 +55,15 @@ try:
     report["install"] = sorted(result)
     package = "bl_ext.user_default.hc_smooth"
     report["enabled"] = package in bpy.context.preferences.addons
-    site = work / "user" / "extensions" / ".local" / "lib" / f"python{sys.version_info[0]}.{sys.version_info[1]}" \
+    site = (
+        work
+        / "user"
+        / "extensions"
+        / ".local"
+        / "lib"
+        / f"python{sys.version_info[0]}.{sys.version_info[1]}"
         / "site-packages"
+    )
     report["site_packages"] = str(site)
     report["dist_infos"] = sorted(path.name for path in site.glob("*.dist-info")) if site.is_dir() else []
     import scipy.sparse  # what the extension's core imports

@@ -3,7 +3,6 @@
 import bpy
 import numpy as np
 import pytest
-
 from blender_scene import make_mesh_object, noisy_sphere, positions_of, select_only
 
 

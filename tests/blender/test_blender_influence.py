@@ -6,9 +6,9 @@ import sys
 import bpy
 import numpy as np
 import pytest
+from blender_scene import ADDON, edges_of, noisy_sphere, positions_of, select_only
 
 import core
-from blender_scene import ADDON, edges_of, noisy_sphere, positions_of, select_only
 
 ALPHA, BETA = float(np.float32(0.1)), float(np.float32(0.6))
 
@@ -31,11 +31,11 @@ def painted_sphere(subdivisions=3):
 def test_operator_equals_core_with_the_group_weights(scene, subdivisions, invert):
     obj, weights = painted_sphere(subdivisions)
     before = positions_of(obj.data)
-    assert bpy.ops.object.hc_smooth(auto_amount=False, iterations=6, influence_group="Influence",
-                                    invert_influence_group=invert) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth(
+        auto_amount=False, iterations=6, influence_group="Influence", invert_influence_group=invert
+    ) == {"FINISHED"}
     influence = 1.0 - weights if invert else weights
-    expected = core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=6,
-                              influence=influence)
+    expected = core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=6, influence=influence)
     after = positions_of(obj.data)
     assert np.array_equal(after, expected)
     still = influence == 0
@@ -70,18 +70,23 @@ def test_command_line_influence_group(scene, addon, tmp_path):
     source = tmp_path / "painted.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(source))
     cli = sys.modules[ADDON + ".cli"]
-    assert cli.main([str(source), "-o", str(tmp_path / "out"), "--influence-group", "Influence",
-                     "--iterations", "6"]) == 0
+    assert (
+        cli.main([str(source), "-o", str(tmp_path / "out"), "--influence-group", "Influence", "--iterations", "6"]) == 0
+    )
     bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "out" / "painted.blend"))
-    expected = core.hc_smooth(before, edges_of(bpy.data.objects["Scan"].data), alpha=ALPHA, beta=BETA,
-                              iterations=6, influence=weights)
+    expected = core.hc_smooth(
+        before, edges_of(bpy.data.objects["Scan"].data), alpha=ALPHA, beta=BETA, iterations=6, influence=weights
+    )
     assert np.array_equal(positions_of(bpy.data.objects["Scan"].data), expected)
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--invert-influence"], "--invert-influence needs --influence-group"),
-    (["--points", "--influence-group", "Paint"], "--influence-group does not apply to point clouds"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--invert-influence"], "--invert-influence needs --influence-group"),
+        (["--points", "--influence-group", "Paint"], "--influence-group does not apply to point clouds"),
+    ],
+)
 def test_command_line_refuses_influence_misuse(addon, tmp_path, capsys, argv, message):
     cli = sys.modules[ADDON + ".cli"]
     assert cli.main([str(tmp_path / "a.ply"), "-o", str(tmp_path / "out"), *argv]) == 2

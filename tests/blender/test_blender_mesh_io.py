@@ -6,10 +6,9 @@ import bmesh
 import bpy
 import numpy as np
 import pytest
+from blender_scene import ADDON, noisy_grid, noisy_sphere
 
 import core
-from blender_scene import noisy_grid, noisy_sphere
-from blender_scene import ADDON
 
 
 def mesh_io():
@@ -35,13 +34,16 @@ def add_loose_edge(obj):
     bm.free()
 
 
-@pytest.mark.parametrize("make, change, expected", [
-    (noisy_sphere, None, True),
-    (noisy_grid, None, False),
-    (noisy_sphere, flip_first_face, False),
-    (noisy_sphere, add_loose_edge, True),  # a loose edge does not open the surface
-    (lambda: (bpy.ops.mesh.primitive_monkey_add(), bpy.context.active_object)[1], None, False),
-])
+@pytest.mark.parametrize(
+    "make, change, expected",
+    [
+        (noisy_sphere, None, True),
+        (noisy_grid, None, False),
+        (noisy_sphere, flip_first_face, False),
+        (noisy_sphere, add_loose_edge, True),  # a loose edge does not open the surface
+        (lambda: (bpy.ops.mesh.primitive_monkey_add(), bpy.context.active_object)[1], None, False),
+    ],
+)
 def test_closedness_from_corner_edges_matches_the_core(scene, make, change, expected):
     obj = make()
     if change is not None:
@@ -55,8 +57,9 @@ def test_closedness_from_corner_edges_matches_the_core(scene, make, change, expe
     assert core.topology.closed_from_triangles(core.metrics.fan_triangles(faces)) is expected
 
 
-@pytest.mark.parametrize("make", [noisy_sphere, noisy_grid,
-                                  lambda: (bpy.ops.mesh.primitive_monkey_add(), bpy.context.active_object)[1]])
+@pytest.mark.parametrize(
+    "make", [noisy_sphere, noisy_grid, lambda: (bpy.ops.mesh.primitive_monkey_add(), bpy.context.active_object)[1]]
+)
 def test_boundary_from_corner_edges_matches_the_faces(scene, make):
     # Reference: an edge of exactly one face, counted from the faces' own corner pairs.
     mesh = make().data

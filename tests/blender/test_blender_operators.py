@@ -3,11 +3,9 @@
 import bpy
 import numpy as np
 import pytest
+from blender_scene import edges_of, faces_of, noisy_grid, noisy_sphere, positions_of, select_only
 
 import core
-from blender_scene import (edges_of, faces_of, make_mesh_object, noisy_grid, noisy_sphere, positions_of,
-                      select_only)
-
 
 # Blender stores float properties in single precision: compare with the values the operator really got.
 ALPHA, BETA = float(np.float32(0.1)), float(np.float32(0.6))
@@ -30,8 +28,15 @@ def test_object_mode_equals_core_on_the_same_arrays(scene):
     for mode, method in (("SEQUENTIAL", "HC"), ("SIMULTANEOUS", "LAPLACIAN_ORIGINAL")):
         start = positions_of(obj.data)
         bpy.ops.object.hc_smooth(auto_amount=False, method=method, mode=mode, alpha=0.25, beta=0.625, iterations=3)
-        expected = core.smooth(start, edges_of(obj.data), method="hc" if method == "HC" else "original",
-                               mode=mode.lower(), alpha=0.25, beta=0.625, iterations=3).positions
+        expected = core.smooth(
+            start,
+            edges_of(obj.data),
+            method="hc" if method == "HC" else "original",
+            mode=mode.lower(),
+            alpha=0.25,
+            beta=0.625,
+            iterations=3,
+        ).positions
         assert np.array_equal(positions_of(obj.data), expected)
 
 
@@ -201,8 +206,9 @@ def test_invoke_in_background_runs_execute(scene):
     obj = noisy_sphere()
     before = positions_of(obj.data)
     assert bpy.ops.object.hc_smooth("INVOKE_DEFAULT", auto_amount=False, iterations=2) == {"FINISHED"}
-    assert np.array_equal(positions_of(obj.data),
-                          core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=2))
+    assert np.array_equal(
+        positions_of(obj.data), core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=2)
+    )
 
 
 def test_outside_the_convergence_region_warns(scene, capfd):

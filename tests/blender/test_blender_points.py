@@ -5,9 +5,9 @@ import sys
 import bpy
 import numpy as np
 import pytest
+from blender_scene import ADDON, make_mesh_object, positions_of, select_only
 
 import core
-from blender_scene import ADDON, make_mesh_object, positions_of, select_only
 
 
 def noisy_sphere_points(n=1500, sigma=0.01, seed=0):
@@ -43,14 +43,19 @@ def test_smooths_loose_vertices_like_the_core(scene):
 def test_manual_amount_uses_alpha_and_steps_as_set(scene):
     obj = cloud_object()
     before = positions_of(obj.data)
-    assert bpy.ops.object.hc_smooth_points(auto_amount=False, alpha=0.05, iterations_per_round=7, rounds=2) == {"FINISHED"}
-    expected = core.smooth_point_cloud(before, alpha=float(np.float32(0.05)), beta=float(np.float32(0.55)),
-                                       rounds=2, iterations_per_round=7)
+    assert bpy.ops.object.hc_smooth_points(auto_amount=False, alpha=0.05, iterations_per_round=7, rounds=2) == {
+        "FINISHED"
+    }
+    expected = core.smooth_point_cloud(
+        before, alpha=float(np.float32(0.05)), beta=float(np.float32(0.55)), rounds=2, iterations_per_round=7
+    )
     assert np.array_equal(positions_of(obj.data), expected)
     # The manual values are ignored while the amount is automatic.
     obj.data.vertices.foreach_set("co", before.ravel())
     bpy.ops.object.hc_smooth_points(alpha=0.05, iterations_per_round=7, rounds=2)
-    assert np.array_equal(positions_of(obj.data), core.smooth_point_cloud(before, beta=float(np.float32(0.55)), rounds=2))
+    assert np.array_equal(
+        positions_of(obj.data), core.smooth_point_cloud(before, beta=float(np.float32(0.55)), rounds=2)
+    )
 
 
 def test_automatic_amount_follows_the_noise(scene):
@@ -84,7 +89,13 @@ def test_redo_panel_greys_out_the_manual_amount(scene):
     for automatic in (True, False):
         record = []
         props = type("Props", (), {})()
-        props.layout, props.auto_amount, props.alpha, props.beta, props.vertex_group = Layout(record), automatic, 0.01, 0.55, ""
+        props.layout, props.auto_amount, props.alpha, props.beta, props.vertex_group = (
+            Layout(record),
+            automatic,
+            0.01,
+            0.55,
+            "",
+        )
         props.invert_vertex_group = False
         bpy.types.OBJECT_OT_hc_smooth_points.draw(props, bpy.context)
         shown = {entry[1]: entry[2] for entry in record if entry[0] == "prop"}
@@ -124,17 +135,20 @@ def snapshot():
     return {o.name: positions_of(o.data).tobytes() for o in bpy.data.objects if o.type == "MESH"}
 
 
-@pytest.mark.parametrize("case, message", [
-    ("edges", "has edges or faces.*object.hc_smooth"),
-    ("empty", "no points"),
-    # Fewer than three distinct points cannot form an RFS face: said as such, not as "scan lines?".
-    ("single", "'Single' is a single point: nothing to smooth"),
-    ("coincide", "All 100 points of 'Same' coincide: nothing to smooth"),
-    ("two", "The 100 points of 'Two' lie at only 2 distinct positions: nothing to smooth"),
-    ("nan", "NaN or infinite.*point 7"),
-    ("group", "no vertex group 'Nope'"),
-    ("nothing", "Select a mesh of loose vertices or a point cloud"),
-])
+@pytest.mark.parametrize(
+    "case, message",
+    [
+        ("edges", "has edges or faces.*object.hc_smooth"),
+        ("empty", "no points"),
+        # Fewer than three distinct points cannot form an RFS face: said as such, not as "scan lines?".
+        ("single", "'Single' is a single point: nothing to smooth"),
+        ("coincide", "All 100 points of 'Same' coincide: nothing to smooth"),
+        ("two", "The 100 points of 'Two' lie at only 2 distinct positions: nothing to smooth"),
+        ("nan", "NaN or infinite.*point 7"),
+        ("group", "no vertex group 'Nope'"),
+        ("nothing", "Select a mesh of loose vertices or a point cloud"),
+    ],
+)
 def test_bad_input_writes_nothing(scene, case, message):
     properties = {}
     if case == "edges":
@@ -193,10 +207,17 @@ def test_invoke_in_background_runs_execute(scene):
     assert np.any(positions_of(obj.data) != before)
 
 
-@pytest.mark.parametrize("given, amount", [([], {}), (["--alpha", "0.05"], {"alpha": 0.05, "iterations_per_round": 22}),
-                                           (["--steps-per-round", "4"], {"alpha": 0.01, "iterations_per_round": 4})])
-def test_command_line_points_use_the_automatic_amount_unless_alpha_or_steps_are_given(addon, scene, tmp_path, given,
-                                                                                      amount):
+@pytest.mark.parametrize(
+    "given, amount",
+    [
+        ([], {}),
+        (["--alpha", "0.05"], {"alpha": 0.05, "iterations_per_round": 22}),
+        (["--steps-per-round", "4"], {"alpha": 0.01, "iterations_per_round": 4}),
+    ],
+)
+def test_command_line_points_use_the_automatic_amount_unless_alpha_or_steps_are_given(
+    addon, scene, tmp_path, given, amount
+):
     # blender -b -c hc_smooth --points runs the operator's functions: its automatic amount unless --alpha or
     # --steps-per-round is given, which (as the operator's toggle) uses both manual values.
     command, arguments = sys.modules[ADDON + ".cli.command"], sys.modules[ADDON + ".cli.arguments"]

@@ -8,9 +8,7 @@ steps through: results must equal the one-call run, progress must rise to 1, and
 import importlib
 from types import SimpleNamespace
 
-import bpy
 import numpy as np
-
 from blender_scene import ADDON, noisy_sphere, positions_of
 
 
@@ -93,8 +91,9 @@ def modal_operator():
             self.abandoned = True
 
     statuses = []
-    context = SimpleNamespace(window=None, window_manager=FakeWindowManager(),
-                              workspace=SimpleNamespace(status_text_set=statuses.append))
+    context = SimpleNamespace(
+        window=None, window_manager=FakeWindowManager(), workspace=SimpleNamespace(status_text_set=statuses.append)
+    )
     return Operator(), context, statuses
 
 
@@ -116,8 +115,11 @@ def test_modal_steps_show_progress_then_finish():
     assert not operator.finished
     assert operator.modal(context, TIMER) == {"FINISHED"} and operator.finished
     assert context.window_manager.calls == ["timer_add", "begin", "handler", 25, 50, 100, "timer_remove", "end"]
-    assert statuses[:3] == ["HC Smooth: 25% — Esc to cancel", "HC Smooth: 50% — Esc to cancel",
-                            "HC Smooth: 100% — Esc to cancel"] and statuses[-1] is None
+    assert (
+        statuses[:3]
+        == ["HC Smooth: 25% — Esc to cancel", "HC Smooth: 50% — Esc to cancel", "HC Smooth: 100% — Esc to cancel"]
+        and statuses[-1] is None
+    )
 
 
 def test_modal_escape_abandons_without_finishing():

@@ -2,7 +2,6 @@
 
 import addon_utils
 import bpy
-
 from blender_scene import ADDON
 
 OPERATOR_TYPES = ("OBJECT_OT_hc_smooth", "MESH_OT_hc_smooth")

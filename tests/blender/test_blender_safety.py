@@ -6,11 +6,10 @@ import sys
 import bpy
 import numpy as np
 import pytest
-
-import core
+import test_blender_progress as progress
 from blender_scene import ADDON, edges_of, make_mesh_object, noisy_sphere, positions_of, select_only
 
-import test_blender_progress as progress
+import core
 
 
 def bits(array):
@@ -94,8 +93,9 @@ def test_keys_relative_to_the_smoothed_key_move_with_it(scene, smoothed, moving,
         assert bpy.ops.mesh.hc_smooth(auto_amount=False, iterations=5) == {"FINISHED"}
         bpy.ops.object.mode_set(mode="OBJECT")
     after = {key.name: key_positions(key) for key in keys}
-    expected = core.hc_smooth(before[smoothed], edges_of(obj.data), alpha=float(np.float32(0.1)),
-                              beta=float(np.float32(0.6)), iterations=5)
+    expected = core.hc_smooth(
+        before[smoothed], edges_of(obj.data), alpha=float(np.float32(0.1)), beta=float(np.float32(0.6)), iterations=5
+    )
     np.testing.assert_allclose(after[smoothed], expected, atol=1e-6)
     displacement = after[smoothed] - before[smoothed]
     assert np.abs(displacement).max() > 1e-3
@@ -135,8 +135,16 @@ def test_every_route_gives_the_same_result_with_a_tolerance(scene, addon, tmp_pa
     alpha, beta = float(np.float32(props.alpha)), float(np.float32(props.beta))
     obj = noisy_sphere(name="Scan")
     start = positions_of(obj.data)
-    expected = core.smooth(start, edges_of(obj.data), method="hc", alpha=alpha, beta=beta, iterations=60,
-                           mode=mode.lower(), tolerance=float(np.float32(tolerance)))
+    expected = core.smooth(
+        start,
+        edges_of(obj.data),
+        method="hc",
+        alpha=alpha,
+        beta=beta,
+        iterations=60,
+        mode=mode.lower(),
+        tolerance=float(np.float32(tolerance)),
+    )
     assert expected.stopped_early and expected.iterations < 60
     for chunk in (None, 1, 4, 7):
         (job,) = [jobs.make_job(obj, props)]
@@ -145,8 +153,22 @@ def test_every_route_gives_the_same_result_with_a_tolerance(scene, addon, tmp_pa
         assert job.iterations_run == expected.iterations
     source = tmp_path / "scan.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(source))
-    assert sys.modules[ADDON + ".cli"].main([str(source), "-o", str(tmp_path / "out"), "--mode", mode,
-                                             "--iterations", "60", "--tolerance", repr(tolerance)]) == 0
+    assert (
+        sys.modules[ADDON + ".cli"].main(
+            [
+                str(source),
+                "-o",
+                str(tmp_path / "out"),
+                "--mode",
+                mode,
+                "--iterations",
+                "60",
+                "--tolerance",
+                repr(tolerance),
+            ]
+        )
+        == 0
+    )
     bpy.ops.wm.open_mainfile(filepath=str(source))
     obj = bpy.data.objects["Scan"]
     select_only(obj)

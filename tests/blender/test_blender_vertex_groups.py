@@ -4,9 +4,7 @@ import importlib
 
 import bpy
 import numpy as np
-
-from blender_scene import noisy_grid, select_only
-from blender_scene import ADDON
+from blender_scene import ADDON, noisy_grid, select_only
 
 
 def mesh_io():
@@ -24,7 +22,7 @@ def grid_with_group(rng):
     group = obj.vertex_groups.new(name="Keep")
     chosen = np.flatnonzero(rng.random(n) < 0.3)
     group.add(chosen[: len(chosen) // 2].tolist(), 0.7, "REPLACE")
-    group.add(chosen[len(chosen) // 2:].tolist(), 0.0, "REPLACE")  # in the group with weight 0: not fixed
+    group.add(chosen[len(chosen) // 2 :].tolist(), 0.0, "REPLACE")  # in the group with weight 0: not fixed
     obj.vertex_groups.new(name="Other").add(list(range(0, n, 5)), 1.0, "REPLACE")
     return obj, group
 

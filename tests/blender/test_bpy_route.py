@@ -8,10 +8,18 @@ import re
 
 import bpy
 import pytest
-
 from blender_scene import noisy_sphere, select_only
-from bpy_route import DOCUMENTS, INSTALL, ROUTE, documented_lines, install_documented, is_syntax, run_line, \
-    user_env, workdir
+from bpy_route import (
+    DOCUMENTS,
+    INSTALL,
+    ROUTE,
+    documented_lines,
+    install_documented,
+    is_syntax,
+    run_line,
+    user_env,
+    workdir,
+)
 
 COMMAND = f"{ROUTE} hc_smooth scans/*.ply -o smoothed/"
 HELP = f"{ROUTE} hc_smooth --help"
@@ -35,8 +43,9 @@ def make_scans(folder, names=("a", "b")):
     for seed, name in enumerate(names):
         bpy.ops.wm.read_homefile(use_empty=True)
         select_only(noisy_sphere(name=name, subdivisions=3, seed=seed))
-        bpy.ops.wm.ply_export(filepath=str(folder / f"{name}.ply"), export_selected_objects=True,
-                              export_uv=False, export_normals=False)
+        bpy.ops.wm.ply_export(
+            filepath=str(folder / f"{name}.ply"), export_selected_objects=True, export_uv=False, export_normals=False
+        )
 
 
 @pytest.fixture(scope="module")
@@ -49,8 +58,9 @@ def test_every_documented_line_of_the_route_is_run_by_a_test():
     assert documented == set(TESTED)
 
 
-@pytest.mark.parametrize("path", [p for p in DOCUMENTS if p.suffix in (".md", ".py") and p.parent.name != "scripts"],
-                         ids=lambda p: p.name)
+@pytest.mark.parametrize(
+    "path", [p for p in DOCUMENTS if p.suffix in (".md", ".py") and p.parent.name != "scripts"], ids=lambda p: p.name
+)
 def test_every_blender_line_has_the_route_beside_it(path):
     """In each shell block of the docs with `blender` lines (each example's docstring), as many route lines."""
     text = path.read_text()
@@ -127,11 +137,19 @@ def test_user_folder_option_comes_first(extension_zip, tmp_path):
     assert not (tmp_path / "other").exists()
 
 
-@pytest.mark.parametrize("args, message", [
-    ("", "give a subcommand"), ("smooth a.ply", "give a subcommand"), ("install", "install takes one extension zip"),
-    ("install missing.zip", "missing.zip does not exist"), ("run", "usage: run"),
-    ("run examples/batch_from_script.py a.ply", "usage: run"), ("run nothing.py", "no script nothing.py"),
-    ("run missing.blend examples/smooth_with_operators.py", "no file missing.blend")])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        ("", "give a subcommand"),
+        ("smooth a.ply", "give a subcommand"),
+        ("install", "install takes one extension zip"),
+        ("install missing.zip", "missing.zip does not exist"),
+        ("run", "usage: run"),
+        ("run examples/batch_from_script.py a.ply", "usage: run"),
+        ("run nothing.py", "no script nothing.py"),
+        ("run missing.blend examples/smooth_with_operators.py", "no file missing.blend"),
+    ],
+)
 def test_usage_errors_say_what_is_wrong_and_exit_2(user_folder, tmp_path, args, message):
     completed = run_line(f"{ROUTE} {args}".strip(), workdir(tmp_path), user_env(user_folder))
     assert completed.returncode == 2 and message in completed.stderr, completed.stderr

@@ -9,10 +9,9 @@ import sys
 import bpy
 import numpy as np
 import pytest
+from blender_scene import ADDON, make_mesh_object, noisy_sphere, positions_of, select_only
 
 import core
-from blender_scene import make_mesh_object, noisy_sphere, positions_of, select_only
-from blender_scene import ADDON
 
 FORMATS = ("ply", "obj", "stl")
 
@@ -69,9 +68,27 @@ def test_registered_with_blenders_command_registry(cli, monkeypatch):
 def test_help(cli, capsys):
     assert cli.main(["--help"]) == 0
     text = capsys.readouterr().out
-    for option in ("--output-dir", "--in-place", "--format", "--overwrite", "--method", "--alpha", "--beta",
-                   "--iterations", "--mode", "--fixed-group", "--invert-group", "--pin-boundary", "--points",
-                   "--object", "--rounds", "--steps-per-round", "--neighbours", "--reach", "--gap"):
+    for option in (
+        "--output-dir",
+        "--in-place",
+        "--format",
+        "--overwrite",
+        "--method",
+        "--alpha",
+        "--beta",
+        "--iterations",
+        "--mode",
+        "--fixed-group",
+        "--invert-group",
+        "--pin-boundary",
+        "--points",
+        "--object",
+        "--rounds",
+        "--steps-per-round",
+        "--neighbours",
+        "--reach",
+        "--gap",
+    ):
         assert option in text
     assert "Existing files are never replaced" in text and "keeps the input" in text
 
@@ -108,41 +125,59 @@ def test_options_are_built_from_the_declarations(addon, tmp_path, monkeypatch):
             assert given[setting.name] == bound, flag
             with pytest.raises(arguments.UsageError):
                 arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", str(bound + beyond)])
-    assert set(arguments.MESH_ONLY) == {name.replace("-", "_") for name in declared_options(spec)
-                                        if name not in points}
+    assert set(arguments.MESH_ONLY) == {name.replace("-", "_") for name in declared_options(spec) if name not in points}
     # The plain settings the command line hands to the job code start from the declared defaults.
     point_settings = sys.modules[ADDON + ".operators.point_cloud"].PointSettings()
     for plain, declared in ((arguments.Settings(), spec.MESH), (point_settings, spec.POINTS)):
         assert vars(plain) == {s.name: s.default for s in declared}
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["a.ply"], "either -o OUTDIR or --in-place"),
-    (["a.ply", "-o", "out", "--in-place"], "either -o OUTDIR or --in-place"),
-    (["a.ply", "-o", "out", "--alpha", "1.5"], "outside [0, 1]"),
-    (["a.ply", "-o", "out", "--iterations", "-1"], "negative"),
-    (["a.ply", "-o", "out", "--invert-group"], "--invert-group needs --fixed-group"),
-    (["a.ply", "-o", "out", "--method", "taubin"], "invalid choice"),
-    (["x/a.ply", "y/a.ply", "-o", "out"], "would both be written"),
-    # Numbers that are not finite pass no range check by comparison: refused by name, before any file is read.
-    (["a.ply", "-o", "out", "--tolerance", "inf"], "inf is not a finite number"),
-    (["a.ply", "-o", "out", "--tolerance", "nan"], "nan is not a finite number"),
-    (["a.ply", "-o", "out", "--alpha", "nan"], "nan is not a finite number"),
-    (["a.ply", "-o", "out", "--beta=-inf"], "-inf is not a finite number"),
-    (["a.ply", "-o", "out", "--points", "--reach", "inf"], "inf is not a finite number"),
-    (["a.ply", "-o", "out", "--points", "--gap", "0"], "0 is below 0.1"),  # the operator's Gap minimum
-    (["a.ply", "-o", "out", "--points", "--steps-per-round", "0"], "0 is below 1"),
-    (["a.ply", "-o", "out", "--points", "--reach", "4"], "--reach (4) must not exceed --gap (3)"),
-    # --object picks objects inside .blend files; with none among the inputs it would do nothing.
-    (["a.ply", "b.obj", "-o", "out", "--object", "Scan"], "no input is a .blend file"),
-    # Mesh-only options mean nothing to the point smoother, and point options nothing to meshes.
-    (["a.ply", "-o", "out", "--points", "--iterations", "20"], "--iterations does not apply to point clouds"),
-    (["a.ply", "-o", "out", "--points", "--mode", "sequential", "--tolerance", "0.1", "--method", "laplacian",
-      "--pin-boundary"], "--mode, --tolerance, --method, --pin-boundary do not apply to point clouds (--points): "
-                         "they take --alpha, --beta, --rounds"),
-    (["a.ply", "-o", "out", "--rounds", "2", "--reach", "2"], "--rounds, --reach apply to point clouds only: "
-                                                                "add --points"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["a.ply"], "either -o OUTDIR or --in-place"),
+        (["a.ply", "-o", "out", "--in-place"], "either -o OUTDIR or --in-place"),
+        (["a.ply", "-o", "out", "--alpha", "1.5"], "outside [0, 1]"),
+        (["a.ply", "-o", "out", "--iterations", "-1"], "negative"),
+        (["a.ply", "-o", "out", "--invert-group"], "--invert-group needs --fixed-group"),
+        (["a.ply", "-o", "out", "--method", "taubin"], "invalid choice"),
+        (["x/a.ply", "y/a.ply", "-o", "out"], "would both be written"),
+        # Numbers that are not finite pass no range check by comparison: refused by name, before any file is read.
+        (["a.ply", "-o", "out", "--tolerance", "inf"], "inf is not a finite number"),
+        (["a.ply", "-o", "out", "--tolerance", "nan"], "nan is not a finite number"),
+        (["a.ply", "-o", "out", "--alpha", "nan"], "nan is not a finite number"),
+        (["a.ply", "-o", "out", "--beta=-inf"], "-inf is not a finite number"),
+        (["a.ply", "-o", "out", "--points", "--reach", "inf"], "inf is not a finite number"),
+        (["a.ply", "-o", "out", "--points", "--gap", "0"], "0 is below 0.1"),  # the operator's Gap minimum
+        (["a.ply", "-o", "out", "--points", "--steps-per-round", "0"], "0 is below 1"),
+        (["a.ply", "-o", "out", "--points", "--reach", "4"], "--reach (4) must not exceed --gap (3)"),
+        # --object picks objects inside .blend files; with none among the inputs it would do nothing.
+        (["a.ply", "b.obj", "-o", "out", "--object", "Scan"], "no input is a .blend file"),
+        # Mesh-only options mean nothing to the point smoother, and point options nothing to meshes.
+        (["a.ply", "-o", "out", "--points", "--iterations", "20"], "--iterations does not apply to point clouds"),
+        (
+            [
+                "a.ply",
+                "-o",
+                "out",
+                "--points",
+                "--mode",
+                "sequential",
+                "--tolerance",
+                "0.1",
+                "--method",
+                "laplacian",
+                "--pin-boundary",
+            ],
+            "--mode, --tolerance, --method, --pin-boundary do not apply to point clouds (--points): "
+            "they take --alpha, --beta, --rounds",
+        ),
+        (
+            ["a.ply", "-o", "out", "--rounds", "2", "--reach", "2"],
+            "--rounds, --reach apply to point clouds only: add --points",
+        ),
+    ],
+)
 def test_usage_errors(cli, capsys, tmp_path, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)
     assert cli.main(argv) == 2
@@ -176,8 +211,9 @@ def test_smooths_each_format_like_the_operator(cli, capsys, tmp_path, fmt):
     assert not np.allclose(expected, positions)  # it did smooth
     tolerance = 2e-6 if fmt == "obj" else 0  # OBJ stores 6 decimals; PLY/STL float32 round-trip exactly
     np.testing.assert_allclose(result, expected, rtol=0, atol=tolerance)
-    np.testing.assert_allclose(result, core.hc_smooth(positions, edges, alpha=0.1, beta=0.7, iterations=7),
-                               rtol=0, atol=tolerance + 1e-5)
+    np.testing.assert_allclose(
+        result, core.hc_smooth(positions, edges, alpha=0.1, beta=0.7, iterations=7), rtol=0, atol=tolerance + 1e-5
+    )
     assert leftovers(tmp_path / "out") == []
 
 
@@ -194,8 +230,9 @@ def test_automatic_amount_unless_alpha_or_iterations_given(cli, tmp_path):
     for option, alpha, iterations in ((["--iterations", "3"], 0.1, 3), (["--alpha", "0.2"], 0.2, 10)):
         assert cli.main([str(source), "-o", str(tmp_path / option[0][2:]), *option]) == 0
         result, _ = import_positions(tmp_path / option[0][2:] / "scan.ply")
-        expected = core.hc_smooth(positions, edges, alpha=float(np.float32(alpha)), beta=float(np.float32(0.6)),
-                                  iterations=iterations)
+        expected = core.hc_smooth(
+            positions, edges, alpha=float(np.float32(alpha)), beta=float(np.float32(0.6)), iterations=iterations
+        )
         np.testing.assert_array_equal(result, expected)
 
 
@@ -333,8 +370,26 @@ def test_points_take_the_point_options_and_report_the_real_amount(cli, capsys, t
     source = export_points(tmp_path / "points.ply", sphere_points())
     before, _ = import_positions(source)
     out = tmp_path / "out"
-    argv = [str(source), "-o", str(out), "--points", "--alpha", "0.05", "--beta", "0.6", "--rounds", "2",
-            "--steps-per-round", "5", "--neighbours", "12", "--reach", "2", "--gap", "4"]
+    argv = [
+        str(source),
+        "-o",
+        str(out),
+        "--points",
+        "--alpha",
+        "0.05",
+        "--beta",
+        "0.6",
+        "--rounds",
+        "2",
+        "--steps-per-round",
+        "5",
+        "--neighbours",
+        "12",
+        "--reach",
+        "2",
+        "--gap",
+        "4",
+    ]
     assert cli.main(argv) == 0
     text = capsys.readouterr().out
     assert "1000 points, 2 rounds of 5 steps (10 steps)" in text
@@ -342,8 +397,16 @@ def test_points_take_the_point_options_and_report_the_real_amount(cli, capsys, t
     (row,) = [line for line in text.splitlines() if line.startswith(str(source)) and "->" not in line]
     assert "2 rounds of 5 steps" in row  # the summary table
     after, _ = import_positions(out / "points.ply")
-    expected = core.smooth_point_cloud(before, alpha=0.05, beta=0.6, rounds=2, iterations_per_round=5,
-                                       neighbours=12, spacing_factor=2.0, gap_factor=4.0)
+    expected = core.smooth_point_cloud(
+        before,
+        alpha=0.05,
+        beta=0.6,
+        rounds=2,
+        iterations_per_round=5,
+        neighbours=12,
+        spacing_factor=2.0,
+        gap_factor=4.0,
+    )
     assert not np.allclose(expected, before)
     assert np.array_equal(after, expected)
     # Without an amount the run follows the noise, as the operator's Automatic Amount; the line says what ran.
@@ -379,10 +442,13 @@ def test_points_missing_group_fails_the_file(cli, capsys, tmp_path):
     assert not out.exists()
 
 
-@pytest.mark.parametrize("points, message", [
-    (np.ones((100, 3), np.float32), "All 100 points of 'points' coincide: nothing to smooth"),
-    (np.zeros((1, 3), np.float32), "'points' is a single point: nothing to smooth"),
-])
+@pytest.mark.parametrize(
+    "points, message",
+    [
+        (np.ones((100, 3), np.float32), "All 100 points of 'points' coincide: nothing to smooth"),
+        (np.zeros((1, 3), np.float32), "'points' is a single point: nothing to smooth"),
+    ],
+)
 def test_points_with_nothing_to_smooth_fail_without_output(cli, capsys, tmp_path, points, message):
     source = export_points(tmp_path / "points.ply", points)
     out = tmp_path / "out"
@@ -393,6 +459,7 @@ def test_points_with_nothing_to_smooth_fail_without_output(cli, capsys, tmp_path
 
 
 # Data safety: nothing but the input itself under --in-place is ever replaced without --overwrite.
+
 
 def snapshot(folder):
     return {name: digest(os.path.join(folder, name)) for name in sorted(os.listdir(folder))}
@@ -489,8 +556,13 @@ def test_stale_temporaries_of_killed_runs_are_removed(cli, capsys, tmp_path):
     out.mkdir()
     dead, alive = dead_pid(), os.getppid()
     stale = [f".scan.hc_smooth-{dead}.ply", f".old.hc_smooth-{dead}.obj.tmp", f".old.hc_smooth-{dead}.mtl"]
-    kept = [f".scan.hc_smooth-{os.getpid()}.stl", f".other.hc_smooth-{alive}.ply",  # their runs may be writing
-            ".notes.hc_smooth-abc.ply", ".keep", "mine.ply"]  # not a pid, or not our pattern at all
+    kept = [
+        f".scan.hc_smooth-{os.getpid()}.stl",
+        f".other.hc_smooth-{alive}.ply",  # their runs may be writing
+        ".notes.hc_smooth-abc.ply",
+        ".keep",
+        "mine.ply",
+    ]  # not a pid, or not our pattern at all
     for name in stale + kept:
         (out / name).write_text("x")
     assert cli.main([str(source), "-o", str(out)]) == 0

@@ -9,11 +9,18 @@ import sys
 import bpy
 import numpy as np
 import pytest
-
 from blender_scene import ADDON, faces_of, noisy_sphere, positions_of, select_only
 
-PLY_TYPES = {"char": "i1", "uchar": "u1", "short": "i2", "ushort": "u2", "int": "i4", "uint": "u4",
-             "float": "f4", "double": "f8"}
+PLY_TYPES = {
+    "char": "i1",
+    "uchar": "u1",
+    "short": "i2",
+    "ushort": "u2",
+    "int": "i4",
+    "uint": "u4",
+    "float": "f4",
+    "double": "f8",
+}
 
 
 @pytest.fixture
@@ -296,7 +303,7 @@ def test_blender_messages_of_a_failed_file_follow_its_line(cli, capfd, tmp_path)
     lines = capfd.readouterr().out.splitlines()
     failed = next(i for i, line in enumerate(lines) if line.startswith("[1/2]"))
     assert "FAILED" in lines[failed]
-    following = lines[failed + 1:lines.index(next(line for line in lines if line.startswith("[2/2]")))]
+    following = lines[failed + 1 : lines.index(next(line for line in lines if line.startswith("[2/2]")))]
     assert following and all(line.startswith("  blender: ") for line in following)
     assert any("PLY import of 'broken.ply'" in line for line in following)  # the importer's own report
     assert not any("PLY import of 'a.ply'" in line for line in lines)  # a file that went well says nothing more
@@ -331,8 +338,11 @@ def test_a_failed_write_removes_the_folder_it_created(cli, capsys, tmp_path, mon
     other = tmp_path / "other.obj"
     export_sphere(other)
     rename = cli.files._rename_material_library
-    monkeypatch.setattr(cli.files, "_rename_material_library",
-                        lambda path, companions: disk_full() if "other" in path else rename(path, companions))
+    monkeypatch.setattr(
+        cli.files,
+        "_rename_material_library",
+        lambda path, companions: disk_full() if "other" in path else rename(path, companions),
+    )
     assert cli.main([str(source), str(other), "-o", str(out)]) == 1
     assert sorted(os.listdir(out)) == ["scan.mtl", "scan.obj"]
 

@@ -10,8 +10,10 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 PERCENT = r"([-+]\d+\.\d+) %"
-ROW = re.compile(rf"^(Noisy|Laplacian|Laplacian, least error|HC, α [\d.]+, β [\d.]+|HC, operator defaults)"
-                 rf"\s+(\d+)\s+(?:{PERCENT}\s+)?{PERCENT}\s+(\d+\.\d+) %\s+{PERCENT}\s+(\d+\.\d+) %")
+ROW = re.compile(
+    rf"^(Noisy|Laplacian|Laplacian, least error|HC, α [\d.]+, β [\d.]+|HC, operator defaults)"
+    rf"\s+(\d+)\s+(?:{PERCENT}\s+)?{PERCENT}\s+(\d+\.\d+) %\s+{PERCENT}\s+(\d+\.\d+) %"
+)
 REPORT = re.compile(r"^\s+(?:Laplacian|HC) on '(.+)': .*, volume ([-+]\d+\.\d+)%$")
 
 
@@ -19,16 +21,36 @@ REPORT = re.compile(r"^\s+(?:Laplacian|HC) on '(.+)': .*, volume ([-+]\d+\.\d+)%
 def demo(tmp_path_factory):
     """One run with a tiny picture: the whole path, render included, in seconds."""
     out = tmp_path_factory.mktemp("demo")
-    run = subprocess.run([sys.executable, str(ROOT / "demo" / "demo.py"), "--iterations", "10", "--samples", "1",
-                          "--scale", "10", "--output-dir", str(out)], capture_output=True, text=True, timeout=300)
+    run = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "demo" / "demo.py"),
+            "--iterations",
+            "10",
+            "--samples",
+            "1",
+            "--scale",
+            "10",
+            "--output-dir",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     rows = {}
     for line in run.stdout.splitlines():
         match = ROW.match(line)
         if match:
             name = "HC fixed" if match[1].startswith("HC, α") else match[1]
-            rows[name] = {"iterations": int(match[2]), "change": None if match[3] is None else float(match[3]),
-                          "vs_clean": float(match[4]), "rms": float(match[5]), "mean": float(match[6])}
+            rows[name] = {
+                "iterations": int(match[2]),
+                "change": None if match[3] is None else float(match[3]),
+                "vs_clean": float(match[4]),
+                "rms": float(match[5]),
+                "mean": float(match[6]),
+            }
     reports = {match[1]: float(match[2]) for match in map(REPORT.match, run.stdout.splitlines()) if match}
     return run, out, rows, reports
 
@@ -50,8 +72,11 @@ def test_demo_prints_a_table_where_hc_keeps_the_volume_laplacian_loses(demo):
 
 def test_the_table_and_the_operator_report_the_same_volume_change(demo):
     run, _, rows, reports = demo
-    names = {"Laplacian": "Laplacian", "Laplacian, least error": "Laplacian, least error",
-             "HC, operator defaults": "HC, operator defaults"}
+    names = {
+        "Laplacian": "Laplacian",
+        "Laplacian, least error": "Laplacian, least error",
+        "HC, operator defaults": "HC, operator defaults",
+    }
     names.update({name: "HC fixed" for name in reports if name.startswith("HC, α")})
     assert set(reports) == set(names), run.stdout  # a volume for every run: the mesh is closed
     for report_name, row in names.items():

@@ -35,9 +35,21 @@ def dist_zip(tmp_path_factory):
     work = tmp_path_factory.mktemp("dist")
     (work / "tmp").mkdir()
     completed = subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "dist.py"), "--output-dir", str(work / "dist"),
-         "--cache", str(ROOT / "build" / "wheels"), "--platform", HOST],
-        capture_output=True, text=True, timeout=900, env={**os.environ, "TMPDIR": str(work / "tmp")})
+        [
+            sys.executable,
+            str(ROOT / "scripts" / "dist.py"),
+            "--output-dir",
+            str(work / "dist"),
+            "--cache",
+            str(ROOT / "build" / "wheels"),
+            "--platform",
+            HOST,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env={**os.environ, "TMPDIR": str(work / "tmp")},
+    )
     assert completed.returncode == 0, completed.stdout + completed.stderr
     assert not list((work / "tmp").iterdir()), "dist.py left its staging folder"
     zips = sorted((work / "dist").glob("hc_smooth-*.zip"))
@@ -52,13 +64,16 @@ def test_zip_for_this_platform_with_both_pythons_and_no_numpy(dist_zip):
     names = zipfile.ZipFile(path).namelist()
     wheels = sorted(name for name in names if name.endswith(".whl"))
     assert [name.split("-")[:3] for name in wheels] == [
-        ["wheels/scipy", "1.15.3", "cp311"], ["wheels/scipy", wheels[1].split("-")[1], "cp313"]]
+        ["wheels/scipy", "1.15.3", "cp311"],
+        ["wheels/scipy", wheels[1].split("-")[1], "cp313"],
+    ]
     assert wheels[1].split("-")[1].startswith("1.17.")
     tag = {"windows-x64": "win_amd64", "macos-x64": "_x86_64", "macos-arm64": "_arm64", "linux-x64": "linux"}[HOST]
     assert all(tag in name for name in wheels), wheels
     assert not any("numpy" in name.lower() for name in names)
-    assert not any(name.split("/")[0] in {"tests", "bench", "docs", "examples", "scripts", ".ci", "demo"}
-                   for name in names)
+    assert not any(
+        name.split("/")[0] in {"tests", "bench", "docs", "examples", "scripts", ".ci", "demo"} for name in names
+    )
     assert "cli/command.py" in names and "core/__init__.py" in names
     manifest = tomllib.loads(zipfile.ZipFile(path).read("blender_manifest.toml").decode())
     assert manifest["platforms"] == [HOST] and len(manifest["wheels"]) == 2
@@ -66,11 +81,13 @@ def test_zip_for_this_platform_with_both_pythons_and_no_numpy(dist_zip):
 
 def fake_pip_download(requested):
     """Stands in for `pip download`: records the platform tags asked for and writes an empty wheel."""
+
     def run(command, check):
         tags = [command[i + 1] for i, arg in enumerate(command) if arg == "--platform"]
         requested.append(tags)
         dest = pathlib.Path(command[command.index("--dest") + 1])
         (dest / f"scipy-1.0-{command[command.index('--python-version') + 1]}-{tags[0]}.whl").touch()
+
     return run
 
 
@@ -92,12 +109,15 @@ def test_make_dist_still_builds_every_platform(tmp_path, monkeypatch):
 
 
 def test_zip_for_this_platform_installs_and_uses_its_own_scipy(dist_zip, tmp_path):
-    completed = subprocess.run([sys.executable, str(pathlib.Path(__file__).with_name("dist_driver.py")),
-                                str(dist_zip[0]), str(tmp_path)],
-                               capture_output=True, text=True, timeout=300)
+    completed = subprocess.run(
+        [sys.executable, str(pathlib.Path(__file__).with_name("dist_driver.py")), str(dist_zip[0]), str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     lines = [line for line in completed.stdout.splitlines() if line.startswith("REPORT ")]
     assert lines, completed.stdout + completed.stderr
-    report = json.loads(lines[-1][len("REPORT "):])
+    report = json.loads(lines[-1][len("REPORT ") :])
     assert "error" not in report, report
     assert report["install"] == ["FINISHED"] and report["enabled"]
     site = report["site_packages"]
@@ -110,7 +130,8 @@ def test_zip_for_this_platform_installs_and_uses_its_own_scipy(dist_zip, tmp_pat
     expected = "1.15.3" if python == "cp311" else "1.17."
     assert report["scipy_version"].startswith(expected)
     assert [name for name in report["dist_infos"] if name.startswith("scipy")] == [
-        f"scipy-{report['scipy_version']}.dist-info"]
+        f"scipy-{report['scipy_version']}.dist-info"
+    ]
     assert "numpy" not in " ".join(report["dist_infos"]).lower()
     assert "/extensions/user_default/hc_smooth/core/" in report["extension_core_file"]
     assert report["operator"] == ["FINISHED"] and report["operator_moved"] > 100

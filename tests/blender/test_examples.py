@@ -15,7 +15,6 @@ import sys
 import bpy
 import numpy as np
 import pytest
-
 from blender_scene import noisy_sphere, positions_of, select_only
 from bpy_route import ROUTE, install_documented, run_line, user_env, workdir
 
@@ -40,8 +39,9 @@ def work(scene, tmp_path):
     bpy.ops.wm.save_as_mainfile(filepath=str(folder / "scene.blend"), copy=True)
     (folder / "scans").mkdir()
     select_only(obj)
-    bpy.ops.wm.ply_export(filepath=str(folder / "scans" / "scan.ply"), export_selected_objects=True,
-                          export_uv=False, export_normals=False)
+    bpy.ops.wm.ply_export(
+        filepath=str(folder / "scans" / "scan.ply"), export_selected_objects=True, export_uv=False, export_normals=False
+    )
     bpy.ops.wm.read_homefile(use_empty=True)
     return folder
 
@@ -61,6 +61,7 @@ def mesh_positions(blend, name):
 
 
 # --- Blender as a Python module: the documented lines, as subprocesses -----------------------------------
+
 
 def test_operators_example_try_out(work, user_folder):
     completed = run_line(OPERATORS_TRY, work, user_env(user_folder))
@@ -103,8 +104,14 @@ def test_batch_example_runs_the_command(work, user_folder):
 
 def run_directly(example, cwd, env, *args):
     """`python examples/NAME.py -- ARGS` in a Python with bpy: no route, nothing enabled beforehand."""
-    return subprocess.run([sys.executable, str(EXAMPLES / example), *(["--", *args] if args else [])],
-                          cwd=cwd, env=env, capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [sys.executable, str(EXAMPLES / example), *(["--", *args] if args else [])],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def test_examples_enable_an_installed_hc_smooth_themselves(work, user_folder):
@@ -116,8 +123,7 @@ def test_examples_enable_an_installed_hc_smooth_themselves(work, user_folder):
     assert operators.returncode == 0 and "smoothed 'Scan' (642 vertices)" in operators.stdout, operators.stderr
 
 
-@pytest.mark.parametrize("example", ["batch_from_script.py", "smooth_arrays_with_core.py",
-                                     "smooth_with_operators.py"])
+@pytest.mark.parametrize("example", ["batch_from_script.py", "smooth_arrays_with_core.py", "smooth_with_operators.py"])
 def test_examples_say_when_hc_smooth_is_not_installed(example, tmp_path):
     completed = run_directly(example, tmp_path, user_env(tmp_path / "empty"), "scan.ply", "-o", "out")
     assert completed.returncode == 1
@@ -127,12 +133,15 @@ def test_examples_say_when_hc_smooth_is_not_installed(example, tmp_path):
 
 def test_examples_share_one_way_to_find_hc_smooth():
     """Each example is standalone, so each carries hc_smooth_package(): the copies must not drift."""
-    bodies = {re.search(r"\ndef hc_smooth_package\(\):\n(?:    .*\n|\n)+", (EXAMPLES / name).read_text())[0]
-              for name in ("batch_from_script.py", "smooth_arrays_with_core.py", "smooth_with_operators.py")}
+    bodies = {
+        re.search(r"\ndef hc_smooth_package\(\):\n(?:    .*\n|\n)+", (EXAMPLES / name).read_text())[0]
+        for name in ("batch_from_script.py", "smooth_arrays_with_core.py", "smooth_with_operators.py")
+    }
     assert len(bodies) == 1
 
 
 # --- As `blender -b --python` runs them: HC Smooth already enabled (in this process) ---------------------
+
 
 def run_example(name, monkeypatch, *args):
     argv = ["blender", "-b", "--python", str(EXAMPLES / name)] + (["--", *args] if args else [])

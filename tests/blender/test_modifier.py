@@ -10,17 +10,25 @@ import importlib
 import bpy
 import numpy as np
 import pytest
+from blender_scene import ADDON, edges_of, noisy_grid, noisy_sphere, positions_of, select_only
+from test_ui import RecordingLayout
 
 import core
-from blender_scene import ADDON, edges_of, make_mesh_object, noisy_grid, noisy_sphere, positions_of, select_only
-from test_ui import RecordingLayout
 
 ALPHA, BETA = 0.25, 0.7  # away from the defaults, so a default left in place would show
 ITERATIONS = 10
 TOLERANCE = 1e-5  # of the bounding-box diagonal: single-precision rounding after 10 iterations
 CORE_METHOD = {"HC": "hc", "LAPLACIAN": "plain", "LAPLACIAN_CENTRAL": "central", "LAPLACIAN_ORIGINAL": "original"}
-INPUT_NAMES = ("Method", "Alpha", "Beta", "Iterations", "Fixed Group", "Invert Fixed Group", "Pin Boundary",
-               "Influence")
+INPUT_NAMES = (
+    "Method",
+    "Alpha",
+    "Beta",
+    "Iterations",
+    "Fixed Group",
+    "Invert Fixed Group",
+    "Pin Boundary",
+    "Influence",
+)
 
 
 def manual(**settings):
@@ -87,8 +95,9 @@ def add_modifier(obj, **settings):
 def expected(obj, method, fixed=None, **core_options):
     options = dict(alpha=f32(ALPHA), beta=f32(BETA), iterations=ITERATIONS)
     options.update(core_options)
-    return core.smooth(positions_of(obj.data), edges_of(obj.data), method=CORE_METHOD[method], fixed=fixed,
-                       **options).positions
+    return core.smooth(
+        positions_of(obj.data), edges_of(obj.data), method=CORE_METHOD[method], fixed=fixed, **options
+    ).positions
 
 
 def check_equals_core(obj, method, fixed=None, **settings):
@@ -155,6 +164,7 @@ MESHES = {
 
 # --- exactness -------------------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("method", CORE_METHOD)
 @pytest.mark.parametrize("shape", MESHES)
 def test_modifier_equals_core(scene, shape, method):
@@ -220,6 +230,7 @@ def test_zero_iterations_and_alpha_one_leave_the_mesh(scene):
 
 
 # --- adding it, names for scripts, one group per file ----------------------------------------------------
+
 
 def test_operator_adds_to_every_selected_mesh_with_one_group(scene):
     a, b = noisy_sphere("A"), noisy_grid("B")
@@ -297,12 +308,14 @@ def test_a_group_of_the_same_name_without_the_marker_is_left_alone(scene):
 
 # --- apply = operator; Add as Modifier ------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("method", CORE_METHOD)
 def test_applying_gives_what_the_operator_gives(scene, method):
     obj = noisy_grid("Patch")
     obj.vertex_groups.new(name="Keep").add(list(range(0, 30)), 1.0, "REPLACE")
-    settings = dict(method=method, alpha=ALPHA, beta=BETA, iterations=ITERATIONS, vertex_group="Keep",
-                    pin_boundary=True)
+    settings = dict(
+        method=method, alpha=ALPHA, beta=BETA, iterations=ITERATIONS, vertex_group="Keep", pin_boundary=True
+    )
     twin = obj.copy()
     twin.data = obj.data.copy()
     bpy.context.scene.collection.objects.link(twin)
@@ -321,8 +334,9 @@ def test_redo_panel_offers_add_as_modifier_with_the_same_settings(scene):
     select_only(obj)
     # Called as a click does (invoked, with its undo step, see test_undo.py): then it is the last operator.
     bpy.ops.ed.undo_push(message="Before")
-    bpy.ops.object.hc_smooth("INVOKE_DEFAULT", True, **manual(method="LAPLACIAN_ORIGINAL", alpha=0.3, iterations=7,
-                                                              pin_boundary=True))
+    bpy.ops.object.hc_smooth(
+        "INVOKE_DEFAULT", True, **manual(method="LAPLACIAN_ORIGINAL", alpha=0.3, iterations=7, pin_boundary=True)
+    )
     operator = bpy.context.window_manager.operators[-1]
     assert operator.bl_idname == "OBJECT_OT_hc_smooth"
     panel = redo_panel(operator)
@@ -361,8 +375,9 @@ def test_add_as_modifier_replaces_the_smoothing_just_made(scene):
     assert bpy.ops.object.hc_smooth("INVOKE_DEFAULT", True, **manual(**settings)) == {"FINISHED"}
     smoothed = positions_of(bpy.data.objects["Sphere"].data)
     assert not np.array_equal(smoothed, before)
-    assert bpy.ops.object.hc_smooth_modifier_add("INVOKE_DEFAULT", True, replace_smoothing=True,
-                                                 **settings) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth_modifier_add("INVOKE_DEFAULT", True, replace_smoothing=True, **settings) == {
+        "FINISHED"
+    }
     obj = bpy.data.objects["Sphere"]  # undo reloads the data: look it up again
     assert np.array_equal(positions_of(obj.data), before)  # the smoothing is gone...
     assert [modifier.name for modifier in obj.modifiers] == ["HC Smooth"]  # ...the modifier does it now
@@ -385,13 +400,16 @@ def test_replace_after_another_operation_only_adds(scene):
 
 # --- the panel and the Add Modifier menu ------------------------------------------------------------------
 
+
 def test_panel_button_and_add_modifier_menu_carry_the_scene_settings(scene):
     noisy_sphere()
     panel = module("ui.panel")
     settings = scene.hc_smooth
     settings.iterations, settings.method, settings.pin_boundary = 17, "LAPLACIAN_CENTRAL", True
-    for draw in (lambda layout: bpy.types.VIEW3D_PT_hc_smooth.draw(type("P", (), {"layout": layout})(), bpy.context),
-                 lambda layout: panel.draw_modifier_menu_entry(type("M", (), {"layout": layout})(), bpy.context)):
+    for draw in (
+        lambda layout: bpy.types.VIEW3D_PT_hc_smooth.draw(type("P", (), {"layout": layout})(), bpy.context),
+        lambda layout: panel.draw_modifier_menu_entry(type("M", (), {"layout": layout})(), bpy.context),
+    ):
         layout = RecordingLayout()
         draw(layout)
         ((idname, button),) = [entry for entry in layout.buttons() if entry[0] == "object.hc_smooth_modifier_add"]
@@ -405,6 +423,7 @@ def test_panel_button_and_add_modifier_menu_carry_the_scene_settings(scene):
 
 # --- a file with the modifier, opened without the add-on -------------------------------------------------
 
+
 def test_saved_file_evaluates_the_same_without_the_add_on(scene, tmp_path):
     obj = noisy_grid("Patch")
     obj.vertex_groups.new(name="Keep").add(list(range(10, 50)), 1.0, "REPLACE")
@@ -415,8 +434,9 @@ def test_saved_file_evaluates_the_same_without_the_add_on(scene, tmp_path):
     bpy.ops.preferences.addon_disable(module=ADDON)
     try:
         assert ADDON not in bpy.context.preferences.addons
-        assert not hasattr(bpy.ops.object, "hc_smooth_modifier_add") or \
-            not hasattr(bpy.types, "OBJECT_OT_hc_smooth_modifier_add")
+        assert not hasattr(bpy.ops.object, "hc_smooth_modifier_add") or not hasattr(
+            bpy.types, "OBJECT_OT_hc_smooth_modifier_add"
+        )
         bpy.ops.wm.open_mainfile(filepath=path)
         reopened = evaluated_positions(bpy.data.objects["Patch"])
     finally:

@@ -10,7 +10,6 @@ import subprocess
 import sys
 
 import bpy
-
 from bpy_route import ROOT, ROUTE, run_line, workdir
 
 SESSION_USER_FOLDER = pathlib.Path(os.environ["BLENDER_USER_RESOURCES"])  # set by conftest.py before bpy
@@ -48,9 +47,21 @@ def test_the_route_leaves_home_alone(addon, tmp_path):
 def test_the_demo_leaves_home_and_the_sessions_user_folder_alone(addon, tmp_path):
     env = isolated_env(tmp_path)
     before = snapshot(SESSION_USER_FOLDER)
-    run = subprocess.run([sys.executable, str(ROOT / "demo" / "demo.py"), "--no-render", "--iterations", "1",
-                          "--output-dir", str(tmp_path / "out")], env=env, capture_output=True, text=True,
-                         timeout=300)
+    run = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "demo" / "demo.py"),
+            "--no-render",
+            "--iterations",
+            "1",
+            "--output-dir",
+            str(tmp_path / "out"),
+        ],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     # Its own user folder is a fresh one, removed at its end, not the inherited one where this session's
     # add-on is loaded; the zip it installed is not left behind either.
@@ -61,6 +72,11 @@ def test_the_demo_leaves_home_and_the_sessions_user_folder_alone(addon, tmp_path
 
 def test_building_the_extension_leaves_home_alone(tmp_path):
     env = isolated_env(tmp_path)
-    subprocess.run([sys.executable, str(ROOT / "scripts" / "build_extension.py"), "--output-dir",
-                    str(tmp_path / "build")], env=env, check=True, capture_output=True, timeout=120)
+    subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "build_extension.py"), "--output-dir", str(tmp_path / "build")],
+        env=env,
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
     assert_left_alone(tmp_path)

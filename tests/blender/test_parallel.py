@@ -8,7 +8,6 @@ import time
 
 import bpy
 import pytest
-
 from blender_scene import ADDON, noisy_sphere, select_only
 from bpy_route import ROOT, ROUTE, install_documented, run_line, user_env, workdir
 
@@ -32,8 +31,12 @@ def make_scans(folder, count=SCANS):
     for seed in range(count):
         bpy.ops.wm.read_homefile(use_empty=True)
         select_only(noisy_sphere(name=f"scan{seed}", subdivisions=4, seed=seed))
-        bpy.ops.wm.ply_export(filepath=str(folder / f"scan{seed}.ply"), export_selected_objects=True,
-                              export_uv=False, export_normals=False)
+        bpy.ops.wm.ply_export(
+            filepath=str(folder / f"scan{seed}.ply"),
+            export_selected_objects=True,
+            export_uv=False,
+            export_normals=False,
+        )
 
 
 def run_documented_line(cwd, user_folder):

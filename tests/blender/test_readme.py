@@ -6,7 +6,7 @@ from bpy_route import ROOT
 
 README = (ROOT / "README.md").read_text()
 # Caches of tools, never committed and never meant for a reader.
-TOOL_CACHES = {".git", ".hypothesis", ".benchmarks", ".pytest_cache", "__pycache__"}
+TOOL_CACHES = {".git", ".hypothesis", ".benchmarks", ".pytest_cache", ".ruff_cache", "__pycache__"}
 
 
 def test_what_is_in_here_lists_every_top_level_folder():
@@ -18,6 +18,7 @@ def test_what_is_in_here_lists_every_top_level_folder():
 
 def test_every_make_target_a_reader_runs_is_in_the_readme():
     makefile = (ROOT / "Makefile").read_text()
-    for target in ("demo", "test", "test-core", "build", "dist", "envs", "env-bpy45", "env-bpy52", "clean"):
+    for target in ("demo", "test", "test-core", "lint", "format", "build", "dist", "envs", "env-bpy45", "env-bpy52",
+                   "clean"):
         assert re.search(rf"^{re.escape(target)}\b.*:", makefile, re.M) or f" {target}:" in makefile, target
         assert f"make {target}" in README, target

@@ -7,16 +7,14 @@ same calls (prop, operator, label) Blender would make, and the test inspects the
 import ast
 import importlib
 import os
-import sys
 import types
 
 import bpy
 import numpy as np
 import pytest
+from blender_scene import ADDON, noisy_grid, noisy_sphere, positions_of
 
 import core
-from blender_scene import noisy_grid, noisy_sphere, positions_of, select_only
-from blender_scene import ADDON
 
 OPERATORS = ("object.hc_smooth", "mesh.hc_smooth")
 
@@ -50,6 +48,7 @@ class RecordingLayout:
     def __getattr__(self, name):  # prop, prop_search, label, menu, separator, ...
         def call(*args, **kwargs):
             self.record.append((name, args, kwargs))
+
         return call
 
     def calls(self, kind):
@@ -83,8 +82,9 @@ def assert_built_from(prop, setting):
     for key, rna_key in limits.items():
         if getattr(setting, key) is not None:
             assert getattr(prop, rna_key) == np.float32(getattr(setting, key)), (setting.name, key)
-    assert [(item.identifier, item.name, item.description) for item in getattr(prop, "enum_items", ())] == \
-        [(choice.identifier, choice.label, choice.description) for choice in setting.items]
+    assert [(item.identifier, item.name, item.description) for item in getattr(prop, "enum_items", ())] == [
+        (choice.identifier, choice.label, choice.description) for choice in setting.items
+    ]
 
 
 @pytest.fixture
@@ -94,12 +94,15 @@ def settings(scene):
 
 # --- registration ---------------------------------------------------------------------------------------
 
+
 def test_scene_settings_and_operators_are_built_from_the_declarations(settings):
     spec = importlib.import_module(f"{ADDON}.settings_spec")
-    routes = {"scene.hc_smooth": (settings.bl_rna.properties, spec.MESH),
-              "object.hc_smooth": (bpy.ops.object.hc_smooth.get_rna_type().properties, spec.MESH),
-              "mesh.hc_smooth": (bpy.ops.mesh.hc_smooth.get_rna_type().properties, spec.MESH),
-              "object.hc_smooth_points": (bpy.ops.object.hc_smooth_points.get_rna_type().properties, spec.POINTS)}
+    routes = {
+        "scene.hc_smooth": (settings.bl_rna.properties, spec.MESH),
+        "object.hc_smooth": (bpy.ops.object.hc_smooth.get_rna_type().properties, spec.MESH),
+        "mesh.hc_smooth": (bpy.ops.mesh.hc_smooth.get_rna_type().properties, spec.MESH),
+        "object.hc_smooth_points": (bpy.ops.object.hc_smooth_points.get_rna_type().properties, spec.POINTS),
+    }
     inherited = {"rna_type", "name"}  # every struct's, and every PropertyGroup's
     for route, (properties, declared) in routes.items():
         assert {prop.identifier for prop in properties} - inherited == {s.name for s in declared}, route
@@ -128,8 +131,14 @@ def test_disable_removes_everything_enable_restores(addon):
     preset_dir = os.path.join(preset.PRESET_ROOT, "presets", "hc_smooth")
     bpy.ops.preferences.addon_disable(module=ADDON)
     try:
-        for name in ("VIEW3D_PT_hc_smooth", "VIEW3D_PT_hc_smooth_fixed", "HC_SMOOTH_MT_presets",
-                     "HC_SMOOTH_OT_preset_add", "HC_SMOOTH_OT_count_fixed", "HCSmoothSettings"):
+        for name in (
+            "VIEW3D_PT_hc_smooth",
+            "VIEW3D_PT_hc_smooth_fixed",
+            "HC_SMOOTH_MT_presets",
+            "HC_SMOOTH_OT_preset_add",
+            "HC_SMOOTH_OT_count_fixed",
+            "HCSmoothSettings",
+        ):
             assert not hasattr(bpy.types, name), name
         assert not hasattr(bpy.types.Scene, "hc_smooth")
         for menu, entry in entries:
@@ -143,6 +152,7 @@ def test_disable_removes_everything_enable_restores(addon):
 
 
 # --- the panel ------------------------------------------------------------------------------------------
+
 
 def test_panel_polls_in_object_and_edit_mode_only(scene):
     obj = noisy_sphere()
@@ -210,6 +220,7 @@ def test_convergence_status_follows_the_paper():
 
 # --- fixed vertices -------------------------------------------------------------------------------------
 
+
 def fixed_count_label(context):
     layout = draw(bpy.types.VIEW3D_PT_hc_smooth_fixed, context)
     return [text for text in layout.labels() if text.startswith("Fixed:")], layout
@@ -259,7 +270,7 @@ def test_large_meshes_are_counted_on_request(settings, monkeypatch):
     obj = noisy_grid(size=6)
     settings.pin_boundary = True
     labels, layout = fixed_count_label(bpy.context)
-    assert not labels and ("hc_smooth.count_fixed", ) == tuple(name for name, _ in layout.buttons())
+    assert not labels and ("hc_smooth.count_fixed",) == tuple(name for name, _ in layout.buttons())
     assert bpy.ops.hc_smooth.count_fixed() == {"FINISHED"}
     labels, _ = fixed_count_label(bpy.context)
     assert labels == [ui_module(".texts").count_line(grid_boundary_count(obj), len(obj.data.vertices))]
@@ -284,6 +295,7 @@ def test_edit_mode_counts_unselected_vertices(settings):
 
 # --- menus ----------------------------------------------------------------------------------------------
 
+
 def test_menu_entries_call_the_operator_of_the_mode(settings):
     noisy_sphere()
     panel = ui_module(".panel")
@@ -301,6 +313,7 @@ def test_menu_entries_call_the_operator_of_the_mode(settings):
 
 
 # --- presets --------------------------------------------------------------------------------------------
+
 
 def preset_assignments(path):
     """{name: value} of the `settings.name = value` lines of a preset file."""
@@ -331,7 +344,8 @@ def test_shipped_presets_apply_their_values(settings):
             assert getattr(settings, name) == expected, (path, name)
         assert (settings.vertex_group, settings.output) == ("Untouched", "SHAPE_KEY")
         assert bpy.types.HC_SMOOTH_MT_presets.bl_label == bpy.path.display_name(
-            os.path.splitext(os.path.basename(path))[0], title_case=False)
+            os.path.splitext(os.path.basename(path))[0], title_case=False
+        )
 
 
 def test_presets_are_ordered_by_noise_strength():
@@ -349,8 +363,12 @@ def test_add_apply_and_remove_a_user_preset(settings):
     assert os.path.dirname(path) == bpy.utils.user_resource("SCRIPTS", path=os.path.join("presets", "hc_smooth"))
     settings.alpha, settings.beta, settings.iterations, settings.mode = 0.1, 0.6, 10, "SIMULTANEOUS"
     assert apply_preset(path) == {"FINISHED"}
-    assert (settings.alpha, settings.beta, settings.iterations, settings.mode) == \
-        (pytest.approx(0.25), pytest.approx(0.75), 33, "SEQUENTIAL")
+    assert (settings.alpha, settings.beta, settings.iterations, settings.mode) == (
+        pytest.approx(0.25),
+        pytest.approx(0.75),
+        33,
+        "SEQUENTIAL",
+    )
     assert bpy.ops.hc_smooth.preset_add(name="My_Scanner", remove_name=True) == {"FINISHED"}
     assert not os.path.exists(path)
 
@@ -392,7 +410,10 @@ def test_redo_panels_draw_the_fixed_group_and_the_convergence_warning(scene, idn
     props.layout, props.beta = RecordingLayout(), 0.4
     operator_class.draw(props, bpy.context)
     # The N-panel's lines (one helper), for the smallest alpha the run can use.
-    alpha = importlib.import_module(f"{ADDON}.operators.point_cloud").lowest_alpha(props) if "points" in idname \
+    alpha = (
+        importlib.import_module(f"{ADDON}.operators.point_cloud").lowest_alpha(props)
+        if "points" in idname
         else props.alpha
+    )
     _, lines = importlib.import_module(f"{ADDON}.operators.properties").convergence_status("HC", alpha, 0.4)
     assert props.layout.labels() == lines and "Outside the convergence region:" in lines

@@ -21,11 +21,11 @@ import bmesh
 import bpy
 import numpy as np
 import pytest
-
 from blender_scene import make_mesh_object, noisy_grid, noisy_sphere, select_only
 
-HAS_POINT_CLOUD_CONVERT = "POINTCLOUD" in {item.identifier for item in
-                                            bpy.ops.object.convert.get_rna_type().properties["target"].enum_items}
+HAS_POINT_CLOUD_CONVERT = "POINTCLOUD" in {
+    item.identifier for item in bpy.ops.object.convert.get_rna_type().properties["target"].enum_items
+}
 
 
 def raw(array):
@@ -45,8 +45,10 @@ def snapshot():
         if obj.mode == "EDIT":
             obj.update_from_editmode()  # Edit-mode data lives in BMesh until written back
     state = {
-        "objects": sorted((o.name, o.type, o.data.name if o.data else None, o.mode, o.active_shape_key_index)
-                          for o in bpy.data.objects),
+        "objects": sorted(
+            (o.name, o.type, o.data.name if o.data else None, o.mode, o.active_shape_key_index)
+            for o in bpy.data.objects
+        ),
         "meshes": {},
         "keys": sorted(k.name for k in bpy.data.shape_keys),
         "point clouds": {},
@@ -54,15 +56,22 @@ def snapshot():
     for mesh in bpy.data.meshes:
         keys = None
         if mesh.shape_keys is not None:
-            keys = [(k.name, k.relative_key.name, k.value, k.mute, float_attribute(k.data, "co", len(k.data)))
-                    for k in mesh.shape_keys.key_blocks]
+            keys = [
+                (k.name, k.relative_key.name, k.value, k.mute, float_attribute(k.data, "co", len(k.data)))
+                for k in mesh.shape_keys.key_blocks
+            ]
         edges = np.empty(len(mesh.edges) * 2, dtype=np.int32)
         mesh.edges.foreach_get("vertices", edges)
-        state["meshes"][mesh.name] = (float_attribute(mesh.vertices, "co", len(mesh.vertices)), raw(edges),
-                                      len(mesh.polygons), keys)
+        state["meshes"][mesh.name] = (
+            float_attribute(mesh.vertices, "co", len(mesh.vertices)),
+            raw(edges),
+            len(mesh.polygons),
+            keys,
+        )
     for cloud in bpy.data.pointclouds:
-        state["point clouds"][cloud.name] = float_attribute(cloud.attributes["position"].data, "vector",
-                                                           len(cloud.points))
+        state["point clouds"][cloud.name] = float_attribute(
+            cloud.attributes["position"].data, "vector", len(cloud.points)
+        )
     return state
 
 
@@ -106,6 +115,7 @@ def noisy_cloud(name="Scan", n=800, seed=0):
 
 # Object mode (memfile undo)
 
+
 def test_object_mode_undo_restores_the_mesh(scene):
     noisy_sphere()
     before, after = check_undo_restores(bpy.ops.object.hc_smooth, ["meshes"], iterations=4)
@@ -129,8 +139,7 @@ def test_object_mode_undo_restores_several_objects(scene):
 
 def test_object_mode_undo_removes_the_new_shape_key(scene):
     noisy_sphere()
-    before, after = check_undo_restores(bpy.ops.object.hc_smooth, ["meshes", "keys"], output="SHAPE_KEY",
-                                        iterations=4)
+    before, after = check_undo_restores(bpy.ops.object.hc_smooth, ["meshes", "keys"], output="SHAPE_KEY", iterations=4)
     names = [k[0] for k in after["meshes"]["Sphere"][3]]
     assert names == ["Basis", "HC Smooth"] and before["meshes"]["Sphere"][3] is None
 
@@ -146,6 +155,7 @@ def test_object_mode_undo_removes_a_shape_key_added_to_existing_ones(scene):
 
 
 # Edit mode (the mesh undo system)
+
 
 def enter_edit_mode_as_from_the_ui(obj, select):
     """Tab into Edit mode with its undo step (as the UI pushes it), then select some vertices."""
@@ -185,6 +195,7 @@ def test_edit_mode_undo_restores_the_active_shape_key(scene):
 
 # Point clouds (memfile undo)
 
+
 def test_point_cloud_undo_restores_loose_vertices(scene):
     noisy_cloud()
     check_undo_restores(bpy.ops.object.hc_smooth_points, ["meshes"], rounds=2)
@@ -192,8 +203,9 @@ def test_point_cloud_undo_restores_loose_vertices(scene):
 
 def test_point_cloud_undo_removes_the_rfs_mesh(scene):
     noisy_cloud()
-    before, after = check_undo_restores(bpy.ops.object.hc_smooth_points, ["meshes", "objects"], rounds=2,
-                                        keep_rfs_mesh=True)
+    before, after = check_undo_restores(
+        bpy.ops.object.hc_smooth_points, ["meshes", "objects"], rounds=2, keep_rfs_mesh=True
+    )
     assert len(after["objects"]) == len(before["objects"]) + 1
 
 
@@ -206,6 +218,7 @@ def test_point_cloud_object_undo_restores_the_points(scene):
 
 
 # Adjust Last Operation (F9, the redo panel): undo to before the operator, run it again with the new values
+
 
 @pytest.mark.parametrize("mode", ["OBJECT", "EDIT"])
 def test_redo_panel_reruns_from_the_state_before(scene, mode):

@@ -7,8 +7,8 @@ from four points or a face's quality on its own.
 import numpy as np
 import scipy.sparse as sp
 
-
 # --- the umbrella operator and convergence (paper section 5) ----------------------------------------
+
 
 def umbrella_matrix(operator, dtype=np.float64):
     """T as CSR from an Umbrella's pattern: t_ij = 1/|adj(i)| for every edge {i, j}; rows of isolated
@@ -17,8 +17,9 @@ def umbrella_matrix(operator, dtype=np.float64):
     weights = np.zeros(operator.n_vertices, dtype=dtype)
     np.divide(1.0, degree, out=weights, where=degree > 0, casting="unsafe")
     data = np.repeat(weights, degree)
-    return sp.csr_matrix((data, operator.indices.copy(), operator.indptr.copy()),
-                         shape=(operator.n_vertices, operator.n_vertices))
+    return sp.csr_matrix(
+        (data, operator.indices.copy(), operator.indptr.copy()), shape=(operator.n_vertices, operator.n_vertices)
+    )
 
 
 def hc_iteration_matrix(operator, alpha, beta, movable=None):
@@ -40,6 +41,7 @@ def spectral_radius(matrix):
 
 
 # --- triangle geometry (RFS mesh, edge swapping) -----------------------------------------------------
+
 
 def _dot(x, y):
     return x[..., 0] * y[..., 0] + x[..., 1] * y[..., 1] + x[..., 2] * y[..., 2]

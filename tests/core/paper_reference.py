@@ -42,8 +42,11 @@ def smooth_loop(positions, edges, *, method, alpha=0.0, beta=0.5, iterations, mo
             elif method == "original":  # 3.3
                 new[i] = [alpha * o[i][k] + (1 - alpha) * avg[k] for k in range(3)]
         if method == "hc":  # Algorithm 1, second loop
-            b = {i: [new[i][k] - (alpha * o[i][k] + (1 - alpha) * q[i][k]) for k in range(3)]
-                 for i in range(n) if i not in fixed}
+            b = {
+                i: [new[i][k] - (alpha * o[i][k] + (1 - alpha) * q[i][k]) for k in range(3)]
+                for i in range(n)
+                if i not in fixed
+            }
             zero = [0.0, 0.0, 0.0]
             corrected = [list(v) for v in new]
             for i in range(n):

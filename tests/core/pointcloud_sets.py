@@ -14,10 +14,9 @@ def scan_lines(rows=8, per_row=300, seed=0):
     """Dense rows far apart (row gap ~50x the spacing along a row): a kNN graph is disconnected."""
     rng = np.random.default_rng(seed)
     x = np.linspace(0.0, 1.0, per_row)
-    return np.concatenate([
-        np.stack([x, np.full(per_row, y), 0.01 * rng.random(per_row)], axis=1)
-        for y in np.linspace(0.0, 1.0, rows)
-    ])
+    return np.concatenate(
+        [np.stack([x, np.full(per_row, y), 0.01 * rng.random(per_row)], axis=1) for y in np.linspace(0.0, 1.0, rows)]
+    )
 
 
 def sphere_rings(rings=40, per_ring=150, seed=0):

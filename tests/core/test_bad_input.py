@@ -2,9 +2,9 @@
 
 import numpy as np
 import pytest
+import small_meshes as sm
 
 import core
-import small_meshes as sm
 
 POSITIONS, FACES = sm.octahedron()
 EDGES = sm.edges_of(FACES)
@@ -17,29 +17,32 @@ def run(**overrides):
     return core.hc_smooth(positions, edges, **arguments)
 
 
-@pytest.mark.parametrize("overrides,message", [
-    (dict(positions=np.zeros((6, 2))), r"shape \(n, 3\)"),
-    (dict(positions=np.zeros(6)), r"shape \(n, 3\)"),
-    (dict(positions=np.zeros((6, 3), dtype=np.int64)), "float32 or float64"),
-    (dict(positions=np.where(np.arange(18).reshape(6, 3) == 4, np.nan, 0.0)), "NaN or infinite.*vertex 1"),
-    (dict(positions=np.full((6, 3), np.inf)), "NaN or infinite"),
-    (dict(edges=np.array([[0, 1, 2]])), r"shape \(m, 2\)"),
-    (dict(edges=np.array([[0.0, 1.0]])), "integer"),
-    (dict(edges=np.array([[0, 6]])), "vertex 6.*only 6 vertices"),
-    (dict(edges=np.array([[-1, 2]])), "vertex -1"),
-    (dict(alpha=-0.1), "alpha must lie between 0 and 1"),
-    (dict(beta=1.5), "beta must lie between 0 and 1"),
-    (dict(alpha=float("nan")), "alpha"),
-    (dict(alpha="0.5"), "alpha"),
-    (dict(iterations=-1), "iterations must be 0 or more"),
-    (dict(iterations=2.5), "whole number"),
-    (dict(mode="parallel"), "mode must be one of"),
-    (dict(fixed=np.zeros(5, dtype=bool)), "length 6"),
-    (dict(fixed=np.array([7])), "0..5"),
-    (dict(tolerance=-1.0), "tolerance"),
-    (dict(original=np.zeros((5, 3))), "original must have the shape"),
-    (dict(operator=core.umbrella_operator(EDGES, 7)), "built for 6 vertices"),
-])
+@pytest.mark.parametrize(
+    "overrides,message",
+    [
+        (dict(positions=np.zeros((6, 2))), r"shape \(n, 3\)"),
+        (dict(positions=np.zeros(6)), r"shape \(n, 3\)"),
+        (dict(positions=np.zeros((6, 3), dtype=np.int64)), "float32 or float64"),
+        (dict(positions=np.where(np.arange(18).reshape(6, 3) == 4, np.nan, 0.0)), "NaN or infinite.*vertex 1"),
+        (dict(positions=np.full((6, 3), np.inf)), "NaN or infinite"),
+        (dict(edges=np.array([[0, 1, 2]])), r"shape \(m, 2\)"),
+        (dict(edges=np.array([[0.0, 1.0]])), "integer"),
+        (dict(edges=np.array([[0, 6]])), "vertex 6.*only 6 vertices"),
+        (dict(edges=np.array([[-1, 2]])), "vertex -1"),
+        (dict(alpha=-0.1), "alpha must lie between 0 and 1"),
+        (dict(beta=1.5), "beta must lie between 0 and 1"),
+        (dict(alpha=float("nan")), "alpha"),
+        (dict(alpha="0.5"), "alpha"),
+        (dict(iterations=-1), "iterations must be 0 or more"),
+        (dict(iterations=2.5), "whole number"),
+        (dict(mode="parallel"), "mode must be one of"),
+        (dict(fixed=np.zeros(5, dtype=bool)), "length 6"),
+        (dict(fixed=np.array([7])), "0..5"),
+        (dict(tolerance=-1.0), "tolerance"),
+        (dict(original=np.zeros((5, 3))), "original must have the shape"),
+        (dict(operator=core.umbrella_operator(EDGES, 7)), "built for 6 vertices"),
+    ],
+)
 def test_bad_input_raises_value_error(overrides, message):
     positions = overrides.get("positions", POSITIONS)
     before = np.array(positions, copy=True)
@@ -57,13 +60,13 @@ def test_unknown_variant_and_method():
 
 @pytest.mark.parametrize("mode", core.MODES)
 def test_degenerate_but_valid_meshes(mode):
-    empty = core.hc_smooth(np.zeros((0, 3)), np.zeros((0, 2), dtype=int), alpha=0.1, beta=0.6, iterations=5,
-                           mode=mode)
+    empty = core.hc_smooth(np.zeros((0, 3)), np.zeros((0, 2), dtype=int), alpha=0.1, beta=0.6, iterations=5, mode=mode)
     assert empty.shape == (0, 3)
     no_edges = core.hc_smooth(POSITIONS, np.zeros((0, 2), dtype=int), alpha=0.1, beta=0.6, iterations=5, mode=mode)
     assert np.array_equal(no_edges, POSITIONS)  # every vertex isolated, hence fixed
-    all_fixed = core.smooth(POSITIONS, EDGES, alpha=0.1, beta=0.6, iterations=5, mode=mode,
-                            fixed=np.ones(6, dtype=bool))
+    all_fixed = core.smooth(
+        POSITIONS, EDGES, alpha=0.1, beta=0.6, iterations=5, mode=mode, fixed=np.ones(6, dtype=bool)
+    )
     assert np.array_equal(all_fixed.positions, POSITIONS)
     zero = core.smooth(POSITIONS, EDGES, alpha=0.1, beta=0.6, iterations=0, mode=mode)
     assert np.array_equal(zero.positions, POSITIONS) and zero.iterations == 0
@@ -108,5 +111,6 @@ def test_fixed_on_tiny_meshes():
     assert np.array_equal(both, two)
     # One vertex has no neighbours and never moves: [0] is read as its index, either reading is the same.
     lone = np.array([[1.0, 2.0, 3.0]])
-    assert np.array_equal(core.hc_smooth(lone, np.zeros((0, 2), int), alpha=0.1, beta=0.6, iterations=1,
-                                         fixed=[0]), lone)
+    assert np.array_equal(
+        core.hc_smooth(lone, np.zeros((0, 2), int), alpha=0.1, beta=0.6, iterations=1, fixed=[0]), lone
+    )

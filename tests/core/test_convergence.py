@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-
-import core
 import small_meshes as sm
 from oracles import hc_iteration_matrix, spectral_radius, umbrella_matrix
+
+import core
 
 
 def random_connected_graph(n, extra, seed):
@@ -93,10 +93,15 @@ def test_simultaneous_and_sequential_laplacian_have_the_same_limit():
     edges = sm.edges_of(faces)
     n = len(positions)
     x, y = positions[:, 0], positions[:, 1]
-    boundary = (np.isclose(x, x.min(), atol=0.5) | np.isclose(x, x.max(), atol=0.5)
-                | np.isclose(y, y.min(), atol=0.5) | np.isclose(y, y.max(), atol=0.5))
-    limits = {mode: core.laplacian_smooth(positions, edges, iterations=3000, mode=mode, fixed=boundary)
-              for mode in core.MODES}
+    boundary = (
+        np.isclose(x, x.min(), atol=0.5)
+        | np.isclose(x, x.max(), atol=0.5)
+        | np.isclose(y, y.min(), atol=0.5)
+        | np.isclose(y, y.max(), atol=0.5)
+    )
+    limits = {
+        mode: core.laplacian_smooth(positions, edges, iterations=3000, mode=mode, fixed=boundary) for mode in core.MODES
+    }
     # The exact limit: (I - T) p = 0 on movable rows, p = o on fixed ones.
     t = umbrella_matrix(core.umbrella_operator(edges, n))
     movable = ~boundary

@@ -4,9 +4,9 @@ import warnings
 
 import numpy as np
 import pytest
+import small_meshes as sm
 
 import core
-import small_meshes as sm
 
 POSITIONS, FACES = sm.uv_sphere(8, 12)
 NOISY = sm.noisy(POSITIONS, 0.05)
@@ -60,8 +60,15 @@ def test_inside_the_region_long_runs_return(method, mode):
 @pytest.mark.parametrize("tolerance", [0.0, 1e-4])
 def test_chunked_run_equals_one_shot_bit_for_bit(mode, tolerance):
     """The tolerance is measured against the input's bounding box, whatever the chunk."""
-    options = dict(method="hc", alpha=0.1, beta=0.6, iterations=60, mode=mode, tolerance=tolerance,
-                   fixed=np.arange(0, len(NOISY), 7))
+    options = dict(
+        method="hc",
+        alpha=0.1,
+        beta=0.6,
+        iterations=60,
+        mode=mode,
+        tolerance=tolerance,
+        fixed=np.arange(0, len(NOISY), 7),
+    )
     whole = core.smooth(NOISY, EDGES, **options)
     stepped = core.Smoothing(NOISY, EDGES, **options)
     chunks = []
@@ -76,8 +83,7 @@ def test_chunked_run_equals_one_shot_bit_for_bit(mode, tolerance):
 def test_advance_checks_each_chunk():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)
-        stepped = core.Smoothing(sm.noisy(CUBE, 0.05), CUBE_EDGES, method="hc", alpha=0.0, beta=0.0,
-                                 iterations=100)
+        stepped = core.Smoothing(sm.noisy(CUBE, 0.05), CUBE_EDGES, method="hc", alpha=0.0, beta=0.0, iterations=100)
     stepped.advance(3)  # 27x at most: within the bounding box allowed
     with pytest.raises(core.DivergenceError, match="after 6 iterations"):
         stepped.advance(3)

@@ -7,11 +7,11 @@ at a time: q_i + w_i (p_i - q_i); weight 0 stays bit-identical, weight 1 is the 
 import warnings
 
 import numpy as np
+import paper_reference
 import pytest
+import small_meshes as sm
 
 import core
-import paper_reference
-import small_meshes as sm
 
 POSITIONS, FACES = sm.uv_sphere(6, 10)
 NOISY = sm.noisy(POSITIONS, 0.05)
@@ -40,8 +40,11 @@ def weighted_loop(positions, edges, weights, *, method, alpha, beta, iterations,
             else:
                 new[i] = [alpha * o[i][k] + (1 - alpha) * avg[k] for k in range(3)]
         if method == "hc":
-            b = {i: [new[i][k] - (alpha * o[i][k] + (1 - alpha) * q[i][k]) for k in range(3)]
-                 for i in range(n) if i not in frozen}
+            b = {
+                i: [new[i][k] - (alpha * o[i][k] + (1 - alpha) * q[i][k]) for k in range(3)]
+                for i in range(n)
+                if i not in frozen
+            }
             zero = [0.0, 0.0, 0.0]
             for i in range(n):
                 if i not in frozen:
@@ -82,12 +85,15 @@ def test_half_influence_moves_half_as_far_in_one_iteration():
     np.testing.assert_allclose(half - NOISY, 0.5 * (full - NOISY), atol=1e-15)
 
 
-@pytest.mark.parametrize("influence, message", [
-    (np.ones(3), "influence must be"),
-    (np.full(len(NOISY), 1.5), "between 0 and 1, got 1.5 at vertex 0"),
-    (np.where(np.arange(len(NOISY)) == 2, np.nan, 0.5), "at vertex 2"),
-    (np.array(["a"] * len(NOISY)), "influence must be"),
-])
+@pytest.mark.parametrize(
+    "influence, message",
+    [
+        (np.ones(3), "influence must be"),
+        (np.full(len(NOISY), 1.5), "between 0 and 1, got 1.5 at vertex 0"),
+        (np.where(np.arange(len(NOISY)) == 2, np.nan, 0.5), "at vertex 2"),
+        (np.array(["a"] * len(NOISY)), "influence must be"),
+    ],
+)
 def test_bad_influence_is_refused(influence, message):
     with pytest.raises(ValueError, match=message):
         core.hc_smooth(NOISY, EDGES, alpha=0.1, beta=0.6, iterations=1, influence=influence)
@@ -103,6 +109,5 @@ def test_influence_with_renumbering_and_float32():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         got = core.hc_smooth(points, shuffled_edges, alpha=0.1, beta=0.6, iterations=3, influence=weights)
-    expected = core.hc_smooth(NOISY.astype(np.float32), EDGES, alpha=0.1, beta=0.6, iterations=3,
-                              influence=WEIGHTS)
+    expected = core.hc_smooth(NOISY.astype(np.float32), EDGES, alpha=0.1, beta=0.6, iterations=3, influence=WEIGHTS)
     np.testing.assert_allclose(got, expected[order], atol=2e-6)

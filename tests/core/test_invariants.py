@@ -5,15 +5,14 @@ import warnings
 
 import numpy as np
 import pytest
+import small_meshes as sm
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from pointcloud_sets import noisy_sphere
 
 import core
-import small_meshes as sm
 from core.pointcloud import emst, rfs_mesh, surface_description_graph, swap_pass
 from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
-
-from pointcloud_sets import noisy_sphere
 
 
 @st.composite
@@ -89,15 +88,30 @@ def quietly(function, *args, **kwargs):
         return function(*args, **kwargs)
 
 
-@given(random_meshes(), st.sampled_from(core.METHODS), st.sampled_from(core.MODES),
-       st.floats(0, 1), st.floats(0, 1), st.integers(0, 6))
+@given(
+    random_meshes(),
+    st.sampled_from(core.METHODS),
+    st.sampled_from(core.MODES),
+    st.floats(0, 1),
+    st.floats(0, 1),
+    st.integers(0, 6),
+)
 def test_invariants(mesh, method, mode, alpha, beta, iterations):
     positions, edges, fixed = mesh
     before = positions.copy()
     edges_before = edges.copy()
     try:
-        result = quietly(core.smooth, positions, edges, method=method, alpha=alpha, beta=beta,
-                         iterations=iterations, mode=mode, fixed=fixed)
+        result = quietly(
+            core.smooth,
+            positions,
+            edges,
+            method=method,
+            alpha=alpha,
+            beta=beta,
+            iterations=iterations,
+            mode=mode,
+            fixed=fixed,
+        )
     except core.DivergenceError:
         # Only HC outside the convergence region may blow up; the input is untouched even then.
         assert method == "hc" and not core.in_convergence_region(alpha, beta)
@@ -115,22 +129,41 @@ def test_invariants(mesh, method, mode, alpha, beta, iterations):
     assert result.iterations <= iterations
 
 
-@given(random_meshes(), st.sampled_from(core.METHODS), st.sampled_from(core.MODES),
-       st.sampled_from(LAYOUTS), st.booleans(), st.booleans(), st.integers(0, 4))
-def test_every_input_layout_is_untouched_and_gives_the_contiguous_result(mesh, method, mode, layout,
-                                                                         with_original, fixed_as_indices,
-                                                                         iterations):
+@given(
+    random_meshes(),
+    st.sampled_from(core.METHODS),
+    st.sampled_from(core.MODES),
+    st.sampled_from(LAYOUTS),
+    st.booleans(),
+    st.booleans(),
+    st.integers(0, 4),
+)
+def test_every_input_layout_is_untouched_and_gives_the_contiguous_result(
+    mesh, method, mode, layout, with_original, fixed_as_indices, iterations
+):
     positions, edges, mask = mesh
     rng = np.random.default_rng(len(positions))
     original = (positions + rng.normal(size=positions.shape).astype(positions.dtype)) if with_original else None
     fixed = as_indices(mask) if fixed_as_indices else mask
     options = dict(method=method, alpha=0.3, beta=0.7, iterations=iterations, mode=mode)
-    expected = quietly(core.smooth, positions.copy(), edges, fixed=fixed.copy(),
-                       original=None if original is None else original.copy(), **options)
+    expected = quietly(
+        core.smooth,
+        positions.copy(),
+        edges,
+        fixed=fixed.copy(),
+        original=None if original is None else original.copy(),
+        **options,
+    )
     inputs = dict(positions=positions, edges=edges, fixed=fixed, original=original)
     laid_out = {name: None if value is None else in_layout(value, layout) for name, value in inputs.items()}
-    result = quietly(core.smooth, laid_out["positions"], laid_out["edges"], fixed=laid_out["fixed"],
-                     original=laid_out["original"], **options)
+    result = quietly(
+        core.smooth,
+        laid_out["positions"],
+        laid_out["edges"],
+        fixed=laid_out["fixed"],
+        original=laid_out["original"],
+        **options,
+    )
     assert np.array_equal(bits(result.positions), bits(expected.positions))  # bit for bit
     assert result.positions.flags.writeable and result.iterations == expected.iterations
     for name, value in inputs.items():
@@ -173,12 +206,16 @@ def test_edge_order_direction_and_duplicates_do_not_matter(mesh):
     shuffled = np.concatenate([edges, edges[:, ::-1]])[rng.permutation(2 * len(edges))] if len(edges) else edges
     a = core.hc_smooth(positions, edges, alpha=0.1, beta=0.6, iterations=2)
     b = core.hc_smooth(positions, shuffled, alpha=0.1, beta=0.6, iterations=2)
-    np.testing.assert_allclose(a, b, rtol=1e-6 if positions.dtype == np.float32 else 1e-12,
-                               atol=1e-30)
+    np.testing.assert_allclose(a, b, rtol=1e-6 if positions.dtype == np.float32 else 1e-12, atol=1e-30)
 
 
-@given(random_meshes(), st.sampled_from(core.METHODS), st.sampled_from(core.MODES),
-       st.sampled_from([1e-6, 1e-3, 7.0, 1e3, 1e6]), st.integers(0, 8))
+@given(
+    random_meshes(),
+    st.sampled_from(core.METHODS),
+    st.sampled_from(core.MODES),
+    st.sampled_from([1e-6, 1e-3, 7.0, 1e3, 1e6]),
+    st.integers(0, 8),
+)
 def test_mesh_smoothing_is_scale_equivariant(mesh, method, mode, scale, iterations):
     positions, edges, fixed = mesh
     positions = positions.astype(np.float64)
@@ -191,8 +228,13 @@ def test_mesh_smoothing_is_scale_equivariant(mesh, method, mode, scale, iteratio
     np.testing.assert_allclose(result, expected, rtol=0, atol=1e-14 * (iterations + 1) * size)
 
 
-@given(random_meshes(), st.sampled_from(core.METHODS), st.sampled_from(core.MODES),
-       st.sampled_from([2.0 ** -20, 2.0 ** 30]), st.sampled_from([0.0, 1e-3]))
+@given(
+    random_meshes(),
+    st.sampled_from(core.METHODS),
+    st.sampled_from(core.MODES),
+    st.sampled_from([2.0**-20, 2.0**30]),
+    st.sampled_from([0.0, 1e-3]),
+)
 def test_mesh_smoothing_by_a_power_of_two_scale_is_bit_exact(mesh, method, mode, scale, tolerance):
     positions, edges, fixed = mesh
     options = dict(method=method, alpha=0.2, beta=0.6, iterations=5, mode=mode, fixed=fixed, tolerance=tolerance)

@@ -10,11 +10,13 @@ from core import locality
 def grid_mesh(side):
     """A triangulated side x side grid, numbered row by row (neighbours close in memory)."""
     index = np.arange(side * side).reshape(side, side)
-    edges = np.concatenate([
-        np.stack([index[:, :-1].ravel(), index[:, 1:].ravel()], axis=1),
-        np.stack([index[:-1, :].ravel(), index[1:, :].ravel()], axis=1),
-        np.stack([index[:-1, :-1].ravel(), index[1:, 1:].ravel()], axis=1),
-    ])
+    edges = np.concatenate(
+        [
+            np.stack([index[:, :-1].ravel(), index[:, 1:].ravel()], axis=1),
+            np.stack([index[:-1, :].ravel(), index[1:, :].ravel()], axis=1),
+            np.stack([index[:-1, :-1].ravel(), index[1:, 1:].ravel()], axis=1),
+        ]
+    )
     y, x = np.divmod(np.arange(side * side), side)
     rng = np.random.default_rng(side)
     positions = np.stack([x, y, rng.normal(0.0, 0.3, side * side)], axis=1).astype(float)
@@ -71,10 +73,27 @@ def test_renumbered_run_keeps_early_stop_progress_and_original(small_scattered):
     positions, edges, _ = small_scattered
     original = positions + 0.01
     seen = []
-    result = core.smooth(positions, edges, method="hc", alpha=0.3, beta=0.7, iterations=200, tolerance=1e-4,
-                         original=original, progress=lambda done, total: seen.append(done))
-    plain = core.smooth(positions, edges, method="hc", alpha=0.3, beta=0.7, iterations=result.iterations,
-                        original=original, operator=_unscattered(edges, len(positions)))
+    result = core.smooth(
+        positions,
+        edges,
+        method="hc",
+        alpha=0.3,
+        beta=0.7,
+        iterations=200,
+        tolerance=1e-4,
+        original=original,
+        progress=lambda done, total: seen.append(done),
+    )
+    plain = core.smooth(
+        positions,
+        edges,
+        method="hc",
+        alpha=0.3,
+        beta=0.7,
+        iterations=result.iterations,
+        original=original,
+        operator=_unscattered(edges, len(positions)),
+    )
     assert result.stopped_early and seen == list(range(1, result.iterations + 1))
     np.testing.assert_allclose(result.positions, plain.positions, rtol=0, atol=1e-12)
 
@@ -89,6 +108,5 @@ def test_sequential_mode_is_never_renumbered(small_scattered):
     # Gauss-Seidel is defined by the vertex order: renumbering would change the result.
     positions, edges, _ = small_scattered
     operator = core.umbrella_operator(edges, len(positions))
-    core.smooth(positions, None, operator=operator, method="hc", alpha=0.1, beta=0.6, iterations=3,
-                mode="sequential")
+    core.smooth(positions, None, operator=operator, method="hc", alpha=0.1, beta=0.6, iterations=3, mode="sequential")
     assert operator._renumbering is None

@@ -10,12 +10,48 @@ from core import noise
 
 
 def icosphere(level):
-    t = (1.0 + 5.0 ** 0.5) / 2.0
-    vertices = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
-                         [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
-    faces = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
-                      [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
-                      [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]])
+    t = (1.0 + 5.0**0.5) / 2.0
+    vertices = np.array(
+        [
+            [-1, t, 0],
+            [1, t, 0],
+            [-1, -t, 0],
+            [1, -t, 0],
+            [0, -1, t],
+            [0, 1, t],
+            [0, -1, -t],
+            [0, 1, -t],
+            [t, 0, -1],
+            [t, 0, 1],
+            [-t, 0, -1],
+            [-t, 0, 1],
+        ],
+        float,
+    )
+    faces = np.array(
+        [
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ]
+    )
     vertices /= np.linalg.norm(vertices, axis=1, keepdims=True)
     for _ in range(level):
         n = len(vertices)
@@ -75,8 +111,9 @@ def test_noise_estimate_recovers_the_true_noise(ratio):
 def test_more_noise_more_iterations():
     vertices, faces = bumpy_sphere()
     edges = edges_of(faces)
-    chosen = [core.choose_amount(with_normal_noise(vertices, ratio, edges)[0], edges).iterations
-              for ratio in (0.05, 0.2, 0.8)]
+    chosen = [
+        core.choose_amount(with_normal_noise(vertices, ratio, edges)[0], edges).iterations for ratio in (0.05, 0.2, 0.8)
+    ]
     assert chosen[0] < chosen[1] < chosen[2]
 
 

@@ -2,9 +2,9 @@
 
 import numpy as np
 import pytest
+import small_meshes as sm
 
 import core
-import small_meshes as sm
 from core.metrics import fan_triangles
 from core.topology import closed_from_triangles as is_closed
 
@@ -123,8 +123,13 @@ def test_closed_from_corners_agrees_with_the_triangles():
     _, cube = sm.cube_quads()
     flipped = [octahedron[0][::-1]] + octahedron[1:]
     three_faces_on_an_edge = octahedron + [[0, 2, 5]]
-    cases = [(octahedron, True), (cube, True), (octahedron[1:], False), (flipped, False),
-             (three_faces_on_an_edge, False)]
+    cases = [
+        (octahedron, True),
+        (cube, True),
+        (octahedron[1:], False),
+        (flipped, False),
+        (three_faces_on_an_edge, False),
+    ]
     for faces, expected in cases:
         edges, corner_verts, corner_edges = blender_layout(faces, extra_edges=[(0, 1)])  # a loose edge
         assert core.topology.closed_from_corners(edges, corner_verts, corner_edges) is expected, faces

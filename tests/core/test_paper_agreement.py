@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
-
-import core
 import small_meshes as sm
 from paper_reference import smooth_loop
+
+import core
 
 
 def _mesh_cases():
@@ -33,12 +33,23 @@ METHODS = [("plain", 0.0, 0.5), ("central", 0.3, 0.5), ("original", 0.2, 0.5), (
 @pytest.mark.parametrize("fixed_kind", ["none", "some"])
 def test_matches_plain_loop(name, positions, edges, method, alpha, beta, mode, fixed_kind):
     fixed = [0, len(positions) // 2] if fixed_kind == "some" else []
-    expected = np.array(smooth_loop(positions, edges, method=method, alpha=alpha, beta=beta, iterations=4,
-                                    mode=mode, fixed=fixed))
-    with np.errstate(all="raise"), pytest.warns(core.ConvergenceWarning) if (method, alpha) == ("hc", 0.0) \
-            else _no_warning():
-        result = core.smooth(positions, edges, method=method, alpha=alpha, beta=beta, iterations=4, mode=mode,
-                             fixed=np.array(fixed, dtype=np.int64))
+    expected = np.array(
+        smooth_loop(positions, edges, method=method, alpha=alpha, beta=beta, iterations=4, mode=mode, fixed=fixed)
+    )
+    with (
+        np.errstate(all="raise"),
+        pytest.warns(core.ConvergenceWarning) if (method, alpha) == ("hc", 0.0) else _no_warning(),
+    ):
+        result = core.smooth(
+            positions,
+            edges,
+            method=method,
+            alpha=alpha,
+            beta=beta,
+            iterations=4,
+            mode=mode,
+            fixed=np.array(fixed, dtype=np.int64),
+        )
     diagonal = np.linalg.norm(np.ptp(positions, axis=0))
     assert result.iterations == 4
     np.testing.assert_allclose(result.positions, expected, rtol=0, atol=1e-12 * diagonal)

@@ -2,18 +2,16 @@
 kNN-graph MST is wrong (scan lines, separated clusters, duplicates, ties)."""
 
 import numpy as np
-from scipy.spatial import cKDTree
 import pytest
 import scipy.sparse as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from pointcloud_sets import clusters, delaunay_mst_length, grid_ties, scan_lines, sphere_rings, uniform, with_duplicates
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from core.pointcloud import emst
 from core.pointcloud.spanning_tree import NeighbourIndex, _exact_nearest_foreign, merge_duplicates
-
-from pointcloud_sets import (clusters, delaunay_mst_length, grid_ties, scan_lines, sphere_rings, uniform,
-                             with_duplicates)
 
 
 def assert_is_emst(points, edges):
@@ -104,7 +102,7 @@ def test_nearest_foreign_search_gives_each_codes_exact_minimum(n_ask, use_tree):
 
 
 @settings(max_examples=25, deadline=None)
-@given(st.integers(2, 60), st.integers(1, 6), st.integers(0, 2 ** 31 - 1), st.booleans())
+@given(st.integers(2, 60), st.integers(1, 6), st.integers(0, 2**31 - 1), st.booleans())
 def test_emst_exact_on_random_sets(n, k, seed, quantize):
     rng = np.random.default_rng(seed)
     points = rng.random((n, 3))
@@ -116,11 +114,14 @@ def test_emst_exact_on_random_sets(n, k, seed, quantize):
     assert_is_emst(points, emst(points, neighbours=k))
 
 
-@pytest.mark.parametrize("bad, message", [
-    (np.zeros((4, 2)), "shape"),
-    (np.array([[0, 0, np.nan]]), "NaN"),
-    (np.zeros((3, 3), dtype=np.int32), "float"),
-])
+@pytest.mark.parametrize(
+    "bad, message",
+    [
+        (np.zeros((4, 2)), "shape"),
+        (np.array([[0, 0, np.nan]]), "NaN"),
+        (np.zeros((3, 3), dtype=np.int32), "float"),
+    ],
+)
 def test_emst_bad_input(bad, message):
     with pytest.raises(ValueError, match=message):
         emst(bad)
@@ -162,8 +163,11 @@ def test_many_askers_per_code_minimum_is_exact(monkeypatch):
 
     asked = []
     original = spanning_tree._query_by_bits
-    monkeypatch.setattr(spanning_tree, "_query_by_bits",
-                        lambda points, code, ask, bound: asked.append(ask.size) or original(points, code, ask, bound))
+    monkeypatch.setattr(
+        spanning_tree,
+        "_query_by_bits",
+        lambda points, code, ask, bound: asked.append(ask.size) or original(points, code, ask, bound),
+    )
     rng = np.random.default_rng(7)
     n, clusters = 12_000, 24
     centres = rng.normal(size=(clusters, 3)) * 10  # clusters far apart relative to their size

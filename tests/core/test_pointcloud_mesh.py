@@ -5,6 +5,8 @@ import pytest
 import scipy.sparse as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from oracles import dihedral, dihedral_cos, face_quality, unique_faces
+from pointcloud_sets import noisy_sphere
 from scipy.sparse.csgraph import connected_components
 
 from core.pointcloud.geometry import Incidence
@@ -12,9 +14,6 @@ from core.pointcloud.rfs import keep_best_pairs, rfs_mesh
 from core.pointcloud.sdg import surface_description_graph
 from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
 from core.pointcloud.swap import swap_pass
-
-from oracles import dihedral, dihedral_cos, face_quality, unique_faces
-from pointcloud_sets import noisy_sphere
 
 
 def build_sdg(points, k=16, **options):
@@ -44,11 +43,14 @@ def edge_lengths(points, edges):
 
 # --- SDG -------------------------------------------------------------------------------------------
 
+
 def test_sdg_connected_on_a_noisy_sphere_and_no_edge_spans_a_gap():
     index, tree, graph = build_sdg(noisy_sphere(3000, 0.005))
     assert n_components(graph.edges, index.n_points)[0] == 1
     u, v = graph.edges.T
-    assert np.all(edge_lengths(index.points, graph.edges) <= 3.0 * np.maximum(graph.spacing[u], graph.spacing[v]) + 1e-12)
+    assert np.all(
+        edge_lengths(index.points, graph.edges) <= 3.0 * np.maximum(graph.spacing[u], graph.spacing[v]) + 1e-12
+    )
     degree = np.bincount(graph.edges.ravel(), minlength=index.n_points)
     assert 5 <= np.median(degree) <= 12  # a surface-like neighbourhood, not a 1-D chain or a blob
     wide = build_sdg(index.points, spacing_factor=3.0)[2]
@@ -96,8 +98,10 @@ def test_sdg_adapts_to_density():
     assert np.median(length[on_left]) < 0.5 * np.median(length[right[graph.edges].all(axis=1)])
 
 
-@pytest.mark.parametrize("points", [noisy_sphere(1000, 0.01, seed=3),
-                                    np.concatenate([plane(400, seed=1), plane(400, seed=2) + [5.0, 0.0, 0.0]])])
+@pytest.mark.parametrize(
+    "points",
+    [noisy_sphere(1000, 0.01, seed=3), np.concatenate([plane(400, seed=1), plane(400, seed=2) + [5.0, 0.0, 0.0]])],
+)
 def test_sdg_keeps_exactly_the_consistent_emst_edges(points):
     # An EMST edge is in the SDG iff it is consistent (no adaptive edge brings back a cut one: that
     # would need |pq| <= spacing_factor x min(h) <= gap_factor x max(h)), and the counts the graph
@@ -120,6 +124,7 @@ def test_sdg_rejects_inconsistent_factors():
 
 
 # --- RFS mesh --------------------------------------------------------------------------------------
+
 
 def assert_mesh_invariants(points, faces, edges=None, min_quality=None):
     n = len(points)
@@ -174,6 +179,7 @@ def test_quality_of_equilateral_is_one_and_degenerate_zero():
 
 # --- edge swapping ---------------------------------------------------------------------------------
 
+
 def interior_dihedral_sum(points, faces):
     inc = Incidence(faces, len(points))
     two = np.flatnonzero(inc.edge_count == 2)
@@ -221,7 +227,7 @@ def test_swap_invariants_and_monotone_dihedral_sum(seed):
 
 
 @settings(max_examples=15, deadline=None)
-@given(st.integers(30, 200), st.integers(0, 2 ** 31 - 1), st.floats(0.0, 0.2))
+@given(st.integers(30, 200), st.integers(0, 2**31 - 1), st.floats(0.0, 0.2))
 def test_rfs_and_swap_invariants_on_random_clouds(n, seed, noise):
     rng = np.random.default_rng(seed)
     points = rng.random((n, 3))
@@ -248,6 +254,7 @@ def test_pair_priorities_order_flattest_first_in_both_encodings():
 
 
 # --- geometry from face normals, the swapper's kept state, threads ---------------------------------
+
 
 def test_incidence_cos_equals_the_dihedral_cos_whatever_the_face_orientation():
     from core.pointcloud.geometry import face_normals, incidence_cos
@@ -321,7 +328,7 @@ def test_pruning_rounds_equal_the_edge_by_edge_rule_in_any_order_within_a_round(
     settled = np.full(inc.edges.shape[0], -1)
     alive, _ = _prune(points, faces, settled=settled)
     assert settled.max() >= 2  # several rounds happened
-    members = [inc.order[s:s + c] // 3 for s, c in zip(inc.edge_start, inc.edge_count)]
+    members = [inc.order[s : s + c] // 3 for s, c in zip(inc.edge_start, inc.edge_count)]
     rng = np.random.default_rng(0)
     reference = np.ones(len(faces), dtype=bool)
     for r in range(settled.max() + 1):
@@ -332,8 +339,10 @@ def test_pruning_rounds_equal_the_edge_by_edge_rule_in_any_order_within_a_round(
             u, v = inc.edges[e]
             third = [int(np.setdiff1d(faces[f], [u, v])[0]) for f in live]
             pairs = [(i, j) for i in range(len(live)) for j in range(i + 1, len(live))]
-            cos = [dihedral_cos(points, np.array([u]), np.array([v]), np.array([third[i]]), np.array([third[j]]))[0]
-                   for i, j in pairs]
+            cos = [
+                dihedral_cos(points, np.array([u]), np.array([v]), np.array([third[i]]), np.array([third[j]]))[0]
+                for i, j in pairs
+            ]
             i, j = pairs[int(np.argmin(np.nan_to_num(cos, nan=np.inf)))]
             for k, f in enumerate(live):
                 if k not in (i, j):
@@ -359,8 +368,9 @@ def test_incidence_order_by_counting_equals_a_stable_sort(monkeypatch):
     np.testing.assert_array_equal(geometry.Incidence(faces, 40).order, counted.order)
 
 
-@pytest.mark.parametrize("size, n, seed", [(0, 5, 0), (1, 1, 1), (1, 7, 2), (2, 1, 3), (50, 3, 4), (2000, 40, 5),
-                                           (3000, 2000, 6)])
+@pytest.mark.parametrize(
+    "size, n, seed", [(0, 5, 0), (1, 1, 1), (1, 7, 2), (2, 1, 3), (50, 3, 4), (2000, 40, 5), (3000, 2000, 6)]
+)
 def test_group_by_edge_equals_a_stable_sort_of_the_keys(size, n, seed):
     # Many ties (n small), empty input, a single pair, vertices without pairs (n large).
     from core.pointcloud.geometry import group_by_edge
@@ -402,7 +412,7 @@ def _best_pairs_reference(normals, forward, edges, order, start, count):
     # The all-pairs arrays of each edge and np.argmin, NaN as inf.
     first, second, best = [], [], []
     for e in edges:
-        incidence = order[start[e]:start[e] + count[e]]
+        incidence = order[start[e] : start[e] + count[e]]
         sign = np.where(forward[incidence], 1.0, -1.0)
         v = [normals[j][incidence // 3] * sign for j in range(3)]
         i, j = np.triu_indices(incidence.size, 1)
@@ -441,7 +451,7 @@ def test_best_pairs_equal_argmin_over_all_pairs_with_ties_and_nan(monkeypatch, b
     assert all(x.size == 0 for x in empty)
 
 
-@pytest.mark.parametrize("n, count, seed", [(6, 300, 0), (1000, 5000, 1), (4, 0, 2), (3, 1, 3), (2 ** 21, 400, 4)])
+@pytest.mark.parametrize("n, count, seed", [(6, 300, 0), (1000, 5000, 1), (4, 0, 2), (3, 1, 3), (2**21, 400, 4)])
 def test_face_keys_give_the_unique_sorted_rows(n, count, seed):
     # Every vertex order and repeated vertices; n = 2^21 takes the np.unique fallback (n^3 > 2^62).
     from core.pointcloud.geometry import faces_of_keys, triple_keys

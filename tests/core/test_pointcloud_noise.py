@@ -2,13 +2,12 @@
 
 import numpy as np
 import pytest
+from pointcloud_sets import noisy_sphere, sphere_rms
 
 import core
 from core.pointcloud import noise
 from core.pointcloud.noise import estimate_noise, matched_alpha, steps_per_round, total_steps
 from core.pointcloud.spanning_tree import NeighbourIndex
-
-from pointcloud_sets import noisy_sphere, sphere_rms
 
 
 def noisy_plane(n, ratio, seed=0):
@@ -133,13 +132,16 @@ def test_explicit_numbers_bypass_the_estimate(monkeypatch):
     assert report.alpha == 0.2 and report.iterations_per_round == noise.MAX_STEPS // 3
 
 
-@pytest.mark.parametrize("options, message", [
-    (dict(alpha="max"), "alpha must be 'auto' or a number"),
-    (dict(alpha=None), "alpha"),
-    (dict(iterations_per_round="automatic"), "iterations_per_round must be 'auto' or a whole number"),
-    (dict(iterations_per_round=0), "iterations_per_round must be 'auto' or a whole number >= 1"),
-    (dict(rounds="auto"), "rounds must be a whole number"),
-])
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (dict(alpha="max"), "alpha must be 'auto' or a number"),
+        (dict(alpha=None), "alpha"),
+        (dict(iterations_per_round="automatic"), "iterations_per_round must be 'auto' or a whole number"),
+        (dict(iterations_per_round=0), "iterations_per_round must be 'auto' or a whole number >= 1"),
+        (dict(rounds="auto"), "rounds must be a whole number"),
+    ],
+)
 def test_bad_amounts_raise(options, message):
     with pytest.raises(ValueError, match=message):
         core.smooth_point_cloud(noisy_sphere(50, 0.01), **options)

@@ -3,12 +3,11 @@ float64 cannot hold is refused up front."""
 
 import numpy as np
 import pytest
+from pointcloud_sets import noisy_sphere
 
 import core
 from core.pointcloud import emst, estimate_noise, rfs_mesh, surface_description_graph, swap_pass
 from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
-
-from pointcloud_sets import noisy_sphere
 
 SCALES = [1e-6, 1e-3, 1e3, 1e6]
 # smooth(s P) / s against smooth(P), relative to the diagonal. Each HC step rounds a few times at a few
@@ -29,8 +28,10 @@ def sphere():
 @pytest.fixture(scope="module")
 def reference(sphere):
     points, fixed = sphere
-    return {name: core.smooth_point_cloud(points, fixed=fixed, return_mesh=True, **options)
-            for name, options in (("auto", {}), ("explicit", EXPLICIT))}
+    return {
+        name: core.smooth_point_cloud(points, fixed=fixed, return_mesh=True, **options)
+        for name, options in (("auto", {}), ("explicit", EXPLICIT))
+    }
 
 
 def diagonal(points):
@@ -42,13 +43,17 @@ def diagonal(points):
 def test_result_is_scale_equivariant(sphere, reference, amount, scale):
     points, fixed = sphere
     expected, expected_report = reference[amount]
-    out, report = core.smooth_point_cloud(points * scale, fixed=fixed, return_mesh=True,
-                                          **(EXPLICIT if amount == "explicit" else {}))
+    out, report = core.smooth_point_cloud(
+        points * scale, fixed=fixed, return_mesh=True, **(EXPLICIT if amount == "explicit" else {})
+    )
     assert np.abs(out / scale - expected).max() <= RTOL * diagonal(points)
     assert np.array_equal(out[fixed], (points * scale)[fixed])  # fixed points keep their bits
     # The same amount of smoothing and the same mesh: no decision depended on the unit.
-    assert (report.rounds, report.iterations_per_round, report.alpha) == \
-        (expected_report.rounds, expected_report.iterations_per_round, expected_report.alpha)
+    assert (report.rounds, report.iterations_per_round, report.alpha) == (
+        expected_report.rounds,
+        expected_report.iterations_per_round,
+        expected_report.alpha,
+    )
     assert np.array_equal(report.mesh.faces, expected_report.mesh.faces)
     assert report.noise.ratio == pytest.approx(expected_report.noise.ratio, rel=1e-12)
     assert report.noise.sigma == pytest.approx(expected_report.noise.sigma * scale, rel=1e-12)
@@ -64,7 +69,7 @@ def test_far_scales_are_smoothed_the_same(sphere, reference, scale):
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
-@pytest.mark.parametrize("scale", [2.0 ** -40, 2.0 ** 30])
+@pytest.mark.parametrize("scale", [2.0**-40, 2.0**30])
 def test_power_of_two_scales_are_bit_exact(dtype, scale):
     points = noisy_sphere(500, 0.01, seed=4, dtype=dtype)
     expected = core.smooth_point_cloud(points)
@@ -85,8 +90,17 @@ def test_points_left_in_place_keep_their_bits():
     assert np.array_equal(unmoved.view(np.uint8), points.view(np.uint8))
 
 
-@pytest.mark.parametrize("dtype, scale", [(np.float64, 1e-310), (np.float64, 1e-320), (np.float64, 1e308),
-                                          (np.float64, 2e307), (np.float32, 1e-39), (np.float32, 1e38)])
+@pytest.mark.parametrize(
+    "dtype, scale",
+    [
+        (np.float64, 1e-310),
+        (np.float64, 1e-320),
+        (np.float64, 1e308),
+        (np.float64, 2e307),
+        (np.float32, 1e-39),
+        (np.float32, 1e38),
+    ],
+)
 def test_scales_float_cannot_hold_are_refused_up_front(dtype, scale):
     points = (noisy_sphere(300, 0.01, seed=7) * scale).astype(dtype)
     assert np.isfinite(points).all() and np.abs(points).max() > 0
@@ -116,8 +130,9 @@ def test_every_stage_is_scale_free_on_its_own(scale):
         tree, _ = boruvka_emst(index)
         graph = surface_description_graph(index, tree, spacing_factor=2.5)
         mesh = rfs_mesh(index.points, graph.edges)
-        moved = index.points + np.random.default_rng(0).normal(scale=0.3 * np.median(graph.spacing),
-                                                               size=index.points.shape)
+        moved = index.points + np.random.default_rng(0).normal(
+            scale=0.3 * np.median(graph.spacing), size=index.points.shape
+        )
         return index, tree, graph, mesh, swap_pass(moved, mesh.faces), estimate_noise(index)
 
     index, tree, graph, mesh, swapped, noise = stages(points)

@@ -2,12 +2,11 @@
 
 import numpy as np
 import pytest
+from pointcloud_sets import noisy_sphere, sphere_rms, with_duplicates
 
 import core
 from core.pointcloud import PointCloudReport
 from core.smoothing import Cancelled
-
-from pointcloud_sets import noisy_sphere, sphere_rms, with_duplicates
 
 
 @pytest.fixture(scope="module")
@@ -95,23 +94,26 @@ def test_progress_and_cancel():
         core.smooth_point_cloud(points, rounds=3, progress=lambda done, total: done < 2)
 
 
-@pytest.mark.parametrize("options, message", [
-    (dict(points=np.zeros((5, 2))), "shape"),
-    (dict(points=np.array([[0.0, 0, 0], [np.inf, 0, 0]])), "infinite"),
-    (dict(points=np.zeros((5, 3), dtype=np.int64)), "float32 or float64"),
-    (dict(alpha=1.5), "alpha"),
-    (dict(beta=-0.1), "beta"),
-    (dict(rounds=-1), "rounds"),
-    (dict(rounds=2.5), "rounds"),
-    (dict(iterations_per_round=0), "iterations_per_round"),
-    (dict(neighbours=1), "neighbours"),
-    (dict(spacing_factor=0), "spacing_factor"),
-    (dict(spacing_factor=4.0, gap_factor=3.0), "gap_factor"),
-    (dict(min_quality=2), "min_quality"),
-    (dict(fixed=np.zeros(3, bool)), "length"),
-    (dict(fixed=[10 ** 6]), "fixed"),
-    (dict(progress=5), "progress"),
-])
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (dict(points=np.zeros((5, 2))), "shape"),
+        (dict(points=np.array([[0.0, 0, 0], [np.inf, 0, 0]])), "infinite"),
+        (dict(points=np.zeros((5, 3), dtype=np.int64)), "float32 or float64"),
+        (dict(alpha=1.5), "alpha"),
+        (dict(beta=-0.1), "beta"),
+        (dict(rounds=-1), "rounds"),
+        (dict(rounds=2.5), "rounds"),
+        (dict(iterations_per_round=0), "iterations_per_round"),
+        (dict(neighbours=1), "neighbours"),
+        (dict(spacing_factor=0), "spacing_factor"),
+        (dict(spacing_factor=4.0, gap_factor=3.0), "gap_factor"),
+        (dict(min_quality=2), "min_quality"),
+        (dict(fixed=np.zeros(3, bool)), "length"),
+        (dict(fixed=[10**6]), "fixed"),
+        (dict(progress=5), "progress"),
+    ],
+)
 def test_bad_input(options, message):
     options = dict(options)
     points = options.pop("points", noisy_sphere(50, 0.01))

@@ -2,9 +2,9 @@
 
 import numpy as np
 import pytest
+import small_meshes as sm
 
 import core
-import small_meshes as sm
 
 POSITIONS, FACES = sm.uv_sphere(8, 12)
 NOISY = sm.noisy(POSITIONS, 0.05)

@@ -14,8 +14,11 @@ from core.smoothing import METHODS as CORE_METHODS
 from core.smoothing import MODES as CORE_MODES
 
 SMALL_WORDS = {"a", "and", "in", "of", "per", "the", "to"}  # lower case inside a Title Case label
-EVERY = [pytest.param(setting, id=f"{group}.{setting.name}")
-         for group, settings in (("mesh", spec.MESH), ("points", spec.POINTS)) for setting in settings]
+EVERY = [
+    pytest.param(setting, id=f"{group}.{setting.name}")
+    for group, settings in (("mesh", spec.MESH), ("points", spec.POINTS))
+    for setting in settings
+]
 
 
 @pytest.mark.parametrize("settings", [spec.MESH, spec.POINTS], ids=["mesh", "points"])
@@ -28,21 +31,57 @@ def test_identifiers_and_flags_are_unique(settings):
 
 def test_identifiers_users_rely_on():
     # Users' scripts, presets and the command line name these: they must not change.
-    assert [s.name for s in spec.MESH] == ["method", "auto_amount", "alpha", "beta", "iterations", "mode", "tolerance",
-                                           "vertex_group", "invert_vertex_group", "pin_boundary",
-                                           "influence_group", "invert_influence_group", "output"]
-    assert [s.name for s in spec.POINTS] == ["auto_amount", "alpha", "beta", "rounds", "iterations_per_round",
-                                             "neighbours", "spacing_factor", "gap_factor", "min_quality", "swap",
-                                             "vertex_group", "invert_vertex_group", "keep_rfs_mesh"]
+    assert [s.name for s in spec.MESH] == [
+        "method",
+        "auto_amount",
+        "alpha",
+        "beta",
+        "iterations",
+        "mode",
+        "tolerance",
+        "vertex_group",
+        "invert_vertex_group",
+        "pin_boundary",
+        "influence_group",
+        "invert_influence_group",
+        "output",
+    ]
+    assert [s.name for s in spec.POINTS] == [
+        "auto_amount",
+        "alpha",
+        "beta",
+        "rounds",
+        "iterations_per_round",
+        "neighbours",
+        "spacing_factor",
+        "gap_factor",
+        "min_quality",
+        "swap",
+        "vertex_group",
+        "invert_vertex_group",
+        "keep_rfs_mesh",
+    ]
     assert spec.METHOD.identifiers == ("HC", "LAPLACIAN", "LAPLACIAN_CENTRAL", "LAPLACIAN_ORIGINAL")
     assert spec.MODE.identifiers == ("SIMULTANEOUS", "SEQUENTIAL")
     assert spec.OUTPUT.identifiers == ("MESH", "SHAPE_KEY")
     assert {s.flag: s.name for s in spec.MESH + spec.POINTS if s.flag} == {
-        "method": "method", "alpha": "alpha", "beta": "beta", "iterations": "iterations", "mode": "mode",
-        "tolerance": "tolerance", "fixed-group": "vertex_group", "invert-group": "invert_vertex_group",
-        "pin-boundary": "pin_boundary", "influence-group": "influence_group",
-        "invert-influence": "invert_influence_group", "rounds": "rounds", "steps-per-round": "iterations_per_round",
-        "neighbours": "neighbours", "reach": "spacing_factor", "gap": "gap_factor"}
+        "method": "method",
+        "alpha": "alpha",
+        "beta": "beta",
+        "iterations": "iterations",
+        "mode": "mode",
+        "tolerance": "tolerance",
+        "fixed-group": "vertex_group",
+        "invert-group": "invert_vertex_group",
+        "pin-boundary": "pin_boundary",
+        "influence-group": "influence_group",
+        "invert-influence": "invert_influence_group",
+        "rounds": "rounds",
+        "steps-per-round": "iterations_per_round",
+        "neighbours": "neighbours",
+        "reach": "spacing_factor",
+        "gap": "gap_factor",
+    }
 
 
 @pytest.mark.parametrize("setting", EVERY)
@@ -63,7 +102,8 @@ def test_default_has_the_kind_and_lies_within_the_limits(setting):
 
 @pytest.mark.parametrize("setting", EVERY)
 def test_texts_in_blenders_style(setting):
-    # Tooltips are sentences without a final period; labels are Title Case (as Blender's); command-line help is a phrase.
+    # Tooltips are sentences without a final period; labels are Title Case (as Blender's);
+    # command-line help is a phrase.
     texts = [setting.description] + [choice.description for choice in setting.items]
     for text in texts:
         assert text and text[0].isupper() and not text.endswith(".") and text == text.strip(), text
@@ -89,8 +129,10 @@ def test_enum_items():
 def test_point_alpha_and_beta_differ_from_the_mesh_ones_only_where_declared():
     # Points smooth with a weaker pull and a beta nearer 0.5 (core.smooth_point_cloud); label, limits and
     # command-line option are the mesh settings' own.
-    for mesh, point, changed in ((spec.ALPHA, spec.POINT_ALPHA, {"default", "step", "description", "cli_default"}),
-                                 (spec.BETA, spec.POINT_BETA, {"default", "description"})):
+    for mesh, point, changed in (
+        (spec.ALPHA, spec.POINT_ALPHA, {"default", "step", "description", "cli_default"}),
+        (spec.BETA, spec.POINT_BETA, {"default", "description"}),
+    ):
         differ = {f.name for f in dataclasses.fields(spec.Setting) if getattr(mesh, f.name) != getattr(point, f.name)}
         assert differ == changed
     assert (spec.POINT_ALPHA.default, spec.POINT_BETA.default) == (0.01, 0.55)

@@ -1,8 +1,8 @@
 """Threaded products and solves give bit-identical results to the one-thread path."""
 
 import numpy as np
-import scipy.sparse as sp
 import pytest
+import scipy.sparse as sp
 
 import core
 from core import parallel
@@ -70,7 +70,7 @@ def test_pool_grows_to_the_largest_request(monkeypatch):
     monkeypatch.setattr(parallel, "_pool_size", 0)
     for count in (2, 4, 3):
         barrier = threading.Barrier(count, timeout=10)
-        names = parallel.run_all([lambda: (barrier.wait(), threading.current_thread().name)[1]] * count)
+        names = parallel.run_all([lambda barrier=barrier: (barrier.wait(), threading.current_thread().name)[1]] * count)
         assert len(set(names)) == count
     assert parallel._executor(1) is parallel._executor(3)  # big enough: kept
 
@@ -188,6 +188,8 @@ def test_neighbour_sums_are_the_pattern_product(monkeypatch, dtype):
     blocks.run(lambda block: block.neighbour_sums(x, combine))
     indptr, indices, _ = _pattern(grid_edges(side), n)
     pattern = sp.csr_matrix((np.ones(indices.size), indices, indptr), shape=(n, n))
-    np.testing.assert_allclose(got, (pattern @ x.T.astype(np.float64)).T, rtol=0, atol=1e-5 if dtype == np.float32 else 1e-13)
+    np.testing.assert_allclose(
+        got, (pattern @ x.T.astype(np.float64)).T, rtol=0, atol=1e-5 if dtype == np.float32 else 1e-13
+    )
     ones = parallel._ones(dtype, 1)
     assert not ones.flags.writeable and np.all(ones == 1)

@@ -4,9 +4,9 @@ import numpy as np
 import scipy.sparse as sp
 from hypothesis import given
 from hypothesis import strategies as st
+from oracles import umbrella_matrix
 
 import core
-from oracles import umbrella_matrix
 
 
 @given(st.integers(1, 25), st.integers(0, 80), st.integers(0, 2**32 - 1))
@@ -23,8 +23,9 @@ def test_matches_dense_definition(n, m, seed):
     assert t.has_canonical_format  # every row's neighbours increasing, each once
     np.testing.assert_allclose(t.toarray(), expected, rtol=1e-15)
     np.testing.assert_array_equal(operator.degree, degree)
-    upper = sp.csr_matrix((np.ones(operator.upper_indices.size), operator.upper_indices, operator.upper_indptr),
-                          shape=(n, n))
+    upper = sp.csr_matrix(
+        (np.ones(operator.upper_indices.size), operator.upper_indices, operator.upper_indptr), shape=(n, n)
+    )
     assert upper.has_canonical_format
     np.testing.assert_array_equal(upper.toarray(), np.triu(dense, 1))  # each edge once, in row min(i, j)
     assert np.array_equal(operator.isolated, degree == 0)

@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
+from test_mesh_noise import icosphere
 
 import core
 from core.volume import restore_volume, vertex_normals
-from test_mesh_noise import icosphere
 
 
 def volume(points, triangles):

@@ -1,10 +1,11 @@
 import bpy
+
 settings = bpy.context.scene.hc_smooth
 
-settings.method = 'HC'
+settings.method = "HC"
 settings.auto_amount = False
 settings.alpha = 0.01
 settings.beta = 0.6
 settings.iterations = 100
-settings.mode = 'SIMULTANEOUS'
+settings.mode = "SIMULTANEOUS"
 settings.tolerance = 0.0
