@@ -18,7 +18,18 @@ def test_what_is_in_here_lists_every_top_level_folder():
 
 def test_every_make_target_a_reader_runs_is_in_the_readme():
     makefile = (ROOT / "Makefile").read_text()
-    for target in ("demo", "test", "test-core", "lint", "format", "build", "dist", "envs", "env-bpy45", "env-bpy52",
-                   "clean"):
+    for target in (
+        "demo",
+        "test",
+        "test-core",
+        "lint",
+        "format",
+        "build",
+        "dist",
+        "envs",
+        "env-bpy45",
+        "env-bpy52",
+        "clean",
+    ):
         assert re.search(rf"^{re.escape(target)}\b.*:", makefile, re.M) or f" {target}:" in makefile, target
         assert f"make {target}" in README, target
