@@ -31,9 +31,12 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "scripts")]
 
+from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
+
+# isort: split
+
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
-from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
 
 sys.path.insert(0, str(ROOT / "bench"))
 import meshes  # noqa: E402
@@ -111,23 +114,10 @@ def bench_closed(n_vertices, shuffle, repeats):
 
     times["report"] = median_time(report, repeats)
     assert job.change.volume_change is not None  # the report measured a volume: the torus is closed
-    modifier = obj.modifiers.new("Smooth", "SMOOTH")
-    modifier.factor, modifier.iterations = 0.5, ITERATIONS
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-
-    def evaluate_modifier():
-        obj.update_tag(refresh={"DATA"})
-        depsgraph.update()
-        obj.evaluated_get(depsgraph).data  # noqa: B018 - the evaluated mesh is the product
-
-    evaluate_modifier()
-    times["modifier"] = median_time(evaluate_modifier, repeats)
-    obj.modifiers.remove(modifier)
+    times["modifier"] = smooth_modifier_time(obj, repeats)
 
     def enter_edit_mode_all_selected():
-        reset()
-        bpy.ops.object.mode_set(mode="EDIT")
-        bpy.ops.mesh.select_all(action="SELECT")
+        edit_mode_all_selected(reset)
 
     def hc_edit():
         assert bpy.ops.mesh.hc_smooth(auto_amount=False, iterations=ITERATIONS) == {"FINISHED"}
@@ -139,6 +129,30 @@ def bench_closed(n_vertices, shuffle, repeats):
     times["edit"] = median_time(hc_edit, repeats, enter_edit_mode_all_selected)
     reset()
     return times
+
+
+def smooth_modifier_time(obj, repeats):
+    """Median time to evaluate Blender's Smooth modifier (factor 0.5, 10 repeats) on ``obj``."""
+    modifier = obj.modifiers.new("Smooth", "SMOOTH")
+    modifier.factor, modifier.iterations = 0.5, ITERATIONS
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+
+    def evaluate_modifier():
+        obj.update_tag(refresh={"DATA"})
+        depsgraph.update()
+        obj.evaluated_get(depsgraph).data  # noqa: B018 - the evaluated mesh is the product
+
+    evaluate_modifier()
+    seconds = median_time(evaluate_modifier, repeats)
+    obj.modifiers.remove(modifier)
+    return seconds
+
+
+def edit_mode_all_selected(reset):
+    """The mesh back to its noisy start, in Edit mode with everything selected."""
+    reset()
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
 
 
 def restore(obj, points):
@@ -204,23 +218,10 @@ def main():
     )
 
     reset()
-    modifier = obj.modifiers.new("Smooth", "SMOOTH")
-    modifier.factor, modifier.iterations = 0.5, ITERATIONS
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-
-    def evaluate_modifier():
-        obj.update_tag(refresh={"DATA"})
-        depsgraph.update()
-        obj.evaluated_get(depsgraph).data  # noqa: B018 - the evaluated mesh is the product
-
-    evaluate_modifier()
-    rows.append(("Smooth modifier (10 repeats, evaluated)", median_time(evaluate_modifier, repeats)))
-    obj.modifiers.remove(modifier)
+    rows.append(("Smooth modifier (10 repeats, evaluated)", smooth_modifier_time(obj, repeats)))
 
     def enter_edit_mode_all_selected():
-        reset()
-        bpy.ops.object.mode_set(mode="EDIT")
-        bpy.ops.mesh.select_all(action="SELECT")
+        edit_mode_all_selected(reset)
 
     rows.append(
         (

@@ -18,9 +18,12 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "scripts")]
 
+from extension_session import run_and_exit  # noqa: E402  (before bpy: a throw-away Blender user folder)
+
+# isort: split
+
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
-from extension_session import run_and_exit  # noqa: E402  (before bpy: a throw-away Blender user folder)
 
 
 def mesh_object(vertices, faces):

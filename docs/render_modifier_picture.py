@@ -14,10 +14,13 @@ import sys
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "scripts"), str(ROOT / "demo"), str(ROOT)]  # scene_setup imports core
 
+from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
+
+# isort: split
+
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 import scene_setup  # noqa: E402
-from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
 
 ITERATIONS = 10
 NOISE = 0.004  # of the bounding-box diagonal, along the normals

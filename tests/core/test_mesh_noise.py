@@ -6,64 +6,8 @@ import numpy as np
 import pytest
 
 import core
+from bench.meshes import icosphere  # pure NumPy, no bench requirements
 from core import noise
-
-
-def icosphere(level):
-    t = (1.0 + 5.0**0.5) / 2.0
-    vertices = np.array(
-        [
-            [-1, t, 0],
-            [1, t, 0],
-            [-1, -t, 0],
-            [1, -t, 0],
-            [0, -1, t],
-            [0, 1, t],
-            [0, -1, -t],
-            [0, 1, -t],
-            [t, 0, -1],
-            [t, 0, 1],
-            [-t, 0, -1],
-            [-t, 0, 1],
-        ],
-        float,
-    )
-    faces = np.array(
-        [
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ]
-    )
-    vertices /= np.linalg.norm(vertices, axis=1, keepdims=True)
-    for _ in range(level):
-        n = len(vertices)
-        corners = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-        keys = corners.min(axis=1) * n + corners.max(axis=1)
-        unique, inverse = np.unique(keys, return_inverse=True)
-        middle = (vertices[unique // n] + vertices[unique % n]) / 2.0
-        vertices = np.concatenate([vertices, middle / np.linalg.norm(middle, axis=1, keepdims=True)])
-        ab, bc, ca = (n + inverse.reshape(-1, 3)).T
-        a, b, c = faces.T
-        faces = np.concatenate([np.stack(f, -1) for f in ([a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca])])
-    return vertices, faces
 
 
 def edges_of(faces):
