@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
 from .validation import check_edges
 
@@ -71,7 +72,7 @@ class Umbrella:
         return _from_pairs(rows, inverse[self.indices], self.n_vertices)
 
 
-def umbrella_operator(edges, n_vertices):
+def umbrella_operator(edges: ArrayLike, n_vertices: int) -> Umbrella:
     """Build the umbrella structure of a mesh with ``n_vertices`` vertices from its undirected edges.
 
     Order, direction and duplicates of ``edges`` do not matter; self-loops are ignored.

@@ -4,6 +4,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from . import parallel
 from .topology import closed_from_triangles
@@ -143,7 +144,7 @@ def _signed_volume(points, corners, centre, unit):
     return total / 6.0
 
 
-def measure_change(before, after, faces=None, closed=None):
+def measure_change(before: ArrayLike, after: ArrayLike, faces=None, closed: bool | None = None) -> Change:
     """Compare a smoothing result with its input (both (n, 3)); ``faces`` as for ``fan_triangles``.
 
     ``closed``: whether the faces form a closed, consistently oriented surface, when the caller already

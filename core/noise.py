@@ -32,6 +32,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .adjacency import Umbrella, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError
@@ -116,7 +117,14 @@ class _Run:
         return np.asarray(self.smoothing.current[:, index].T, dtype=np.float64)
 
 
-def choose_amount(positions, edges=None, *, beta=0.6, fixed=None, operator=None):
+def choose_amount(
+    positions: ArrayLike,
+    edges: ArrayLike | None = None,
+    *,
+    beta: float = 0.6,
+    fixed: ArrayLike | None = None,
+    operator: Umbrella | None = None,
+) -> MeshAmount:
     """The HC amount (alpha, iterations) for a noisy mesh at the given beta: see the module docstring.
 
     ``positions`` (n, 3), ``edges`` (m, 2) as for ``hc_smooth`` (or a prebuilt ``operator``), ``fixed``

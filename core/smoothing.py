@@ -8,10 +8,12 @@ without neighbours, section 2) are copied through unchanged, so they stay bit-id
 
 import math
 import warnings
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
 from . import locality, parallel
 from .adjacency import Umbrella, umbrella_operator
@@ -45,21 +47,21 @@ class SmoothResult:
 
 
 def smooth(
-    positions,
-    edges,
+    positions: ArrayLike,
+    edges: ArrayLike | None,
     *,
-    method="hc",
-    alpha=0.0,
-    beta=0.5,
-    iterations,
-    mode="simultaneous",
-    fixed=None,
-    tolerance=0.0,
-    original=None,
-    operator=None,
-    progress=None,
-    influence=None,
-):
+    method: str = "hc",
+    alpha: float = 0.0,
+    beta: float = 0.5,
+    iterations: int,
+    mode: str = "simultaneous",
+    fixed: ArrayLike | None = None,
+    tolerance: float = 0.0,
+    original: ArrayLike | None = None,
+    operator: Umbrella | None = None,
+    progress: Callable[[int, int], bool | None] | None = None,
+    influence: ArrayLike | None = None,
+) -> SmoothResult:
     """Run one of the smoothers and report how many iterations ran. See ``hc_smooth`` for the arguments.
 
     ``method`` is ``"hc"`` or a Laplacian variant (``"plain"``, ``"central"``, ``"original"``);
@@ -104,21 +106,21 @@ class Smoothing:
 
     def __init__(
         self,
-        positions,
-        edges,
+        positions: ArrayLike,
+        edges: ArrayLike | None,
         *,
-        method="hc",
-        alpha=0.0,
-        beta=0.5,
-        iterations,
-        mode="simultaneous",
-        fixed=None,
-        tolerance=0.0,
-        original=None,
-        operator=None,
-        influence=None,
-        stacklevel=2,
-    ):
+        method: str = "hc",
+        alpha: float = 0.0,
+        beta: float = 0.5,
+        iterations: int,
+        mode: str = "simultaneous",
+        fixed: ArrayLike | None = None,
+        tolerance: float = 0.0,
+        original: ArrayLike | None = None,
+        operator: Umbrella | None = None,
+        influence: ArrayLike | None = None,
+        stacklevel: int = 2,
+    ) -> None:
         self.method = method = check_choice(method, "method", METHODS)
         mode = check_choice(mode, "mode", MODES)
         self.alpha = check_unit_interval(alpha, "alpha")
@@ -186,7 +188,7 @@ class Smoothing:
     def finished(self):
         return self.stopped_early or self.done >= self.iterations
 
-    def steps(self, chunk=None):
+    def steps(self, chunk: int | None = None) -> Iterator[float]:
         """Advance ``chunk`` iterations at a time (all at once if None), yielding the fraction of the run
         done after each slice, as core.pointcloud.PointCloudSmoother.steps does; then call ``result()``."""
         while not self.finished:
@@ -195,7 +197,7 @@ class Smoothing:
         if not self.done:
             yield 1.0  # nothing to run: one slice, already done
 
-    def advance(self, count=None, check=True):
+    def advance(self, count: int | None = None, check: bool = True) -> int:
         """Run up to ``count`` more iterations (all that remain if None); returns how many ran.
         ``check``: raise DivergenceError now if the positions have blown up (else ``result()`` does)."""
         count = self.iterations - self.done if count is None else min(count, self.iterations - self.done)
@@ -221,7 +223,7 @@ class Smoothing:
             self._check()
         return ran
 
-    def result(self):
+    def result(self) -> SmoothResult:
         """The positions in the input's shape, dtype and vertex order, as a SmoothResult."""
         self._check()
         if self.finished:  # the step's buffers go before the result is made
@@ -277,20 +279,20 @@ def _planar(points, order=None):
 
 
 def hc_smooth(
-    positions,
-    edges,
+    positions: ArrayLike,
+    edges: ArrayLike | None,
     *,
-    alpha,
-    beta,
-    iterations,
-    mode="simultaneous",
-    fixed=None,
-    tolerance=0.0,
-    original=None,
-    operator=None,
-    progress=None,
-    influence=None,
-):
+    alpha: float,
+    beta: float,
+    iterations: int,
+    mode: str = "simultaneous",
+    fixed: ArrayLike | None = None,
+    tolerance: float = 0.0,
+    original: ArrayLike | None = None,
+    operator: Umbrella | None = None,
+    progress: Callable[[int, int], bool | None] | None = None,
+    influence: ArrayLike | None = None,
+) -> np.ndarray:
     """The HC algorithm (paper, Algorithm 1); returns the new positions, same shape and dtype.
 
     positions: (n, 3) float32/float64, never modified. edges: (m, 2) vertex pairs, undirected.
@@ -322,20 +324,20 @@ def hc_smooth(
 
 
 def laplacian_smooth(
-    positions,
-    edges,
+    positions: ArrayLike,
+    edges: ArrayLike | None,
     *,
-    variant="plain",
-    alpha=0.0,
-    iterations,
-    mode="simultaneous",
-    fixed=None,
-    tolerance=0.0,
-    original=None,
-    operator=None,
-    progress=None,
-    influence=None,
-):
+    variant: str = "plain",
+    alpha: float = 0.0,
+    iterations: int,
+    mode: str = "simultaneous",
+    fixed: ArrayLike | None = None,
+    tolerance: float = 0.0,
+    original: ArrayLike | None = None,
+    operator: Umbrella | None = None,
+    progress: Callable[[int, int], bool | None] | None = None,
+    influence: ArrayLike | None = None,
+) -> np.ndarray:
     """Laplacian smoothing: variant "plain" (3.1), "central" (3.2, alpha weights q_i) or "original"
     (3.3, alpha weights o_i). Other arguments as for ``hc_smooth``."""
     variant = check_choice(variant, "variant", METHODS[1:])

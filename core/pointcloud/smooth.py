@@ -8,9 +8,11 @@ so the rounds together behave like one HC run whose mesh adapts between steps.
 
 import numbers
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..adjacency import umbrella_operator
 from ..smoothing import Cancelled, smooth
@@ -67,21 +69,21 @@ def _positive(value, name):
 
 
 def smooth_point_cloud(
-    points,
+    points: ArrayLike,
     *,
-    alpha=AUTO,
-    beta=0.55,
-    rounds=3,
-    iterations_per_round=AUTO,
-    fixed=None,
-    neighbours=16,
-    spacing_factor=2.5,
-    gap_factor=3.0,
-    min_quality=0.3,
-    swap=True,
-    progress=None,
-    return_mesh=False,
-):
+    alpha: float | str = AUTO,
+    beta: float = 0.55,
+    rounds: int = 3,
+    iterations_per_round: int | str = AUTO,
+    fixed: ArrayLike | None = None,
+    neighbours: int = 16,
+    spacing_factor: float = 2.5,
+    gap_factor: float = 3.0,
+    min_quality: float = 0.3,
+    swap: bool = True,
+    progress: Callable[[int, int], bool | None] | None = None,
+    return_mesh: bool = False,
+) -> np.ndarray | tuple[np.ndarray, PointCloudReport]:
     """Smooth ``points`` (n, 3) float32/float64 and return the moved points (same shape and dtype).
 
     alpha, beta: HC weights (converges for alpha > 0, beta > 0.5). rounds: how many times to run
