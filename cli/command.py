@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import bpy
 
 from .. import core
+from ..console_capture import captured
 from ..operators import jobs as jobs_module
 from ..operators import point_cloud
 from ..operators.objects import InputError, unique_data
@@ -128,7 +129,7 @@ def process(source, target, plan, settings):
     outcome = Outcome(source=source, target=target)
     start = time.perf_counter()
     bug = None
-    with files.blender_output() as printed, warnings.catch_warnings(record=True) as caught:
+    with captured() as printed, warnings.catch_warnings(record=True) as caught:
         try:
             if os.path.splitext(source)[1].lower() == arguments.BLEND:
                 smooth_blend_file(source, target, plan, settings, outcome)

@@ -93,12 +93,9 @@ def test_the_demo_renders_without_cycles_progress_lines(demo):
 
 
 def test_captured_collects_what_c_code_and_python_print(capfd):
-    sys.path.insert(0, str(ROOT / "demo"))
-    try:
-        import console
-    finally:
-        sys.path.remove(str(ROOT / "demo"))
-    with console.captured() as lines:
+    import console_capture  # the repository root is on sys.path (conftest), as for the demo
+
+    with console_capture.captured() as lines:
         os.write(1, b"Fra:1 Mem:8.20M | Synchronizing object\n")
         os.write(2, b"from C on stderr\n")
         print("from Python")
