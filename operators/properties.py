@@ -82,24 +82,24 @@ def draw_convergence(layout, method, alpha, beta, always=False):
         column.label(text=line, icon=icon)
 
 
-def draw_fixed_group(layout, props, obj):
-    """The fixed vertex group field (searchable on a mesh) with its Invert toggle, for the redo panels."""
+def draw_group_field(layout, props, obj, name, invert, text):
+    """A vertex-group name field (searchable on a mesh) with its Invert toggle, greyed out while the
+    name is empty; for the redo panels and the N-panel."""
     row = layout.row(align=True)
     if obj is not None and obj.type == "MESH":
-        row.prop_search(props, "vertex_group", obj, "vertex_groups", text="Fixed Group")
+        row.prop_search(props, name, obj, "vertex_groups", text=text)
     else:
-        row.prop(props, "vertex_group", text="Fixed Group")
-    row.prop(props, "invert_vertex_group", text="", icon="ARROW_LEFTRIGHT")
-
-
-def draw_influence_group(layout, props, obj):
-    """The painted influence: a vertex group (searchable on a mesh) whose weights scale each vertex's
-    move, with its Invert toggle; for the redo panels and the N-panel."""
-    row = layout.row(align=True)
-    if obj is not None and obj.type == "MESH":
-        row.prop_search(props, "influence_group", obj, "vertex_groups", text="Influence")
-    else:
-        row.prop(props, "influence_group", text="Influence")
+        row.prop(props, name, text=text)
     sub = row.row(align=True)
-    sub.active = bool(props.influence_group)
-    sub.prop(props, "invert_influence_group", text="", icon="ARROW_LEFTRIGHT")
+    sub.active = bool(getattr(props, name))
+    sub.prop(props, invert, text="", icon="ARROW_LEFTRIGHT")
+
+
+def draw_fixed_group(layout, props, obj, text="Fixed Group"):
+    """The group of vertices that stay fixed."""
+    draw_group_field(layout, props, obj, "vertex_group", "invert_vertex_group", text)
+
+
+def draw_influence_group(layout, props, obj, text="Influence"):
+    """The painted influence: a vertex group whose weights scale each vertex's move."""
+    draw_group_field(layout, props, obj, "influence_group", "invert_influence_group", text)

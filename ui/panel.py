@@ -104,14 +104,7 @@ class VIEW3D_PT_hc_smooth_fixed(bpy.types.Panel):
         obj = context.active_object
         mesh_object = obj if obj is not None and obj.type == "MESH" else None
 
-        row = layout.row(align=True)
-        if mesh_object is not None:
-            row.prop_search(settings, "vertex_group", mesh_object, "vertex_groups", text="")
-        else:
-            row.prop(settings, "vertex_group", text="")
-        sub = row.row(align=True)
-        sub.active = bool(settings.vertex_group)
-        sub.prop(settings, "invert_vertex_group", text="", icon="ARROW_LEFTRIGHT")
+        properties.draw_fixed_group(layout, settings, mesh_object, text="")
         layout.prop(settings, "pin_boundary")
         properties.draw_influence_group(layout, settings, mesh_object)
 

@@ -399,7 +399,9 @@ def test_redo_panels_draw_the_fixed_group_and_the_convergence_warning(scene, idn
     # The operators' draw() (the F9 panel) shares its fixed-group row and convergence label.
     obj = noisy_sphere()
     operator_class = getattr(bpy.types, idname)
-    props = types.SimpleNamespace(layout=RecordingLayout(), method="HC", alpha=0.1, beta=0.6, influence_group="")
+    props = types.SimpleNamespace(
+        layout=RecordingLayout(), method="HC", alpha=0.1, beta=0.6, vertex_group="", influence_group=""
+    )
     operator_class.draw(props, bpy.context)
     searched = [args for args, _ in ((e[1], e[2]) for e in props.layout.calls("prop_search"))]
     assert searched and searched[0][1:3] == ("vertex_group", obj)
