@@ -91,83 +91,153 @@ def enclosed_volume(positions, triangles):
 
 def enclosed_volumes(triangles, *position_sets):
     """The signed volume of each set of (n, 3) positions on the same triangles: one pass over the
-    triangles each, in the positions' own precision, the sets side by side on threads."""
-    volumes, unit = _volumes_in_units(triangles, position_sets)
-    return [volume * unit * unit * unit for volume in volumes]
+    triangles each, in the positions' own precision."""
+    corners = _corner_columns(triangles)
+    frame = _Frame.of(position_sets[0] if position_sets else np.zeros((0, 3)))
+    return [frame.volume(points, corners) for points in position_sets]
 
 
-def _volumes_in_units(triangles, position_sets):
-    """(volumes, unit): the volumes measured in a power of two near the size of the first set, so
-    that their terms neither overflow nor underflow (and their ratios hold at any scale)."""
-    corners = [np.ascontiguousarray(triangles[:, k]) for k in range(3)]
-    # The volume does not change under translation; measured from a point near the surface the terms
-    # do not cancel, so single precision keeps its digits even far from the origin.
-    first = position_sets[0] if position_sets else np.zeros((0, 3))
-    centre = _box_centre(first) if len(first) else np.zeros(3)
-    size = bbox_diagonal(first)
-    unit = 2.0 ** math.frexp(size)[1] if size > 0.0 and math.isfinite(size) else 1.0
-    tasks = [lambda points=points: _signed_volume(points, corners, centre, unit) for points in position_sets]
-    if len(tasks) > 1 and corners[0].size >= _VOLUME_BLOCK * 8 and parallel.thread_count() > 1:
-        return parallel.run_all(tasks), unit
-    return [task() for task in tasks], unit
+def _corner_columns(triangles):
+    return tuple(np.ascontiguousarray(triangles[:, k]) for k in range(3))
 
 
-_VOLUME_BLOCK = 1 << 14  # triangles per block: the gathered corners of a block stay in cache
+@dataclass(frozen=True)
+class _Frame:
+    """Where volumes are measured from: a point near the surface (the volume does not change under
+    translation, and measured from there its terms do not cancel, so single precision keeps its
+    digits far from the origin) in a power-of-two unit near the size (no overflow or underflow)."""
+
+    centre: np.ndarray
+    unit: float
+
+    @classmethod
+    def of(cls, points):
+        if not len(points):
+            return cls(np.zeros(3), 1.0)
+        centre = np.array([float(points[:, k].min()) / 2 + float(points[:, k].max()) / 2 for k in range(3)])
+        size = bbox_diagonal(points)
+        return cls(centre, 2.0 ** math.frexp(size)[1] if size > 0.0 and math.isfinite(size) else 1.0)
+
+    def volume(self, points, corners):
+        return _signed_volume_in_units(points, corners, self) * self.unit * self.unit * self.unit
+
+    def units(self, points, corners):
+        return _signed_volume_in_units(points, corners, self)
 
 
-def _box_centre(points):
-    return np.array([float(points[:, k].min()) / 2 + float(points[:, k].max()) / 2 for k in range(3)])
+_VOLUME_BLOCK = 1 << 15  # triangles per block: the gathered corners of a block stay in cache
 
 
-def _signed_volume(points, corners, centre, unit):
-    """Σ a·(b×c) / 6 over the triangles (a, b, c) of the points in ``unit``s from ``centre``, written
-    out per coordinate, block by block."""
-    x, y, z = ((points[:, k] - points.dtype.type(centre[k])) / points.dtype.type(unit) for k in range(3))
+def _signed_volume_in_units(points, corners, frame):
+    """Σ a·(b×c) / 6 over the triangles (a, b, c), in ``frame``'s unit, block by block: each corner gathers
+    whole rows (one take per corner, not one per coordinate)."""
+    local, unit = _in_frame(points, frame)
     a_all, b_all, c_all = corners
     total = 0.0
     for start in range(0, a_all.size, _VOLUME_BLOCK):
-        a, b, c = (index[start : start + _VOLUME_BLOCK] for index in (a_all, b_all, c_all))
-        bx, by, bz, cx, cy, cz = x[b], y[b], z[b], x[c], y[c], z[c]
+        a, b, c = (np.take(local, index[start : start + _VOLUME_BLOCK], axis=0) for index in (a_all, b_all, c_all))
+        bx, by, bz, cx, cy, cz = b[:, 0], b[:, 1], b[:, 2], c[:, 0], c[:, 1], c[:, 2]
         term = by * cz
         term -= bz * cy
-        term *= x[a]
+        term *= a[:, 0]
         part = bz * cx
         part -= bx * cz
-        part *= y[a]
+        part *= a[:, 1]
         term += part
-        bx *= cy
-        by *= cx
-        bx -= by
-        bx *= z[a]
-        term += bx
+        part = bx * cy
+        part -= by * cx
+        part *= a[:, 2]
+        term += part
         total += float(term.sum(dtype=np.float64))
-    return total / 6.0
+    return total / 6.0 / (unit * unit * unit)
 
 
-def measure_change(before: ArrayLike, after: ArrayLike, faces=None, closed: bool | None = None) -> Change:
-    """Compare a smoothing result with its input (both (n, 3)); ``faces`` as for ``fan_triangles``.
+def _in_frame(points, frame):
+    """(points measured in ``frame``, the unit they are in, relative to frame.unit). A copy only where it
+    matters: far from the origin (terms would cancel) or at sizes whose cubes leave the dtype's range."""
+    size = frame.unit
+    near = float(np.abs(frame.centre).max(initial=0.0)) <= size
+    if near and _cubes_are_safe(size, points.dtype):
+        return points, size
+    local = points - frame.centre.astype(points.dtype)
+    local /= points.dtype.type(frame.unit)
+    return local, 1.0
 
-    ``closed``: whether the faces form a closed, consistently oriented surface, when the caller already
-    knows (Blender's edge data tells it cheaply); None checks it here.
-    """
-    before, after = check_positions(before, "before"), check_positions(after, "after")
-    if before.shape != after.shape:
-        raise ValueError(f"before and after must have the same shape, got {before.shape} and {after.shape}")
-    # In the arrays' own precision (a report, not a result): no float64 copies of a million rows.
-    diag_before, diag_after = bbox_diagonal(before), bbox_diagonal(after)
-    displacement = row_lengths(after - before, max(diag_before, diag_after))
+
+def _cubes_are_safe(length, dtype):
+    """Whether products of three coordinates up to ``length`` (and a millionth of it) stay normal numbers."""
+    info = np.finfo(dtype)
+    return np.cbrt(info.tiny) * 1e6 < length < np.cbrt(info.max) / 4
+
+
+@dataclass(frozen=True)
+class InputMeasure:
+    """What a report needs of a run's input, measured once: ``measure_change`` takes it so that a caller
+    can measure the input while the run starts (on another thread) and only the result afterwards."""
+
+    n_vertices: int
+    diagonal: float
+    closed: bool
+    frame: _Frame
+    corners: tuple | None  # the triangles' corner columns of a closed surface, for the result's volume
+    volume_units: float | None  # the input's volume in frame.unit³
+
+
+def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> InputMeasure:
+    """The input's side of ``measure_change`` (same arguments, without ``after``)."""
+    before = check_positions(before, "before")
     closed = closed if faces is not None else False
-    volume_before = volume_after = volume_change = None
+    corners = None
     if faces is not None and closed is not False:  # an open surface has no volume to compare
         triangles = fan_triangles(faces)
         if triangles.size and triangles.max() >= before.shape[0]:
             raise ValueError("faces refer to vertices that do not exist")
         closed = closed_from_triangles(triangles) if closed is None else bool(closed)
-        if closed:
-            (before_units, after_units), unit = _volumes_in_units(triangles, (before, after))
-            volume_before, volume_after = (units * unit * unit * unit for units in (before_units, after_units))
-            if before_units != 0.0:
-                volume_change = (after_units - before_units) / abs(before_units)
+        corners = _corner_columns(triangles) if closed else None
+    frame = _Frame.of(before)
+    return InputMeasure(
+        n_vertices=before.shape[0],
+        diagonal=bbox_diagonal(before),
+        closed=closed,
+        frame=frame,
+        corners=corners,
+        volume_units=frame.units(before, corners) if corners is not None else None,
+    )
+
+
+def measure_change(
+    before: ArrayLike, after: ArrayLike, faces=None, closed: bool | None = None, measured: InputMeasure | None = None
+) -> Change:
+    """Compare a smoothing result with its input (both (n, 3)); ``faces`` as for ``fan_triangles``.
+
+    ``closed``: whether the faces form a closed, consistently oriented surface, when the caller already
+    knows (Blender's edge data tells it cheaply); None checks it here. ``measured``: ``measure_input``
+    of the same before, faces and closed, if the caller has it (then those are not looked at again).
+    """
+    before, after = check_positions(before, "before"), check_positions(after, "after")
+    if before.shape != after.shape:
+        raise ValueError(f"before and after must have the same shape, got {before.shape} and {after.shape}")
+    measured = measure_input(before, faces, closed) if measured is None else measured
+    if measured.n_vertices != before.shape[0]:
+        raise ValueError(f"measured is of {measured.n_vertices} vertices, before has {before.shape[0]}")
+
+    def result_volume():
+        return measured.frame.units(after, measured.corners) if measured.corners is not None else None
+
+    def displacements():  # in the arrays' own precision (a report, not a result): no float64 copies
+        diagonal = bbox_diagonal(after)
+        return diagonal, row_lengths(after - before, max(measured.diagonal, diagonal))
+
+    tasks = [result_volume, displacements]
+    big = measured.corners is not None and measured.corners[0].size >= 8 * _VOLUME_BLOCK
+    on_threads = big and parallel.thread_count() > 1
+    after_units, (diag_after, displacement) = parallel.run_all(tasks) if on_threads else [task() for task in tasks]
+    diag_before, unit = measured.diagonal, measured.frame.unit
+    volume_before = volume_after = volume_change = None
+    if after_units is not None:
+        volume_before, volume_after = (units * unit * unit * unit for units in (measured.volume_units, after_units))
+        if measured.volume_units != 0.0:
+            volume_change = (after_units - measured.volume_units) / abs(measured.volume_units)
     return Change(
         n_vertices=before.shape[0],
         moved=int(np.count_nonzero(displacement)),
@@ -176,7 +246,7 @@ def measure_change(before: ArrayLike, after: ArrayLike, faces=None, closed: bool
         bbox_diagonal_before=diag_before,
         bbox_diagonal_after=diag_after,
         bbox_change=(diag_after - diag_before) / diag_before if diag_before else 0.0,
-        closed=closed,
+        closed=measured.closed,
         volume_before=volume_before,
         volume_after=volume_after,
         volume_change=volume_change,

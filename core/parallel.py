@@ -11,7 +11,7 @@ passes run one task per coordinate, so they use three threads whenever threads a
 
 import os
 import threading
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 import scipy.sparse as sp
@@ -25,6 +25,7 @@ MIN_WORK = 1_000_000  # non-zeros below which one thread is faster
 _pool = None
 _pool_size = 0  # the pool's max_workers, kept here: ThreadPoolExecutor does not expose it
 _pool_lock = threading.Lock()
+_background = None  # one thread of its own: the pool's threads stay free for the passes
 
 
 def thread_count():
@@ -57,6 +58,23 @@ def run_all(tasks):
     finally:
         rest = [future.result() for future in futures]
     return [first] + rest
+
+
+def in_background(task):
+    """A Future of ``task()`` run on a thread of its own, beside whatever runs here meanwhile (its
+    NumPy work releases the GIL); with threads off, run now."""
+    global _background
+    if thread_count() == 1:
+        future = Future()
+        try:
+            future.set_result(task())
+        except Exception as error:  # handed over like a thread's: raised by future.result()
+            future.set_exception(error)
+        return future
+    with _pool_lock:
+        if _background is None:
+            _background = ThreadPoolExecutor(max_workers=1, thread_name_prefix="hc_smooth_background")
+    return _background.submit(task)
 
 
 def _row_blocks(indptr, count):

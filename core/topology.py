@@ -18,11 +18,15 @@ def closed_from_corners(edges, corner_verts, corner_edges):
     two faces, which run along it in opposite directions (loose edges do not matter)."""
     if corner_verts.size == 0 or len(edges) == 0:
         return False
-    # Bin 2e + 1 counts the corners running along edge e from its first vertex, bin 2e the others:
-    # closed and oriented <=> every used edge has one of each.
-    forward = corner_verts == np.take(edges[:, 0], corner_edges)
-    per_direction = np.bincount(2 * corner_edges.astype(np.int64) + forward, minlength=2 * len(edges))
-    return bool(per_direction.max() <= 1 and np.array_equal(per_direction[0::2], per_direction[1::2]))
+    # Key 2e + 1 marks a corner running along edge e from its first vertex, 2e one running against it:
+    # closed and oriented <=> no key twice and every used edge has both.
+    first = np.ascontiguousarray(edges[:, 0])
+    wide = 2 * len(edges) > np.iinfo(np.int32).max
+    keys = np.left_shift(corner_edges, 1, dtype=np.int64 if wide else corner_edges.dtype)
+    keys |= corner_verts == np.take(first, corner_edges)
+    seen = np.zeros(2 * len(edges), dtype=bool)
+    seen[keys] = True
+    return bool(np.count_nonzero(seen) == keys.size and np.array_equal(seen[0::2], seen[1::2]))
 
 
 def boundary_vertices(n_vertices, edges, corner_edges):

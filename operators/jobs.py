@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import core, settings_spec
+from ..core import parallel
 from . import mesh_io, objects
 
 # The method's enum identifier -> core's name for it, and the short name reports and shape keys use.
@@ -24,9 +25,10 @@ class Job:
     mesh: object
     positions: np.ndarray  # float32 (n, 3): the mesh's, or its active shape key's
     edges: np.ndarray
-    faces: np.ndarray  # (t, 3) triangles of a closed mesh, else None (not needed)
+    faces: np.ndarray  # (t, 3) triangles of a closed or all-triangle mesh, else None (not needed)
     fixed: np.ndarray  # bool (n,)
-    closed: bool = False  # the faces enclose a volume (consistently oriented, no boundary)
+    closed: bool | None = False  # the faces enclose a volume; None: not checked yet (see input_measure)
+    corners: tuple = None  # (corner_verts, corner_edges) while ``closed`` is None
     influence: np.ndarray = None  # float32 (n,) weights of the influence group, if any
     key_block: object = None  # the active shape key that holds ``positions``, if any
     operator: object = None
@@ -36,6 +38,7 @@ class Job:
     change: object = None  # core.Change of the result, measured once for every report
     amount: object = None  # core.MeshAmount the Automatic Amount chose, if it ran
     volume_offset: float = 0.0  # the largest offset along the normals that gave closed parts their volume back
+    measured_input: object = None  # Future of the core.metrics.InputMeasure the report compares with
 
 
 def settings_of(props):
@@ -77,7 +80,15 @@ def make_job(obj, props, extra_fixed=None):
     positions, key_block = objects.read_positions(obj)
     edges = mesh_io.read_edges(mesh)
     corner_verts, corner_edges = mesh_io.read_corners(mesh)
-    closed = core.topology.closed_from_corners(edges, corner_verts, corner_edges)
+    corners = None
+    if corner_verts.size and corner_verts.size == 3 * len(mesh.polygons):
+        # All triangles (scans): the faces come free; whether they close is checked with the report, off
+        # this thread (input_measure).
+        faces, closed, corners = corner_verts.reshape(-1, 3), None, (corner_verts, corner_edges)
+    else:
+        closed = core.topology.closed_from_corners(edges, corner_verts, corner_edges)
+        # Triangulated once per mesh, for the volume in the report (only the positions change).
+        faces = core.metrics.fan_triangles(mesh_io.read_faces(mesh, corner_verts)) if closed else None
     fixed = np.zeros(n, dtype=bool) if extra_fixed is None else extra_fixed.copy()
     if props.vertex_group:
         group = obj.vertex_groups.get(props.vertex_group)
@@ -98,8 +109,6 @@ def make_job(obj, props, extra_fixed=None):
         np.clip(influence, 0.0, 1.0, out=influence)  # Blender keeps weights in [0, 1]; rounding may not
     if props.pin_boundary:
         fixed |= core.topology.boundary_vertices(n, edges, corner_edges)
-    # Triangulated once per mesh, for the volume in the report (only the positions change).
-    faces = core.metrics.fan_triangles(mesh_io.read_faces(mesh, corner_verts)) if closed else None
     return Job(
         obj=obj,
         mesh=mesh,
@@ -108,6 +117,7 @@ def make_job(obj, props, extra_fixed=None):
         faces=faces,
         fixed=fixed,
         closed=closed,
+        corners=corners,
         key_block=key_block,
         influence=influence,
     )
@@ -127,6 +137,7 @@ def run(jobs, props, chunk=None):
     settings = settings_of(props)
     for number, job in enumerate(jobs):
         start = time.perf_counter()
+        input_measure(job)  # on the other core while this one builds the operator
         job.operator = core.umbrella_operator(job.edges, len(job.positions))
         iterations, job_settings, share = props.iterations, settings, 0.0
         if automatic(props):
@@ -153,7 +164,7 @@ def run(jobs, props, chunk=None):
                 yield (number + share + (1.0 - share) * fraction) / len(jobs)
         result = smoothing.result()
         job.result, job.iterations_run = result.positions, result.iterations
-        if job.amount is not None and job.closed and job.faces is not None:
+        if job.amount is not None and input_measure(job).result().closed:
             keep_volume(job)
         job.seconds = time.perf_counter() - start
         yield (number + 1) / len(jobs)
@@ -181,10 +192,25 @@ def write(job, props):
     objects.write_positions(job.obj, job.key_block, job.positions, job.result)
 
 
+def input_measure(job):
+    """The Future of what the report needs of the job's input (closedness, size, volume), started once
+    on a background thread: the single-threaded start of a run leaves a core free for it."""
+    if job.measured_input is None:
+        job.measured_input = parallel.in_background(lambda: _measure_input(job))
+    return job.measured_input
+
+
+def _measure_input(job):
+    closed = job.closed
+    if closed is None:
+        closed = core.topology.closed_from_corners(job.edges, *job.corners)
+    return core.metrics.measure_input(job.positions, job.faces if closed else None, closed=closed)
+
+
 def measure(job):
     """What the run changed (volume of a closed mesh, else size), measured once per job."""
     if job.change is None:
-        job.change = core.measure_change(job.positions, job.result, faces=job.faces, closed=job.closed)
+        job.change = core.measure_change(job.positions, job.result, measured=input_measure(job).result())
     return job.change
 
 

@@ -155,3 +155,30 @@ def test_displacements_at_any_scale(scale):
     assert change.moved == 2
     assert change.max_displacement == pytest.approx(0.5 * scale, rel=1e-12)
     assert change.mean_displacement == pytest.approx(1.0 / len(positions) * scale, rel=1e-12)
+
+
+@pytest.mark.parametrize("shape", ["closed", "open"])
+def test_a_measured_input_gives_the_same_change(shape):
+    """measure_input done first (as the operators do, on another thread) changes nothing in the report."""
+    positions, faces = sm.uv_sphere(20, 40)
+    faces = np.array(faces)
+    if shape == "open":
+        faces = faces[1:]
+    moved = positions + np.random.default_rng(3).normal(0.0, 0.01, positions.shape)
+    direct = core.measure_change(positions, moved, faces=faces)
+    measured = core.metrics.measure_input(positions, faces)
+    assert measured.closed is (shape == "closed")
+    assert core.measure_change(positions, moved, measured=measured) == direct
+    assert (direct.volume_change is not None) is (shape == "closed")
+    with pytest.raises(ValueError, match="measured is of"):
+        core.measure_change(positions[:-1], moved[:-1], measured=measured)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_volume_near_and_far_from_the_origin_agree(dtype):
+    """Near the origin the positions are used in place, far away a centred copy: the same volume."""
+    positions, faces = sm.uv_sphere(30, 60)
+    triangles = fan_triangles(np.array(faces))
+    near = core.metrics.enclosed_volume(positions.astype(dtype), triangles)
+    far = core.metrics.enclosed_volume((positions + 50.0).astype(dtype), triangles)
+    assert near == pytest.approx(far, rel=1e-6 if dtype == np.float32 else 1e-12)

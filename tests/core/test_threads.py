@@ -193,3 +193,11 @@ def test_neighbour_sums_are_the_pattern_product(monkeypatch, dtype):
     )
     ones = parallel._ones(dtype, 1)
     assert not ones.flags.writeable and np.all(ones == 1)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_in_background_hands_back_the_result_or_the_error(monkeypatch, threads):
+    monkeypatch.setattr(parallel, "thread_count", lambda: threads)
+    assert parallel.in_background(lambda: 6 * 7).result() == 42
+    with pytest.raises(ZeroDivisionError):
+        parallel.in_background(lambda: 1 / 0).result()
