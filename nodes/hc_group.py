@@ -13,16 +13,22 @@ x_i + T x_i. HC per movable vertex, in the form of core/smoothing.py:
 
     s = α o + (1-α) q,   w = (1-β) (T q - s)  (w = 0 on fixed vertices),   p = s + w - T w
 
-T w is taken by writing w into the positions for a moment, so that both umbrellas read the edges'
-end positions (Edge Vertices) instead of gathering an attribute per edge end (Evaluate at Index),
-which costs two to three times as much (bench/README.md, "HC Smooth modifier"). The Laplacian with the
-original point (p = α o + (1-α) T q) runs in the same Repeat zone. Plain Laplacian (p = T q) and the
-central point (p = α q + (1-α) T q) need no o, so one Blur Attribute node runs all their iterations:
-with weight W_i on vertex i's neighbours, Blur gives (q_i + W_i Σ_j q_j) / (1 + W_i |adj(i)|), which
-is the central step for W_i = (1-α) / (α |adj(i)|), the plain one as α -> 0, and q_i for W_i = 0.
+T w is taken by writing w into the positions for a moment (q waits in a captured attribute, and s is
+taken again from it), so that both umbrellas read the edges' end positions (Edge Vertices) instead of
+gathering an attribute per edge end (Evaluate at Index), which costs two to three times as much
+(bench/README.md, "HC Smooth modifier"). The Laplacian with the original point (p = α o + (1-α) T q)
+runs in the same Repeat zone. Plain Laplacian (p = T q) and the central point (p = α q + (1-α) T q)
+need no o, so one Blur Attribute node runs all their iterations: with weight W_i on vertex i's
+neighbours, Blur gives (q_i + W_i Σ_j q_j) / (1 + W_i |adj(i)|), which is the central step for
+W_i = (1-α) / (α |adj(i)|), the plain one as α -> 0, and q_i for W_i = 0.
 
 Fixed vertices (Fixed Group, Pin Boundary, and vertices without edges, as in core) keep q exactly:
-they are left out of Set Position, get Blur weight 0, and in HC take back their original position.
+they get Blur weight 0 and are left out of Set Position, and in HC take back their original position.
+
+Painted influence λ (the Influence input, a vertex group's weights) is core's influence=: after each
+iteration a vertex takes q + λ (p - q) instead of p, q itself where λ = 0. For the Blur methods that
+is the central step with a per-vertex weight (see build()); the Repeat zone mixes p and q, and only
+when some vertex has λ < 1, so without a painted group the nodes compute what they did before.
 """
 
 import bpy
@@ -31,7 +37,7 @@ from .. import settings_spec
 
 GROUP_NAME = "HC Smooth"
 # Bump whenever the nodes or the interface change: an older group in a file is then rebuilt in place.
-VERSION = 1
+VERSION = 2
 VERSION_KEY = "hc_smooth_version"
 
 # Blur weight standing in for "only the neighbours" (plain Laplacian): the centre's own share is
@@ -67,12 +73,16 @@ INPUTS = (  # (name, socket type, a setting to take description / default / limi
         "Influence",
         "NodeSocketFloat",
         dict(
-            description="Not used yet: painted influence will scale each vertex's move", default=1.0, min=0.0, max=1.0
+            description="How far each vertex moves in every iteration (0 = stays, 1 = the full step): pick a "
+            "vertex group with the button on the right",
+            default=1.0,
+            min=0.0,
+            max=1.0,
         ),
     ),
+    ("Invert Influence", "NodeSocketBool", settings_spec.INVERT_INFLUENCE_GROUP),
 )
 FIELD_INPUTS = ("Fixed Group", "Influence")  # per-vertex values (vertex groups); the rest are settings
-HIDDEN_INPUTS = ("Influence",)  # in the interface for scripts, not shown in the modifier until it works
 
 
 def _interface(tree):
@@ -95,8 +105,6 @@ def _interface(tree):
             socket.max_value = spec["max"]
         if name not in FIELD_INPUTS:
             _single_value(socket)
-        if hasattr(socket, "hide_in_modifier"):
-            socket.hide_in_modifier = name in HIDDEN_INPUTS
         sockets[name] = socket
     return sockets
 
@@ -190,9 +198,25 @@ class _Tree:
         node = self.node("GeometryNodeSetPosition")
         self.feed(node.inputs["Geometry"], geometry)
         self.feed(node.inputs["Position"], position)
+        # Set Position writes position + offset: x + (-0.0) is x for every x, where + 0.0 makes -0.0 into 0.0.
+        node.inputs["Offset"].default_value = (-0.0, -0.0, -0.0)
         if selection is not None:
             self.feed(node.inputs["Selection"], selection)
         return node.outputs["Geometry"]
+
+    def clamp(self, value, low=0.0, high=1.0):
+        node = self.node("ShaderNodeClamp")
+        self.feed(node.inputs["Value"], value)
+        self.feed(node.inputs["Min"], low)
+        self.feed(node.inputs["Max"], high)
+        return node.outputs[0]
+
+    def minimum_on_points(self, geometry, value):
+        """The smallest value of a float field over the points of ``geometry``: a single value."""
+        node = self.node("GeometryNodeAttributeStatistic", data_type="FLOAT", domain="POINT")
+        self.feed(node.inputs["Geometry"], geometry)
+        self.feed(node.inputs["Attribute"], value)
+        return node.outputs["Min"]
 
     def position(self):
         return self.node("GeometryNodeInputPosition").outputs[0]
@@ -237,20 +261,44 @@ def build(tree):
     fixed = t.boolean("OR", fixed, t.math("LESS_THAN", degree, 0.5))
     movable = t.boolean("NOT", fixed)
 
+    # The painted influence, as core takes it: the group's weights (inverted: 1 - weight) clipped to [0, 1].
+    painted = inputs["Influence"]
+    influence = t.clamp(t.switch("FLOAT", inputs["Invert Influence"], painted, t.math("SUBTRACT", 1.0, painted)))
+
     # Plain and central Laplacian: one Blur Attribute, all iterations (weights as in the module's docstring).
+    # Influence λ makes the step the central one with a' = a + (1 - a)(1 - λ): a' q + (1 - a') T q is
+    # q + λ (p - q). Where λ = 1 this is the same arithmetic as without influence (a' = a, 1 - a' = 1 - a).
     a = t.math("MULTIPLY", alpha, is_method(CENTRAL))  # 0 for plain
-    weight = t.math("DIVIDE", t.math("SUBTRACT", 1.0, a), t.math("MULTIPLY_ADD", a, degree, NEIGHBOURS_ONLY))
+    one_minus_a = t.math("SUBTRACT", 1.0, a)
+    kept = t.math("MULTIPLY_ADD", one_minus_a, t.math("SUBTRACT", 1.0, influence), a)  # a'
+    moved = t.math("MULTIPLY", influence, one_minus_a)  # 1 - a'
+    weight = t.math("DIVIDE", moved, t.math("MULTIPLY_ADD", kept, degree, NEIGHBOURS_ONLY))
     blur = t.node("GeometryNodeBlurAttribute", data_type="FLOAT_VECTOR")
     t.feed(blur.inputs[0], t.position())
     t.feed(blur.inputs["Iterations"], iterations)
-    t.feed(blur.inputs["Weight"], t.math("MULTIPLY", weight, movable))
-    blurred = t.set_position(inputs["Geometry"], blur.outputs[0])
+    blur_weight = t.math("MULTIPLY", weight, movable)
+    t.feed(blur.inputs["Weight"], blur_weight)
+    # Blur gives q + 0 where the weight is 0, which turns -0.0 into 0.0: those vertices keep q itself.
+    blurred = t.set_position(inputs["Geometry"], blur.outputs[0], t.math("GREATER_THAN", blur_weight, 0.0))
 
     # HC and the Laplacian with the original point: a Repeat zone of simultaneous steps.
     position = t.position()
-    start, (original, movable) = t.capture(
-        inputs["Geometry"], [("VECTOR", "Original", position), ("BOOLEAN", "Movable", movable)]
+    start, (original, movable, influence) = t.capture(
+        inputs["Geometry"],
+        [("VECTOR", "Original", position), ("BOOLEAN", "Movable", movable), ("FLOAT", "Influence", influence)],
     )
+    # A single value: whether any vertex takes less than the full step. If none does, the steps below are
+    # built without the weighting (a Switch on a single value evaluates only the side it picks).
+    partly = t.math("LESS_THAN", t.minimum_on_points(start, influence), 1.0)
+
+    def weighted(p, q):
+        """q + λ (p - q) as core computes it, λ the influence: that share of the iteration's move from q to p;
+        p itself where λ = 1 and q itself where λ = 0, bit for bit."""
+        share = t.add(q, t.scale(t.subtract(p, q), influence))
+        share = t.switch("VECTOR", t.math("GREATER_THAN", influence, 0.0), q, share)
+        share = t.switch("VECTOR", t.math("LESS_THAN", influence, 1.0), p, share)
+        return t.switch("VECTOR", partly, p, share)
+
     repeat_in = t.node("GeometryNodeRepeatInput")
     repeat_out = t.node("GeometryNodeRepeatOutput")
     repeat_in.pair_with_output(repeat_out)
@@ -261,14 +309,19 @@ def build(tree):
     q = t.position()
     tq = t.umbrella_of_positions()
     one_minus_alpha = t.math("SUBTRACT", 1.0, alpha)
-    laplacian = t.set_position(current, t.add(t.scale(original, alpha), t.scale(tq, one_minus_alpha)), movable)
+    laplacian_step = t.add(t.scale(original, alpha), t.scale(tq, one_minus_alpha))
+    laplacian = t.set_position(current, weighted(laplacian_step, q), movable)
 
-    s = t.add(t.scale(original, alpha), t.scale(q, one_minus_alpha))
+    def anchor(q):
+        """s = α o + (1-α) q."""
+        return t.add(t.scale(original, alpha), t.scale(q, one_minus_alpha))
+
     keep = t.math("MULTIPLY", t.math("SUBTRACT", 1.0, beta), movable)
-    w = t.scale(t.subtract(tq, s), keep)
-    with_s, (s,) = t.capture(current, [("VECTOR", "Anchor", s)])
-    carrying_w = t.set_position(with_s, w)  # every vertex: T w below reads the neighbours' w, 0 if fixed
-    hc_step = t.subtract(t.add(s, t.position()), t.umbrella_of_positions())  # s + w - T w
+    w = t.scale(t.subtract(tq, anchor(q)), keep)
+    with_q, (q_kept,) = t.capture(current, [("VECTOR", "Start", q)])  # q, while the positions carry w
+    carrying_w = t.set_position(with_q, w)  # every vertex: T w below reads the neighbours' w, 0 if fixed
+    hc_step = t.subtract(t.add(anchor(q_kept), t.position()), t.umbrella_of_positions())  # s + w - T w
+    hc_step = weighted(hc_step, q_kept)  # influence scales the move, not w: such vertices stay in V_var
     hc = t.set_position(carrying_w, t.switch("VECTOR", movable, original, hc_step))  # fixed: o = q, exactly
 
     t.feed(repeat_out.inputs["Geometry"], t.switch("GEOMETRY", is_method(HC), laplacian, hc))

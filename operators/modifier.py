@@ -11,15 +11,17 @@ from bpy.props import BoolProperty
 
 from .. import settings_spec
 from ..nodes import hc_group, inputs
-from .properties import alpha_label, annotations, draw_fixed_group, uses_alpha, uses_beta
+from .properties import alpha_label, annotations, draw_fixed_group, draw_influence_group, uses_alpha, uses_beta
 
 MODIFIER_NAME = "HC Smooth"
 SMOOTH_OPERATOR = "OBJECT_OT_hc_smooth"  # the smoothing whose redo panel offers Add as Modifier
+# What the modifier takes from the mesh settings: settings_spec.MODIFIER and the painted influence.
+SETTINGS = (*settings_spec.MODIFIER, settings_spec.INFLUENCE_GROUP, settings_spec.INVERT_INFLUENCE_GROUP)
 
 
 def add_modifier(obj, settings):
-    """Add the HC Smooth modifier to ``obj`` (at the end of its stack) with ``settings`` (settings_spec.MODIFIER
-    names: an operator's properties, the scene settings or a plain object)."""
+    """Add the HC Smooth modifier to ``obj`` (at the end of its stack) with ``settings`` (SETTINGS' names: an
+    operator's properties, the scene settings or a plain object)."""
     modifier = obj.modifiers.new(MODIFIER_NAME, "NODES")
     modifier.node_group = hc_group.ensure_group()
     configure(modifier, settings)
@@ -36,6 +38,9 @@ def configure(modifier, settings):
     # The operators ignore Invert without a group; the modifier would fix everything (weight 0 everywhere).
     inputs.set_input(modifier, "Invert Fixed Group", bool(settings.vertex_group) and settings.invert_vertex_group)
     inputs.set_input(modifier, "Pin Boundary", settings.pin_boundary)
+    inputs.set_input_attribute(modifier, "Influence", settings.influence_group)
+    # Likewise: without a group the operators smooth fully; the inverted value would keep every vertex still.
+    inputs.set_input(modifier, "Invert Influence", bool(settings.influence_group) and settings.invert_influence_group)
 
 
 def modifier_differences(settings):
@@ -47,13 +52,11 @@ def modifier_differences(settings):
         lines.append("The modifier runs Simultaneous mode")
     if getattr(settings, "tolerance", 0.0) > 0.0:
         lines.append("The modifier runs every iteration")
-    if getattr(settings, "influence_group", ""):
-        lines.append("The modifier has no Influence Group yet")
     return lines
 
 
 def copy_settings(source, properties):
-    for setting in settings_spec.MODIFIER:
+    for setting in SETTINGS:
         setattr(properties, setting.name, getattr(source, setting.name))
 
 
@@ -86,7 +89,7 @@ class OBJECT_OT_hc_smooth_modifier_add(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     __annotations__ = {
-        **annotations(settings_spec.MODIFIER),
+        **annotations(SETTINGS),
         # Set by the smoothing's redo panel: undo that smoothing first, so the mesh is not smoothed twice.
         "replace_smoothing": BoolProperty(name="Replace Smoothing", default=False, options={"HIDDEN", "SKIP_SAVE"}),
     }
@@ -106,11 +109,8 @@ class OBJECT_OT_hc_smooth_modifier_add(bpy.types.Operator):
             return {"CANCELLED"}
         for obj in objects:
             add_modifier(obj, self)
-            if self.vertex_group and obj.vertex_groups.get(self.vertex_group) is None:
-                self.report(
-                    {"WARNING"},
-                    f"Object '{obj.name}' has no vertex group '{self.vertex_group}': no vertex is fixed by it",
-                )
+            for warning in missing_groups(obj, self):
+                self.report({"WARNING"}, warning)
         names = f"'{objects[0].name}'" if len(objects) == 1 else f"{len(objects)} objects"
         self.report({"INFO"}, f"Added the {MODIFIER_NAME} modifier to {names}")
         return {"FINISHED"}
@@ -128,7 +128,18 @@ class OBJECT_OT_hc_smooth_modifier_add(bpy.types.Operator):
         layout.prop(self, "iterations")
         draw_fixed_group(layout, self, context.active_object)
         layout.prop(self, "pin_boundary")
+        draw_influence_group(layout, self, context.active_object)
         layout.label(text="Simultaneous mode", icon="INFO")
+
+
+def missing_groups(obj, settings):
+    """What the modifier does with vertex group names ``obj`` lacks (it reads them as weight 0), as warnings."""
+    name = f"Object '{obj.name}' has no vertex group"
+    if settings.vertex_group and obj.vertex_groups.get(settings.vertex_group) is None:
+        yield f"{name} '{settings.vertex_group}': no vertex is fixed by it"
+    if settings.influence_group and obj.vertex_groups.get(settings.influence_group) is None:
+        still = "every vertex takes the full step" if settings.invert_influence_group else "no vertex moves"
+        yield f"{name} '{settings.influence_group}' (the influence group): {still}"
 
 
 def _targets(context):

@@ -1,8 +1,9 @@
 """The HC Smooth modifier (a Geometry Nodes group built by nodes/hc_group.py), through the evaluated depsgraph.
 
 Its result must equal core's for every method on every kind of mesh, within single-precision rounding
-(1e-5 of the bounding-box diagonal after 10 iterations); fixed vertices must not move at all. Applying it
-must give what object.hc_smooth gives, and a file saved with it must evaluate the same without the add-on.
+(1e-5 of the bounding-box diagonal after 10 iterations), with a painted influence as core's influence=;
+fixed vertices and those of influence 0 must not move at all. Applying it must give what object.hc_smooth
+gives, and a file saved with it must evaluate the same without the add-on.
 """
 
 import importlib
@@ -10,6 +11,8 @@ import importlib
 import bpy
 import numpy as np
 import pytest
+import scipy.sparse
+import scipy.sparse.csgraph
 from blender_scene import ADDON, edges_of, noisy_grid, noisy_sphere, positions_of, select_only
 from test_ui import RecordingLayout
 
@@ -28,7 +31,10 @@ INPUT_NAMES = (
     "Invert Fixed Group",
     "Pin Boundary",
     "Influence",
+    "Invert Influence",
 )
+# Painted weights: 0 (stays), 1 (the full step) and shares between that are not binary fractions.
+INFLUENCE_LEVELS = (0.0, 0.3, 0.55, 0.8, 1.0)
 
 
 def manual(**settings):
@@ -85,6 +91,26 @@ def boundary_mask(mesh):
     return mask
 
 
+def painted(obj, name="Paint", seed=4):
+    """A vertex group of INFLUENCE_LEVELS weights, some vertices left out of it (weight 0); returns the
+    weights as Blender stores them (float32), as core's influence= takes them."""
+    rng = np.random.default_rng(seed)
+    n = len(obj.data.vertices)
+    weights = rng.choice(INFLUENCE_LEVELS, size=n).astype(np.float32)
+    left_out = rng.random(n) < 0.15
+    group = obj.vertex_groups.new(name=name)
+    for level in INFLUENCE_LEVELS:
+        group.add(np.flatnonzero((weights == np.float32(level)) & ~left_out).tolist(), level, "REPLACE")
+    weights[left_out] = 0.0
+    assert all((weights == np.float32(level)).any() for level in INFLUENCE_LEVELS)
+    return weights
+
+
+def inverted(weights):
+    """The influence of an inverted group, as the operators take it (float32, clipped to [0, 1])."""
+    return np.clip(np.float32(1.0) - weights, 0.0, 1.0)
+
+
 def add_modifier(obj, **settings):
     select_only(obj)
     settings = dict(dict(alpha=ALPHA, beta=BETA, iterations=ITERATIONS), **settings)
@@ -92,25 +118,36 @@ def add_modifier(obj, **settings):
     return obj.modifiers[-1]
 
 
-def expected(obj, method, fixed=None, **core_options):
+def expected(obj, method, fixed=None, influence=None, **core_options):
     options = dict(alpha=f32(ALPHA), beta=f32(BETA), iterations=ITERATIONS)
     options.update(core_options)
     return core.smooth(
-        positions_of(obj.data), edges_of(obj.data), method=CORE_METHOD[method], fixed=fixed, **options
+        positions_of(obj.data),
+        edges_of(obj.data),
+        method=CORE_METHOD[method],
+        fixed=fixed,
+        influence=influence,
+        **options,
     ).positions
 
 
-def check_equals_core(obj, method, fixed=None, **settings):
-    """The modifier with ``settings`` equals core with ``fixed``; fixed vertices stay bit for bit. Returns the
-    largest difference as a fraction of the diagonal."""
+def check_equals_core(obj, method, fixed=None, influence=None, **settings):
+    """The modifier with ``settings`` equals core with ``fixed`` and ``influence``; fixed vertices and those of
+    influence 0 stay bit for bit. Returns the largest difference as a fraction of the diagonal."""
     before = positions_of(obj.data)
     add_modifier(obj, method=method, **settings)
-    got, want = evaluated_positions(obj), expected(obj, method, fixed)
+    got, want = evaluated_positions(obj), expected(obj, method, fixed, influence=influence)
     error = float(np.abs(got - want).max()) / diagonal(before)
     assert error <= TOLERANCE, (method, error)
     assert np.abs(got - before).max() > 100 * TOLERANCE * diagonal(before)  # it did smooth
     if fixed is not None:
-        assert np.array_equal(got[fixed], before[fixed])
+        assert np.array_equal(got[fixed].view(np.uint32), before[fixed].view(np.uint32))
+    if influence is not None:
+        still = influence == 0.0
+        assert still.any() and np.array_equal(got[still].view(np.uint32), before[still].view(np.uint32))
+        # The weights matter here: core without them is far from the modifier's result.
+        unweighted = expected(obj, method, fixed)
+        assert np.abs(got - unweighted).max() > 100 * TOLERANCE * diagonal(before)
     assert np.array_equal(positions_of(obj.data), before)  # a modifier never changes the mesh itself
     return error
 
@@ -216,6 +253,93 @@ def test_invert_without_a_group_fixes_nothing(scene):
     check_equals_core(noisy_sphere(), "HC", invert_vertex_group=True)
 
 
+# --- painted influence -----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("method", CORE_METHOD)
+@pytest.mark.parametrize("shape", MESHES)
+def test_influence_group_equals_core(scene, shape, method):
+    obj = MESHES[shape]()
+    weights = painted(obj)
+    check_equals_core(obj, method, influence=weights, influence_group="Paint")
+
+
+@pytest.mark.parametrize("method", CORE_METHOD)
+def test_inverted_influence_group_equals_core(scene, method):
+    obj = noisy_sphere()
+    weights = painted(obj)
+    check_equals_core(obj, method, influence=inverted(weights), influence_group="Paint", invert_influence_group=True)
+
+
+@pytest.mark.parametrize("method", CORE_METHOD)
+def test_influence_with_a_fixed_group_and_a_pinned_boundary(scene, method):
+    obj = noisy_grid()
+    weights = painted(obj)
+    keep = np.zeros(len(weights), dtype=bool)
+    keep[40:80] = True  # fixed, whatever their influence (0, partial or 1)
+    obj.vertex_groups.new(name="Keep").add(np.flatnonzero(keep).tolist(), 1.0, "REPLACE")
+    fixed = keep | boundary_mask(obj.data)
+    check_equals_core(
+        obj, method, fixed=fixed, influence=weights, vertex_group="Keep", pin_boundary=True, influence_group="Paint"
+    )
+
+
+@pytest.mark.parametrize("method", CORE_METHOD)
+def test_still_vertices_keep_their_bits_even_negative_zero(scene, method):
+    obj = noisy_sphere()
+    weights = painted(obj)
+    fixed = np.zeros(len(weights), dtype=bool)
+    fixed[::7] = True
+    obj.vertex_groups.new(name="Keep").add(np.flatnonzero(fixed).tolist(), 1.0, "REPLACE")
+    positions = positions_of(obj.data)
+    positions[(weights == 0.0) | fixed, 0] = -0.0  # q + 0 would make it 0.0
+    obj.data.vertices.foreach_set("co", positions.ravel())
+    obj.data.update()
+    check_equals_core(obj, method, fixed=fixed, influence=weights, vertex_group="Keep", influence_group="Paint")
+
+
+def graph_distance(obj, source):
+    """Edges from ``source`` to every vertex (inf where unreachable)."""
+    edges = edges_of(obj.data)
+    n = len(obj.data.vertices)
+    graph = scipy.sparse.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    return scipy.sparse.csgraph.shortest_path(graph, directed=False, unweighted=True, indices=source)
+
+
+@pytest.mark.parametrize("method", CORE_METHOD)
+def test_full_influence_is_the_step_without_influence_bit_for_bit(scene, method):
+    obj = noisy_sphere(subdivisions=4)
+    group = obj.vertex_groups.new(name="Paint")
+    group.add(list(range(len(obj.data.vertices))), 1.0, "REPLACE")
+    modifier = add_modifier(obj, method=method, iterations=5)
+    without = evaluated_positions(obj)
+    inputs = module("nodes.inputs")
+    inputs.set_input_attribute(modifier, "Influence", "Paint")
+    assert np.array_equal(evaluated_positions(obj).view(np.uint32), without.view(np.uint32))
+    # One vertex at half influence: vertices beyond its reach in 5 iterations (HC: two umbrellas each) keep the
+    # bits of the step without influence, so weight 1 takes that step exactly, also when others are weighted.
+    group.add([0], 0.5, "REPLACE")
+    obj.data.update()
+    got = evaluated_positions(obj)
+    far = graph_distance(obj, 0) > 2 * 5 + 1
+    assert far.sum() > len(far) // 4 and not np.array_equal(got, without)
+    assert np.array_equal(got[far].view(np.uint32), without[far].view(np.uint32))
+
+
+def test_missing_influence_group_keeps_every_vertex_and_is_reported(scene, capfd):
+    # A name the mesh lacks reads as weight 0, everywhere.
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    add_modifier(obj, influence_group="Nowhere")
+    assert "has no vertex group 'Nowhere' (the influence group): no vertex moves" in capfd.readouterr().out
+    assert np.array_equal(evaluated_positions(obj), before)
+
+
+def test_invert_influence_without_a_group_smooths_fully(scene):
+    # As in the operators: Invert only means something with a group.
+    check_equals_core(noisy_sphere(), "HC", invert_influence_group=True)
+
+
 def test_zero_iterations_and_alpha_one_leave_the_mesh(scene):
     obj = noisy_sphere()
     before = positions_of(obj.data)
@@ -291,6 +415,42 @@ def test_older_group_is_rebuilt_in_place_keeping_settings(scene):
     assert np.abs(got - want).max() <= TOLERANCE * diagonal(want)
 
 
+def as_version_1(group, version_key):
+    """Make ``group`` what version 1 of the add-on built: no Invert Influence, Influence hidden and unused."""
+    items = {item.name: item for item in group.interface.items_tree if item.item_type == "SOCKET"}
+    group.interface.remove(items["Invert Influence"])
+    if hasattr(items["Influence"], "hide_in_modifier"):
+        items["Influence"].hide_in_modifier = True
+    for link in list(group.links):
+        if link.from_node.bl_idname == "NodeGroupInput" and link.from_socket.name == "Influence":
+            to_socket = link.to_socket
+            group.links.remove(link)
+            to_socket.default_value = 1.0
+    group[version_key] = 1
+
+
+def test_version_1_group_is_upgraded_with_a_working_influence(scene):
+    hc_group, inputs = module("nodes.hc_group"), module("nodes.inputs")
+    obj = noisy_sphere()
+    weights = painted(obj)
+    modifier = add_modifier(obj, method="LAPLACIAN_ORIGINAL", iterations=6)
+    group = modifier.node_group
+    as_version_1(group, hc_group.VERSION_KEY)
+    modifier.node_group = group  # the modifier's inputs follow the changed interface
+    inputs.set_input_attribute(modifier, "Influence", "Paint")  # a script could set it: version 1 ignored it
+    method = "LAPLACIAN_ORIGINAL"
+    unweighted, weighted = expected(obj, method, iterations=6), expected(obj, method, influence=weights, iterations=6)
+    tolerance = TOLERANCE * diagonal(weighted)
+    assert np.abs(evaluated_positions(obj) - unweighted).max() <= tolerance
+    assert hc_group.ensure_group() == group and group[hc_group.VERSION_KEY] == hc_group.VERSION > 1
+    items = {item.name: item for item in group.interface.items_tree if item.item_type == "SOCKET"}
+    assert "Invert Influence" in items and not getattr(items["Influence"], "hide_in_modifier", False)
+    assert inputs.get_input_attribute(modifier, "Influence") == "Paint"
+    assert (inputs.get_input(modifier, "Iterations"), inputs.get_input(modifier, "Invert Influence")) == (6, False)
+    assert np.abs(evaluated_positions(obj) - weighted).max() <= tolerance
+    assert np.abs(weighted - unweighted).max() > 100 * tolerance
+
+
 def test_newer_group_is_used_as_it_is(scene):
     hc_group = module("nodes.hc_group")
     group = hc_group.ensure_group()
@@ -309,12 +469,22 @@ def test_a_group_of_the_same_name_without_the_marker_is_left_alone(scene):
 # --- apply = operator; Add as Modifier ------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("influence", ["", "Paint"])
 @pytest.mark.parametrize("method", CORE_METHOD)
-def test_applying_gives_what_the_operator_gives(scene, method):
+def test_applying_gives_what_the_operator_gives(scene, method, influence):
     obj = noisy_grid("Patch")
     obj.vertex_groups.new(name="Keep").add(list(range(0, 30)), 1.0, "REPLACE")
+    weights = painted(obj)
+    before = positions_of(obj.data)
     settings = dict(
-        method=method, alpha=ALPHA, beta=BETA, iterations=ITERATIONS, vertex_group="Keep", pin_boundary=True
+        method=method,
+        alpha=ALPHA,
+        beta=BETA,
+        iterations=ITERATIONS,
+        vertex_group="Keep",
+        pin_boundary=True,
+        influence_group=influence,
+        invert_influence_group=method == "HC",
     )
     twin = obj.copy()
     twin.data = obj.data.copy()
@@ -327,6 +497,9 @@ def test_applying_gives_what_the_operator_gives(scene, method):
     applied, smoothed = positions_of(obj.data), positions_of(twin.data)
     assert len(obj.modifiers) == 0
     assert np.abs(applied - smoothed).max() <= TOLERANCE * diagonal(smoothed)
+    if influence:
+        still = (inverted(weights) if settings["invert_influence_group"] else weights) == 0.0
+        assert still[30:].any() and np.array_equal(applied[still], before[still])
 
 
 def test_redo_panel_offers_add_as_modifier_with_the_same_settings(scene):
@@ -348,9 +521,22 @@ def test_redo_panel_offers_add_as_modifier_with_the_same_settings(scene):
     operator.properties.mode = "SEQUENTIAL"  # the modifier cannot do that: the panel says so
     panel = redo_panel(operator)
     assert "The modifier runs Simultaneous mode" in panel.labels()
-    if "influence_group" in operator.properties.bl_rna.properties:  # nor use an influence group (yet)
-        operator.properties.influence_group = "Paint"
-        assert "The modifier has no Influence Group yet" in redo_panel(operator).labels()
+    operator.properties.mode = "SIMULTANEOUS"
+    operator.properties.influence_group, operator.properties.invert_influence_group = "Paint", True
+    panel = redo_panel(operator)
+    assert not panel.labels()  # the modifier takes the influence group as it is
+    ((idname, button),) = [entry for entry in panel.buttons() if entry[0] == "object.hc_smooth_modifier_add"]
+    assert (button.influence_group, button.invert_influence_group) == ("Paint", True)
+
+
+def test_modifier_operator_panel_shows_both_groups(scene):
+    obj = noisy_sphere()
+    select_only(obj)
+    assert bpy.ops.object.hc_smooth_modifier_add("INVOKE_DEFAULT", True, influence_group="Paint") == {"FINISHED"}
+    operator = bpy.context.window_manager.operators[-1]
+    assert operator.bl_idname == "OBJECT_OT_hc_smooth_modifier_add"
+    searched = [args[1] for args in (entry[1] for entry in redo_panel(operator).calls("prop_search"))]
+    assert searched == ["vertex_group", "influence_group"]
 
 
 def test_edit_mode_redo_panel_has_no_add_as_modifier(scene):
@@ -406,6 +592,7 @@ def test_panel_button_and_add_modifier_menu_carry_the_scene_settings(scene):
     panel = module("ui.panel")
     settings = scene.hc_smooth
     settings.iterations, settings.method, settings.pin_boundary = 17, "LAPLACIAN_CENTRAL", True
+    settings.influence_group, settings.invert_influence_group = "Paint", True
     for draw in (
         lambda layout: bpy.types.VIEW3D_PT_hc_smooth.draw(type("P", (), {"layout": layout})(), bpy.context),
         lambda layout: panel.draw_modifier_menu_entry(type("M", (), {"layout": layout})(), bpy.context),
@@ -414,6 +601,7 @@ def test_panel_button_and_add_modifier_menu_carry_the_scene_settings(scene):
         draw(layout)
         ((idname, button),) = [entry for entry in layout.buttons() if entry[0] == "object.hc_smooth_modifier_add"]
         assert (button.iterations, button.method, button.pin_boundary) == (17, "LAPLACIAN_CENTRAL", True)
+        assert (button.influence_group, button.invert_influence_group) == ("Paint", True)
     assert panel.draw_modifier_menu_entry in bpy.types.OBJECT_MT_modifier_add_deform._dyn_ui_initialize()
     settings.mode = "SEQUENTIAL"
     layout = RecordingLayout()
@@ -427,7 +615,8 @@ def test_panel_button_and_add_modifier_menu_carry_the_scene_settings(scene):
 def test_saved_file_evaluates_the_same_without_the_add_on(scene, tmp_path):
     obj = noisy_grid("Patch")
     obj.vertex_groups.new(name="Keep").add(list(range(10, 50)), 1.0, "REPLACE")
-    add_modifier(obj, method="HC", vertex_group="Keep", pin_boundary=True)
+    weights = painted(obj)
+    add_modifier(obj, method="HC", vertex_group="Keep", pin_boundary=True, influence_group="Paint")
     with_add_on = evaluated_positions(obj)
     path = str(tmp_path / "with_modifier.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)
@@ -445,5 +634,5 @@ def test_saved_file_evaluates_the_same_without_the_add_on(scene, tmp_path):
     fixed = np.zeros(len(reopened), dtype=bool)
     fixed[10:50] = True
     fixed |= boundary_mask(bpy.data.objects["Patch"].data)
-    want = expected(bpy.data.objects["Patch"], "HC", fixed)
+    want = expected(bpy.data.objects["Patch"], "HC", fixed, influence=weights)
     assert np.abs(reopened - want).max() <= TOLERANCE * diagonal(want)
