@@ -116,6 +116,19 @@ class _Run:
         index = rows if self.position_of is None else self.position_of[rows]
         return np.asarray(self.smoothing.current[:, index].T, dtype=np.float64)
 
+    def snapshot(self):
+        """(iterations run, a copy of the state): what ``positions`` turns back into a result."""
+        return self.smoothing.done, self.smoothing.current.copy()
+
+    def positions(self, state):
+        """A snapshot's state in the caller's shape, dtype and vertex order."""
+        positions = np.empty(self.smoothing.shape, dtype=self.smoothing.dtype)
+        if self.order is None:
+            positions[...] = state.T
+        else:
+            positions[self.order] = state.T
+        return positions
+
 
 def choose_amount(
     positions: ArrayLike,
@@ -155,6 +168,7 @@ class AmountChooser:
         self.movable = movable = np.flatnonzero(~fixed_mask)
         self.edge_length = _median_edge_length(start, operator)
         self.amount = None
+        self._kept = None  # the data run's state at the amount chosen so far: the result, if the choice stays
         if movable.size == 0:
             self.amount = MeshAmount(0.0, beta, 0, 0.0, self.edge_length, 0)
             return
@@ -218,11 +232,21 @@ class AmountChooser:
                 normals = _ring_normals(points, rows, operator)
             score = _scores(residuals, traces, normals)
             chosen = _chosen(steps, score)
+            if chosen == k:
+                self._kept = data.snapshot()
             if k >= 12 and k >= 1.5 * chosen and k >= 1.25 * steps[int(np.argmin(_scores(residuals, traces, None)))]:
                 break  # well past the amount chosen
             yield k / MAX_ITERATIONS
         self.amount = self._amount(steps, traces, residuals, normals, done)
         yield 1.0
+
+    def result(self):
+        """The positions after ``amount.iterations`` HC iterations (alpha 0, this beta, these fixed
+        vertices, simultaneous) if the data run passed through them on its way, else None: then the
+        caller runs them. Bit for bit what core.Smoothing gives for that run, without running it again."""
+        if self.amount is None or self._kept is None or self._kept[0] != self.amount.iterations:
+            return None
+        return self.data.positions(self._kept[1])
 
     def _amount(self, steps, traces, residuals, normals, done):
         if not steps:  # diverged at once (beta far below 0.5): no amount is safe

@@ -139,7 +139,7 @@ def run(jobs, props, chunk=None):
         start = time.perf_counter()
         input_measure(job)  # on the other core while this one builds the operator
         job.operator = core.umbrella_operator(job.edges, len(job.positions))
-        iterations, job_settings, share = props.iterations, settings, 0.0
+        iterations, job_settings, share, done = props.iterations, settings, 0.0, None
         if automatic(props):
             chooser = core.AmountChooser(job.positions, operator=job.operator, beta=settings["beta"], fixed=job.fixed)
             share = CHOOSING_SHARE
@@ -148,26 +148,35 @@ def run(jobs, props, chunk=None):
                     yield (number + share * fraction) / len(jobs)
             job.amount = chooser.amount
             iterations, job_settings = job.amount.iterations, {**settings, "alpha": job.amount.alpha}
-        with warnings.catch_warnings():  # the operators report the convergence region themselves
-            warnings.simplefilter("ignore", core.ConvergenceWarning)
-            smoothing = core.Smoothing(
-                job.positions,
-                None,
-                operator=job.operator,
-                iterations=iterations,
-                fixed=job.fixed,
-                influence=job.influence,
-                **job_settings,
-            )
-        for fraction in smoothing.steps(chunk):
-            if fraction < 1.0:
-                yield (number + share + (1.0 - share) * fraction) / len(jobs)
-        result = smoothing.result()
-        job.result, job.iterations_run = result.positions, result.iterations
+            if job.influence is None and settings["mode"] == "simultaneous" and not settings["tolerance"]:
+                done = chooser.result()  # the choice ran exactly these iterations on its way: not again
+        if done is not None:
+            job.result, job.iterations_run = done, iterations
+        else:
+            smoothing = _smoothing(job, iterations, job_settings)
+            for fraction in smoothing.steps(chunk):
+                if fraction < 1.0:
+                    yield (number + share + (1.0 - share) * fraction) / len(jobs)
+            result = smoothing.result()
+            job.result, job.iterations_run = result.positions, result.iterations
         if job.amount is not None and input_measure(job).result().closed:
             keep_volume(job)
         job.seconds = time.perf_counter() - start
         yield (number + 1) / len(jobs)
+
+
+def _smoothing(job, iterations, settings):
+    with warnings.catch_warnings():  # the operators report the convergence region themselves
+        warnings.simplefilter("ignore", core.ConvergenceWarning)
+        return core.Smoothing(
+            job.positions,
+            None,
+            operator=job.operator,
+            iterations=iterations,
+            fixed=job.fixed,
+            influence=job.influence,
+            **settings,
+        )
 
 
 def keep_volume(job):

@@ -150,3 +150,29 @@ def test_bad_input():
         core.choose_amount(vertices, edges, beta=1.5)
     with pytest.raises(ValueError):
         core.choose_amount(vertices, operator=core.umbrella_operator(edges, len(vertices) + 1))
+
+
+@pytest.mark.parametrize("ratio", [0.1, 0.5, 1.0])
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_the_choice_hands_back_the_run_it_made_bit_for_bit(ratio, dtype):
+    """The data run passes through the chosen amount: its state there is the result of a fresh run."""
+    vertices, faces = bumpy_sphere()
+    edges = edges_of(faces)
+    noisy = with_normal_noise(vertices, ratio, edges)[0].astype(dtype)
+    fixed = np.zeros(len(noisy), dtype=bool)
+    fixed[::17] = True
+    chooser = core.AmountChooser(noisy, edges, beta=0.6, fixed=fixed)
+    for _ in chooser.steps():
+        pass
+    kept = chooser.result()
+    assert kept is not None  # the choice stayed where the run last kept its state
+    fresh = core.hc_smooth(noisy, edges, alpha=0.0, beta=0.6, iterations=chooser.amount.iterations, fixed=fixed)
+    assert kept.dtype == dtype and np.array_equal(kept.view(np.uint8), fresh.view(np.uint8))
+
+
+def test_no_kept_result_when_nothing_ran():
+    vertices, faces = icosphere(2)
+    chooser = core.AmountChooser(vertices, edges_of(faces), fixed=np.ones(len(vertices), dtype=bool))
+    for _ in chooser.steps():
+        pass
+    assert chooser.amount.iterations == 0 and chooser.result() is None
