@@ -407,4 +407,14 @@ POINTS = (
 # The mesh settings a modifier can hold: it runs simultaneous mode and every iteration (no Mode, no
 # Tolerance), on the evaluated mesh (no Output).
 
-MODIFIER = (METHOD, ALPHA, BETA, ITERATIONS, VERTEX_GROUP, INVERT_VERTEX_GROUP, PIN_BOUNDARY)
+MODIFIER = (
+    METHOD,
+    ALPHA,
+    BETA,
+    ITERATIONS,
+    VERTEX_GROUP,
+    INVERT_VERTEX_GROUP,
+    PIN_BOUNDARY,
+    INFLUENCE_GROUP,
+    INVERT_INFLUENCE_GROUP,
+)

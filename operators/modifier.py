@@ -15,8 +15,8 @@ from .properties import alpha_label, annotations, draw_fixed_group, draw_influen
 
 MODIFIER_NAME = "HC Smooth"
 SMOOTH_OPERATOR = "OBJECT_OT_hc_smooth"  # the smoothing whose redo panel offers Add as Modifier
-# What the modifier takes from the mesh settings: settings_spec.MODIFIER and the painted influence.
-SETTINGS = (*settings_spec.MODIFIER, settings_spec.INFLUENCE_GROUP, settings_spec.INVERT_INFLUENCE_GROUP)
+# What the modifier takes from the mesh settings.
+SETTINGS = settings_spec.MODIFIER
 
 
 def add_modifier(obj, settings):
