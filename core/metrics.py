@@ -119,23 +119,43 @@ class _Frame:
         return cls(centre, 2.0 ** math.frexp(size)[1] if size > 0.0 and math.isfinite(size) else 1.0)
 
     def volume(self, points, corners):
-        return _signed_volume_in_units(points, corners, self) * self.unit * self.unit * self.unit
+        return self.units(points, corners) * self.unit * self.unit * self.unit
 
     def units(self, points, corners):
-        return _signed_volume_in_units(points, corners, self)
+        """Σ a·(b×c) / 6 over the triangles (a, b, c) (``corners``: their three index columns), in unit³."""
+        tasks, total = _volume_tasks(points, corners, self, parts=1)
+        return total([task() for task in tasks])
 
 
-_VOLUME_BLOCK = 1 << 15  # triangles per block: the gathered corners of a block stay in cache
-
-
-def _signed_volume_in_units(points, corners, frame):
-    """Σ a·(b×c) / 6 over the triangles (a, b, c), in ``frame``'s unit, block by block: each corner gathers
-    whole rows (one take per corner, not one per coordinate)."""
+def _volume_tasks(points, corners, frame, parts):
+    """The volume of ``frame.units`` as ``parts`` tasks over runs of blocks, and the function that adds
+    their results up in block order (the same bits however the tasks ran)."""
     local, unit = _in_frame(points, frame)
-    a_all, b_all, c_all = corners
-    total = 0.0
-    for start in range(0, a_all.size, _VOLUME_BLOCK):
-        a, b, c = (np.take(local, index[start : start + _VOLUME_BLOCK], axis=0) for index in (a_all, b_all, c_all))
+    count = corners[0].size
+    blocks = [(start, min(start + _VOLUME_BLOCK, count)) for start in range(0, count, _VOLUME_BLOCK)]
+    share = max(1, -(-len(blocks) // parts))
+    tasks = [
+        lambda run=blocks[i : i + share]: _block_sums(local, corners, run) for i in range(0, max(1, len(blocks)), share)
+    ]
+
+    def total(results):
+        value = 0.0
+        for block_sum in (block_sum for sums in results for block_sum in sums):
+            value += block_sum
+        return value / 6.0 / (unit * unit * unit)
+
+    return tasks, total
+
+
+_VOLUME_BLOCK = 1 << 17  # triangles per block: few NumPy calls, each on data that stays in cache
+
+
+def _block_sums(points, corners, blocks):
+    """Σ a·(b×c) over the triangles of each block; each corner gathers whole rows (one take per corner,
+    not one per coordinate)."""
+    sums = []
+    for start, stop in blocks:
+        a, b, c = (np.take(points, index[start:stop], axis=0) for index in corners)
         bx, by, bz, cx, cy, cz = b[:, 0], b[:, 1], b[:, 2], c[:, 0], c[:, 1], c[:, 2]
         term = by * cz
         term -= bz * cy
@@ -148,8 +168,8 @@ def _signed_volume_in_units(points, corners, frame):
         part -= by * cx
         part *= a[:, 2]
         term += part
-        total += float(term.sum(dtype=np.float64))
-    return total / 6.0 / (unit * unit * unit)
+        sums.append(float(term.sum(dtype=np.float64)))
+    return sums
 
 
 def _in_frame(points, frame):
@@ -221,17 +241,20 @@ def measure_change(
     if measured.n_vertices != before.shape[0]:
         raise ValueError(f"measured is of {measured.n_vertices} vertices, before has {before.shape[0]}")
 
-    def result_volume():
-        return measured.frame.units(after, measured.corners) if measured.corners is not None else None
-
     def displacements():  # in the arrays' own precision (a report, not a result): no float64 copies
         diagonal = bbox_diagonal(after)
         return diagonal, row_lengths(after - before, max(measured.diagonal, diagonal))
 
-    tasks = [result_volume, displacements]
-    big = measured.corners is not None and measured.corners[0].size >= 8 * _VOLUME_BLOCK
-    on_threads = big and parallel.thread_count() > 1
-    after_units, (diag_after, displacement) = parallel.run_all(tasks) if on_threads else [task() for task in tasks]
+    # A big closed mesh: its volume in parts on every thread, beside the displacements.
+    volume_tasks, volume_total = [], None
+    if measured.corners is not None:
+        big = measured.corners[0].size >= 2 * _VOLUME_BLOCK
+        parts = parallel.thread_count() if big else 1
+        volume_tasks, volume_total = _volume_tasks(after, measured.corners, measured.frame, parts)
+    tasks = [displacements, *volume_tasks]
+    results = parallel.run_all(tasks) if len(tasks) > 2 else [task() for task in tasks]
+    diag_after, displacement = results[0]
+    after_units = volume_total(results[1:]) if volume_total else None
     diag_before, unit = measured.diagonal, measured.frame.unit
     volume_before = volume_after = volume_change = None
     if after_units is not None:

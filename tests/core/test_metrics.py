@@ -182,3 +182,16 @@ def test_volume_near_and_far_from_the_origin_agree(dtype):
     near = core.metrics.enclosed_volume(positions.astype(dtype), triangles)
     far = core.metrics.enclosed_volume((positions + 50.0).astype(dtype), triangles)
     assert near == pytest.approx(far, rel=1e-6 if dtype == np.float32 else 1e-12)
+
+
+def test_the_report_is_the_same_on_any_number_of_threads(monkeypatch):
+    """measure_change spreads a big mesh's volume over the threads: the same bits as on one."""
+    positions, faces = sm.uv_sphere(60, 120)
+    moved = positions * 1.01 + np.random.default_rng(2).normal(0.0, 1e-3, positions.shape)
+    monkeypatch.setattr(core.metrics, "_VOLUME_BLOCK", 64)  # many blocks: a big mesh in miniature
+    changes = []
+    for threads in (1, 2, 3):
+        monkeypatch.setattr(core.metrics.parallel, "thread_count", lambda threads=threads: threads)
+        changes.append(core.measure_change(positions, moved, faces=np.array(faces)))
+    assert changes[0] == changes[1] == changes[2]
+    assert changes[0].volume_change == pytest.approx(1.01**3 - 1, rel=1e-2)
