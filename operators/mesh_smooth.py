@@ -182,6 +182,8 @@ class MESH_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
     def finish(self, context, jobs):
         try:
             super().finish(context, jobs)
+            for job in jobs:
+                jobs_module.release(job)
         finally:
             bpy.ops.object.mode_set(mode="EDIT")
 

@@ -151,3 +151,16 @@ def test_automatic_amount_reports_progress_while_it_chooses(scene):
     whole = jobs.make_job(noisy_sphere("B"), props)
     list(jobs.run([whole], props))
     assert job.amount == whole.amount and np.array_equal(job.result, whole.result)
+
+
+def test_a_released_job_keeps_its_report(scene):
+    """Edit mode drops a job's arrays before Blender builds its BMesh again: the report stays."""
+    jobs = jobs_module()
+    props = settings()
+    job = jobs.make_job(noisy_sphere(), props)
+    list(jobs.run([job], props))
+    expected = jobs.summary([job], props)
+    job.change = None  # measured again by release, from the arrays
+    jobs.release(job)
+    assert job.positions is None and job.result is None and job.operator is None and job.measured_input is None
+    assert jobs.summary([job], props) == expected and "volume" in expected
