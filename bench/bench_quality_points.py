@@ -15,6 +15,7 @@ smoothing call (conversion into CGAL / MeshLab structures excluded).
     python bench/bench_quality_points.py                              # 20k points, every object, noise and σ
     python bench/bench_quality_points.py --sizes 100k --methods ours,jet,pca --kinds normal
     python bench/bench_quality_points.py --objects cow,bunny --sigmas 0.0025,0.005 --methods ours,jet
+    python bench/bench_quality_points.py --methods ours,uniform,jet  # with and without the local amount
 
 The report goes to stdout and bench/results/ (markdown and JSON).
 """
@@ -41,6 +42,10 @@ def ours(points):
     return result, seconds, note
 
 
+def ours_uniform(points):
+    return bench_points.hc_rfs(points, local_amount=False)
+
+
 def pca32(points):
     start = time.perf_counter()
     out = bench_points.pca_projection(points, k=32)
@@ -49,6 +54,7 @@ def pca32(points):
 
 METHODS = {
     "ours": ("HC Smooth (defaults)", ours),
+    "uniform": ("HC Smooth, one global amount (local_amount=False)", ours_uniform),
     "jet": ("CGAL jet k=24", bench_points.cgal_jet),
     "pca": ("PCA plane k=32", pca32),
     "bilateral": ("CGAL bilateral k=24 x3", bench_points.cgal_bilateral),
@@ -156,16 +162,18 @@ def main():
                             f"({100 * cell['input']['radius']:+.2f}%) | " + " | ".join(texts) + f" | {versus} |"
                         )
                         record.append(cell)
-        if any("ours" in c["methods"] and "jet" in c["methods"] for c in record):
+        for key in ("ours", "uniform"):
             pairs = [
-                (c["methods"]["ours"], c["methods"]["jet"])
+                (c["methods"][key], c["methods"]["jet"])
                 for c in record
-                if "removed" in c["methods"].get("ours", {}) and "removed" in c["methods"].get("jet", {})
+                if "removed" in c["methods"].get(key, {}) and "removed" in c["methods"].get("jet", {})
             ]
+            if not pairs:
+                continue
             won = sum(o["removed"] >= j["removed"] for o, j in pairs)
             out(
-                f"\nOurs removed at least jet's share of the noise in {won} of {len(pairs)} cells; largest |radius "
-                f"change| of ours {100 * max(abs(o['radius']) for o, _ in pairs):.2f} %."
+                f"\n{methods[key][0]} removed at least jet's share of the noise in {won} of {len(pairs)} cells; "
+                f"largest |radius change| {100 * max(abs(o['radius']) for o, _ in pairs):.2f} %."
             )
     (results / f"bench_quality_points-{stamp}.json").write_text(json.dumps(record))
     print(f"\n(written to {report})")

@@ -2,7 +2,7 @@
 
 spanning_tree (exact EMST) -> sdg (surface description graph) -> rfs (RFS mesh) -> swap (edge
 swapping) -> smooth (HC alternating with swapping); noise (noise / sample spacing estimate) picks
-how much smoothing the run does.
+how much smoothing the run does, local_amount how much of it each point takes.
 """
 
 from .noise import NoiseEstimate, estimate_noise

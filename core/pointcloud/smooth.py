@@ -3,7 +3,9 @@
 Pipeline: distinct points -> exact EMST -> SDG -> RFS mesh -> ``rounds`` rounds of HC steps with a
 pass of edge swapping between consecutive rounds -> moved points (a swap pass after the last round
 could not move any point, so there is none). HC's o (original points) stays the input throughout,
-so the rounds together behave like one HC run whose mesh adapts between steps.
+so the rounds together behave like one HC run whose mesh adapts between steps. From the second round
+on, each point takes a share of every step's move that follows its curvature against the noise (the
+local amount, core.pointcloud.local_amount).
 """
 
 import numbers
@@ -17,6 +19,7 @@ from numpy.typing import ArrayLike
 from ..adjacency import umbrella_operator
 from ..smoothing import Cancelled, smooth
 from ..validation import check_fixed, check_positions, check_unit_interval, power_of_two_scale
+from .local_amount import curvature, local_influence
 from .noise import NoiseEstimate, estimate_noise, matched_alpha, steps_per_round
 from .rfs import RFSMesh, rfs_mesh
 from .sdg import surface_description_graph
@@ -40,6 +43,7 @@ class PointCloudReport:
     iterations_per_round: int = 0
     alpha: float = 0.0  # ... with this pull to the originals
     automatic: tuple = ()  # which of "alpha", "iterations_per_round" were chosen automatically
+    influence: np.ndarray = None  # per input point: share of each step's move after round 1 (local amount)
 
 
 AUTO = "auto"
@@ -81,6 +85,7 @@ def smooth_point_cloud(
     gap_factor: float = 3.0,
     min_quality: float = 0.3,
     swap: bool = True,
+    local_amount: bool = True,
     progress: Callable[[int, int], bool | None] | None = None,
     return_mesh: bool = False,
 ) -> np.ndarray | tuple[np.ndarray, PointCloudReport]:
@@ -91,6 +96,10 @@ def smooth_point_cloud(
     keeps the first RFS mesh). fixed: boolean mask or point indices that never move. neighbours: size of the
     nearest-neighbour lists the SDG chooses from; spacing_factor, gap_factor: the SDG rule (see
     core.pointcloud.sdg). min_quality: Bank & Smith threshold for RFS faces, in [0, 1].
+    local_amount: with the automatic amount (``iterations_per_round="auto"``), from the second round on
+    each point takes a share of every step's move that follows its curvature against the noise
+    (core.pointcloud.local_amount): thin parts and sharp rims get fewer effective steps than flat
+    parts. False, or explicit steps: every point takes every step in full.
     progress(done, total) is called after each round; returning False raises ``Cancelled``.
     return_mesh: also return a ``PointCloudReport`` holding the final RFS mesh, the noise estimate
     and the amount of smoothing that ran.
@@ -127,6 +136,7 @@ def smooth_point_cloud(
         gap_factor=gap_factor,
         min_quality=min_quality,
         swap=swap,
+        local_amount=local_amount,
     )
     for _ in run.steps():
         if run.stage == "round" and progress is not None and progress(run.rounds_done, run.rounds) is False:
@@ -157,6 +167,7 @@ class PointCloudSmoother:
         gap_factor=3.0,
         min_quality=0.3,
         swap=True,
+        local_amount=True,
     ):
         self.points = check_positions(points, "points")
         # Everything runs on points / scale (|coordinates| below 1): a power of two, so the division is
@@ -177,6 +188,7 @@ class PointCloudSmoother:
         self.min_quality = check_unit_interval(min_quality, "min_quality")
         self.fixed = check_fixed(fixed, self.points.shape[0])
         self.swap = bool(swap)
+        self.local_amount = bool(local_amount)
         self.result = None
         self.report = None
 
@@ -225,6 +237,7 @@ class PointCloudSmoother:
         swapper = EdgeSwapper(mesh.faces, m) if self.swap and self.rounds > 1 else None
         swaps = []
         operator = None
+        influence = None
         for done in range(1, self.rounds + 1):
             if operator is None:
                 operator = umbrella_operator(mesh.edges, m)
@@ -238,8 +251,19 @@ class PointCloudSmoother:
                 fixed=rows_fixed,
                 original=index.points,
                 operator=operator,
+                influence=influence,
             ).positions
             lap("hc")
+            local = self.local_amount and "iterations_per_round" in self.automatic and index.k >= 5
+            if local and done == 1 and self.rounds > 1:
+                # Measured on the first round's result, where the noise no longer hides the curvature.
+                influence = local_influence(
+                    curvature(current, index.neighbour),
+                    self.rounds * self.iterations_per_round,
+                    noise.sigma,
+                    noise.spacing,
+                )
+                lap("local amount")
             if swapper is not None and done < self.rounds:
                 count = swapper.swap_pass(current)
                 swaps.append(count)
@@ -268,5 +292,6 @@ class PointCloudSmoother:
             iterations_per_round=self.iterations_per_round,
             alpha=self.alpha,
             automatic=self.automatic,
+            influence=None if influence is None else influence[index.representative],
         )
         self.result = result
