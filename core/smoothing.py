@@ -161,9 +161,7 @@ class Smoothing:
             weights = weights[self.order] if weights is not None else None
         # Vertices of partial influence take that fraction of each iteration's move (1: the full step). They
         # stay in the paper's V_var: the weight scales the move, not the neighbours' differences b.
-        partial = np.flatnonzero((weights < 1.0) & ~fixed_mask) if weights is not None else np.zeros(0, np.intp)
-        self.partial_index = partial
-        self.partial_weight = weights[partial].astype(start.dtype) if partial.size else None
+        influence_moves = _Influence.of(weights, fixed_mask, start.dtype)
         # The iterations work on planar copies, one contiguous row per coordinate (see core.parallel).
         self.current = _planar(start, self.order)
         self.step = _step_for(
@@ -175,6 +173,7 @@ class Smoothing:
             self.alpha,
             self.beta,
             start.dtype,
+            influence_moves,
         )  # (keeps α o, never o itself)
         # A step that writes into ``spare`` swaps it with ``current`` every iteration.
         self.spare = np.empty_like(self.current) if self.step.writes_out else None
@@ -205,8 +204,6 @@ class Smoothing:
         with np.errstate(over="ignore", invalid="ignore"):  # a run that blows up is refused by _check
             while ran < count and not self.stopped_early:
                 new = self.step(self.current, self.spare)
-                if self.partial_weight is not None:
-                    _scale_moves(new, self.current, self.partial_index, self.partial_weight)
                 if self.threshold > 0.0:
                     move = new - self.current
                     if not self.plain_squares:  # extreme scales: measure moves in thresholds
@@ -252,12 +249,34 @@ class Smoothing:
         raise DivergenceError(divergence_message(self.method, self.alpha, self.beta, self.done, what))
 
 
-def _scale_moves(new, old, index, weight):
-    """new[:, index] = old + weight (new - old): the weighted vertices take part of the iteration's move.
-    Weight 0 takes old itself (bit-identical, even -0.0), not old + 0."""
-    for to, of in zip(new, old):
-        start = np.take(of, index)
-        np.put(to, index, np.where(weight == 0.0, start, start + weight * (np.take(to, index) - start)))
+class _Influence:
+    """Painted influence: a vertex of weight w in (0, 1) ends an iteration at q + w (p - q) instead of p.
+    Applied to rows in place while they are in cache (a chunk of a simultaneous pass, or all rows);
+    weight 0 keeps q itself (bit-identical, even -0.0), not q + 0."""
+
+    def __init__(self, weight, partial, zero):
+        self.weight, self.partial, self.zero = weight, partial, zero
+
+    @classmethod
+    def of(cls, weights, fixed_mask, dtype):
+        """None when every movable vertex takes the full step."""
+        if weights is None:
+            return None
+        scaled = (weights < 1.0) & ~fixed_mask
+        if not scaled.any():
+            return None
+        zero = scaled & (weights == 0.0)
+        return cls(np.where(scaled, weights, 1.0).astype(dtype), scaled & ~zero, zero if zero.any() else None)
+
+    def apply(self, p, q, rows=slice(None)):
+        """p[:, rows] (planar, written in place) becomes q + w (p - q) on the weighted rows."""
+        p_rows, q_rows = p[:, rows], q[:, rows]
+        blended = np.subtract(p_rows, q_rows)
+        blended *= self.weight[rows]
+        blended += q_rows
+        np.copyto(p_rows, blended, where=self.partial[rows])
+        if self.zero is not None:
+            np.copyto(p_rows, q_rows, where=self.zero[rows])
 
 
 def _box(points):
@@ -365,7 +384,8 @@ class _Step:
 
     writes_out = False
 
-    def __init__(self, fixed_mask, origin, method, alpha, beta):
+    def __init__(self, fixed_mask, origin, method, alpha, beta, influence):
+        self.influence = influence  # an _Influence or None
         self.movable = ~fixed_mask
         self.fixed_index = np.flatnonzero(fixed_mask)
         self.method, self.alpha, self.beta = method, alpha, beta
@@ -388,9 +408,9 @@ def _zero_rows(array, index):
             row[index] = 0.0
 
 
-def _step_for(operator, fixed_mask, origin, method, mode, alpha, beta, dtype):
+def _step_for(operator, fixed_mask, origin, method, mode, alpha, beta, dtype, influence):
     kind = _SequentialStep if mode == "sequential" else _SimultaneousStep
-    return kind(operator, fixed_mask, origin, method, alpha, beta, dtype)
+    return kind(operator, fixed_mask, origin, method, alpha, beta, dtype, influence)
 
 
 class _SimultaneousStep(_Step):
@@ -398,8 +418,8 @@ class _SimultaneousStep(_Step):
 
     writes_out = True
 
-    def __init__(self, operator, fixed_mask, origin, method, alpha, beta, dtype):
-        super().__init__(fixed_mask, origin, method, alpha, beta)
+    def __init__(self, operator, fixed_mask, origin, method, alpha, beta, dtype, influence):
+        super().__init__(fixed_mask, origin, method, alpha, beta, influence)
         dtype = np.dtype(dtype)
         self.blocks = parallel.RowBlocks(operator.indptr, operator.indices, operator.n_vertices)
         # Each block resets its own fixed rows.
@@ -437,6 +457,8 @@ class _SimultaneousStep(_Step):
             elif self.alpha_origin is not None:
                 sums += self.alpha_origin[:, rows]
             p[:, rows] = sums
+            if self.influence is not None:
+                self.influence.apply(p, q, rows)
 
         def block_step(block):
             block.neighbour_sums(q, combine)
@@ -474,6 +496,8 @@ class _SimultaneousStep(_Step):
             p_rows += w[:, rows]
             sums *= self.mean_factor[rows]  # 1/|adj(i)|
             p_rows -= sums
+            if self.influence is not None:
+                self.influence.apply(p, q, rows)
 
         def first_pass(block):
             block.neighbour_sums(q, first)
@@ -495,8 +519,8 @@ class _SequentialStep(_Step):
     threads; the solve itself takes all coordinates in one call (see core.triangular).
     """
 
-    def __init__(self, operator, fixed_mask, origin, method, alpha, beta, dtype):
-        super().__init__(fixed_mask, origin, method, alpha, beta)
+    def __init__(self, operator, fixed_mask, origin, method, alpha, beta, dtype, influence):
+        super().__init__(fixed_mask, origin, method, alpha, beta, influence)
         self.gauss_seidel = _GaussSeidel(operator, self.movable, self.neighbour_weight, dtype)
 
     def __call__(self, q, out=None):
@@ -508,6 +532,8 @@ class _SequentialStep(_Step):
         p = self.gauss_seidel.solve(q, anchor)  # fixed rows of the system read p_i = q_i exactly
         if self.method == "hc":
             self.gauss_seidel.each_coordinate(lambda k: self._correct(q[k], p[k], k), len(p))
+        if self.influence is not None:
+            self.influence.apply(p, q)
         return p
 
     def _correct(self, q, p, k):

@@ -25,23 +25,113 @@ _FULL = 0.98  # weights above this count as 1: the smoother then skips those poi
 _BLOCK = 1 << 14  # rows per block of the batched fits
 
 
-def _curvature_block(points, rows):
+def _sum_products(a, b):
+    """Row sums of a * b for (s, k) arrays, without the product array."""
+    return np.einsum("sk,sk->s", a, b)
+
+
+def _normals(xx, yy, zz, xy, xz, yz):
+    """Unit eigenvectors of the smallest eigenvalue of the symmetric 3 x 3 matrices given by their six
+    entries (each (s,)): the eigenvalue in closed form (trigonometric), the vector as the longest cross
+    product of two rows of the matrix minus it. Vectorized, where a batched eigh spends most of its time
+    on per-matrix overhead; rows with no clear smallest direction (collinear points) fall back to eigh."""
+    mean = (xx + yy + zz) / 3.0
+    off = xy * xy + xz * xz + yz * yz
+    spread = np.sqrt(((xx - mean) ** 2 + (yy - mean) ** 2 + (zz - mean) ** 2 + 2.0 * off) / 6.0)
+    safe = np.where(spread > 0, spread, 1.0)
+    bx, by, bz = (xx - mean) / safe, (yy - mean) / safe, (zz - mean) / safe
+    half_det = (
+        bx * (by * bz - (yz / safe) ** 2)
+        - xy / safe * (xy / safe * bz - yz / safe * xz / safe)
+        + xz / safe * (xy / safe * yz / safe - by * xz / safe)
+    ) / 2.0
+    angle = np.arccos(np.clip(half_det, -1.0, 1.0)) / 3.0
+    smallest = mean + 2.0 * spread * np.cos(angle + 2.0 * np.pi / 3.0)
+    rows = np.stack(
+        [
+            np.stack([xx - smallest, xy, xz], axis=1),
+            np.stack([xy, yy - smallest, yz], axis=1),
+            np.stack([xz, yz, zz - smallest], axis=1),
+        ]
+    )
+    crosses = np.stack([np.cross(rows[0], rows[1]), np.cross(rows[0], rows[2]), np.cross(rows[1], rows[2])])
+    lengths = np.einsum("csi,csi->cs", crosses, crosses)
+    best = lengths.argmax(axis=0)
+    normal = crosses[best, np.arange(best.size)]
+    length = np.sqrt(lengths[best, np.arange(best.size)])
+    # A cross product this short against the matrix's size: two eigenvalues (nearly) tie at the bottom.
+    unclear = ~(length > 1e-9 * (mean * 3.0) ** 2)
+    length[unclear] = 1.0
+    normal /= length[:, None]
+    if unclear.any():
+        matrices = np.stack([xx, xy, xz, xy, yy, yz, xz, yz, zz], axis=1)[unclear].reshape(-1, 3, 3)
+        normal[unclear] = np.linalg.eigh(matrices)[1][:, :, 0]
+    return normal
+
+
+def _curvature_block(planar, rows):
     """Largest absolute principal curvature of the quadric w = a u^2 + b uv + c v^2 + d u + e v + f
-    fitted by least squares to points[rows[i]] in their PCA frame (rows include the point itself)."""
-    patch = points[rows]
-    patch -= patch.mean(axis=1, keepdims=True)
-    reach = np.sqrt(np.einsum("ski,ski->sk", patch, patch).max(axis=1))
+    fitted by least squares to the points ``rows[i]`` of ``planar`` (3, n) in a frame whose w is the
+    normal of their PCA plane (rows include the point itself). The fit's normal equations are built
+    from row sums of monomials; any orthonormal u, v in the plane give the same quadric."""
+    x, y, z = (coordinate[rows] for coordinate in planar)
+    for c in (x, y, z):
+        c -= c.mean(axis=1, keepdims=True)
+    reach = np.sqrt((x * x + y * y + z * z).max(axis=1))
     reach[reach == 0] = 1.0  # all neighbours on the point: no surface to bend
-    patch /= reach[:, None, None]  # unit ball: the columns of the fit are of order 1
-    frame = np.linalg.eigh(np.einsum("ski,skj->sij", patch, patch))[1]  # ascending: column 0 the normal
-    local = np.einsum("ski,sij->skj", patch, frame)
-    u, v, w = local[..., 2], local[..., 1], local[..., 0]
-    design = np.stack([u * u, u * v, v * v, u, v, np.ones_like(u)], axis=2)
-    normal_matrix = np.matmul(design.transpose(0, 2, 1), design)
-    right = np.matmul(design.transpose(0, 2, 1), w[..., None])
+    for c in (x, y, z):
+        c /= reach[:, None]  # unit ball: the columns of the fit are of order 1
+    normal = _normals(*(_sum_products(a, b) for a, b in ((x, x), (y, y), (z, z), (x, y), (x, z), (y, z))))
+    # A tangent: the normal crossed with the coordinate axis it is least aligned with.
+    axis = np.zeros_like(normal)
+    axis[np.arange(len(normal)), np.abs(normal).argmin(axis=1)] = 1.0
+    first = np.cross(normal, axis)
+    first /= np.linalg.norm(first, axis=1, keepdims=True)
+    second = np.cross(normal, first)
+
+    def along(direction):
+        return x * direction[:, 0:1] + y * direction[:, 1:2] + z * direction[:, 2:3]
+
+    u, v, w = along(first), along(second), along(normal)
+    uu, uv, vv = u * u, u * v, v * v
+    m = {
+        "uuuu": _sum_products(uu, uu),
+        "uuuv": _sum_products(uu, uv),
+        "uuvv": _sum_products(uu, vv),
+        "uvvv": _sum_products(uv, vv),
+        "vvvv": _sum_products(vv, vv),
+        "uuu": _sum_products(uu, u),
+        "uuv": _sum_products(uu, v),
+        "uvv": _sum_products(uv, v),
+        "vvv": _sum_products(vv, v),
+        "uu": uu.sum(axis=1),
+        "uv": uv.sum(axis=1),
+        "vv": vv.sum(axis=1),
+        "u": u.sum(axis=1),
+        "v": v.sum(axis=1),
+    }
+    count = float(u.shape[1])
+    # Monomials [uu, uv, vv, u, v, 1]: entry (i, j) of the normal matrix is the sum of their product.
+    names = [
+        ["uuuu", "uuuv", "uuvv", "uuu", "uuv", "uu"],
+        ["uuuv", "uuvv", "uvvv", "uuv", "uvv", "uv"],
+        ["uuvv", "uvvv", "vvvv", "uvv", "vvv", "vv"],
+        ["uuu", "uuv", "uvv", "uu", "uv", "u"],
+        ["uuv", "uvv", "vvv", "uv", "vv", "v"],
+        ["uu", "uv", "vv", "u", "v", None],
+    ]
+    normal_matrix = np.empty((len(u), 6, 6))
+    for i, row in enumerate(names):
+        for j, name in enumerate(row):
+            normal_matrix[:, i, j] = m[name] if name else count
+    right = np.empty((len(u), 6, 1))
+    for i, monomial in enumerate((uu, uv, vv, u, v)):
+        right[:, i, 0] = _sum_products(w, monomial)
+    right[:, 5, 0] = w.sum(axis=1)
     # A tiny ridge keeps collinear neighbourhoods solvable (their curvature comes out ~0).
-    ridge = np.trace(normal_matrix, axis1=1, axis2=2)[:, None, None] * 1e-12 * np.eye(6)
-    a, b, c = np.linalg.solve(normal_matrix + ridge, right)[:, :3, 0].T
+    diagonal = np.arange(6)
+    normal_matrix[:, diagonal, diagonal] += np.trace(normal_matrix, axis1=1, axis2=2)[:, None] * 1e-12
+    a, b, c = np.linalg.solve(normal_matrix, right)[:, :3, 0].T
     # Hessian [[2a, b], [b, 2c]] / reach: eigenvalues (a + c +- sqrt((a - c)^2 + b^2)) / reach.
     return (np.abs(a + c) + np.hypot(a - c, b)) / reach
 
@@ -50,12 +140,13 @@ def curvature(points, neighbours):
     """Per point: the largest absolute principal curvature of the quadric fitted to the point and its
     ``neighbours`` (m, k) rows of ``points`` (k >= 5; 1 / radius on a sphere)."""
     rows = np.concatenate([np.arange(points.shape[0])[:, None], neighbours], axis=1)
+    planar = np.ascontiguousarray(points.T)  # 1-D gathers per coordinate
     out = np.empty(points.shape[0])
 
     def block(start, stop):
         for first in range(start, stop, _BLOCK):
             last = min(first + _BLOCK, stop)
-            out[first:last] = _curvature_block(points, rows[first:last])
+            out[first:last] = _curvature_block(planar, rows[first:last])
 
     run_blocks(block, points.shape[0], share=0.2)
     return out

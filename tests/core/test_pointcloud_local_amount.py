@@ -81,3 +81,30 @@ def test_explicit_steps_are_taken_in_full():
     out, report = core.smooth_point_cloud(points, return_mesh=True, **explicit)
     assert report.influence is None
     assert np.array_equal(out, core.smooth_point_cloud(points, local_amount=False, **explicit))
+
+
+def test_closed_form_normals_agree_with_eigh():
+    from core.pointcloud.local_amount import _normals
+
+    rng = np.random.default_rng(4)
+    spread = rng.normal(size=(2000, 17, 3)) * [1.0, 0.7, 0.02]  # flat patches ...
+    spread[:200] *= [1.0, 1e-9, 1e-9]  # ... and collinear ones: no clear smallest direction
+    rotation = np.linalg.qr(rng.normal(size=(2000, 3, 3)))[0]
+    patch = np.einsum("ski,sji->skj", spread, rotation)
+    matrices = np.einsum("ski,skj->sij", patch, patch)
+    entries = [matrices[:, i, j] for i, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))]
+    ours = _normals(*entries)
+    reference = np.linalg.eigh(matrices)[1][:, :, 0]
+    assert np.allclose(np.linalg.norm(ours, axis=1), 1.0)
+    assert np.abs(np.abs(np.einsum("si,si->s", ours[200:], reference[200:])) - 1.0).max() < 1e-9
+    # Collinear: any direction across the line is a smallest eigenvector.
+    line = rotation[:200, :, 0]
+    assert np.abs(np.einsum("si,si->s", ours[:200], line)).max() < 1e-6
+
+
+def test_curvature_of_a_thin_cylinder():
+    rng = np.random.default_rng(2)
+    angle, height = rng.random(6000) * 2 * np.pi, rng.random(6000) * 2.0
+    cylinder = np.column_stack([0.25 * np.cos(angle), 0.25 * np.sin(angle), height])
+    index = NeighbourIndex(cylinder, 16)
+    assert np.median(curvature(index.points, index.neighbour)) == pytest.approx(4.0, rel=0.03)
