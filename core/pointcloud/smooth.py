@@ -235,6 +235,10 @@ class PointCloudSmoother:
         lap("rfs")
         yield self._finished("rfs")
         swapper = EdgeSwapper(mesh.faces, m) if self.swap and self.rounds > 1 else None
+        # HC runs in the input's precision, as on meshes (float32 halves its memory traffic); the mesh's
+        # geometry (swapping, curvature) stays in float64, which holds every float32 value exactly.
+        precision = np.float32 if start.dtype == np.float32 else np.float64
+        original = index.points.astype(precision, copy=False)
         swaps = []
         operator = None
         influence = None
@@ -242,17 +246,17 @@ class PointCloudSmoother:
             if operator is None:
                 operator = umbrella_operator(mesh.edges, m)
             current = smooth(
-                current,
+                current.astype(precision, copy=False),
                 None,
                 method="hc",
                 alpha=self.alpha,
                 beta=self.beta,
                 iterations=self.iterations_per_round,
                 fixed=rows_fixed,
-                original=index.points,
+                original=original,
                 operator=operator,
                 influence=influence,
-            ).positions
+            ).positions.astype(np.float64, copy=False)
             lap("hc")
             local = self.local_amount and "iterations_per_round" in self.automatic and index.k >= 5
             if local and done == 1 and self.rounds > 1:
