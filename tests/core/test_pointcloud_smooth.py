@@ -5,6 +5,7 @@ import pytest
 from pointcloud_sets import noisy_sphere, sphere_rms, with_duplicates
 
 import core
+import core.pointcloud.smooth as pointcloud_smooth
 from core.pointcloud import PointCloudReport
 from core.smoothing import Cancelled
 
@@ -49,6 +50,27 @@ def test_shape_dtype_and_input_untouched(dtype):
     assert np.array_equal(points, copy)
     assert not np.shares_memory(out, points)
     assert np.abs(out - points).max() > 0
+
+
+def test_float32_cloud_smooths_in_float32_as_well_as_in_float64(monkeypatch):
+    """HC runs in the input's precision; a float32 cloud comes out as close to the sphere as the same
+    cloud given in float64, and its steps really ran in float32."""
+    points = noisy_sphere(3000, 0.01, seed=4, dtype=np.float32)
+    precisions = []
+    real_smooth = pointcloud_smooth.smooth
+    monkeypatch.setattr(
+        pointcloud_smooth, "smooth", lambda q, *a, **k: precisions.append(q.dtype) or real_smooth(q, *a, **k)
+    )
+    single = core.smooth_point_cloud(points).astype(np.float64)
+    assert set(precisions) == {np.dtype(np.float32)}
+    double = core.smooth_point_cloud(points.astype(np.float64))
+    assert precisions[-1] == np.float64
+
+    def error(out):
+        return np.sqrt(np.mean((np.linalg.norm(out, axis=1) - 1.0) ** 2))
+
+    assert error(single) == pytest.approx(error(double), rel=0.01)
+    assert error(single) < 0.5 * error(points.astype(np.float64))
 
 
 @pytest.mark.parametrize("as_indices", [False, True])
