@@ -289,10 +289,10 @@ def quality(args, out):
 def timing(args, out):
     out("## End-to-end time of core.smooth_point_cloud (noisy sphere, σ 0.5 %, float32)\n")
     out(
-        "| points | total (s) | neighbours | noise | EMST | SDG | RFS | HC | swapping | amount | faces "
+        "| points | total (s) | neighbours | noise | EMST | SDG | RFS | HC | local amount | swapping | amount | faces "
         "| points without faces |"
     )
-    out("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    out("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for n in [parse_count(s) for s in args.timing.split(",")]:
         points, _ = noisy("sphere", n, 0.005, seed=args.seed)
         points = points.astype(np.float32)
@@ -304,11 +304,11 @@ def timing(args, out):
             s = report.seconds
             out(
                 f"| {n} | {totals[-1]:.1f} | {s.get('neighbours', 0):.1f} | {s.get('noise', 0):.2f} | "
-                + " | ".join(f"{s.get(k, 0):.1f}" for k in ("emst", "sdg", "rfs", "hc", "swap"))
+                + " | ".join(f"{s.get(k, 0):.1f}" for k in ("emst", "sdg", "rfs", "hc", "local amount", "swap"))
                 + f" | {amount(report)} | {len(report.mesh.faces)} | {report.isolated} |"
             )
         if len(totals) > 1:
-            out(f"| {n} | median {np.median(totals):.1f} | | | | | | | | | | |")
+            out(f"| {n} | median {np.median(totals):.1f} | | | | | | | | | | | |")
 
 
 def sparse(args, out):
