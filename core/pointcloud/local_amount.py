@@ -17,10 +17,14 @@ bench/bench_quality_points.py (bench/README.md, "Quality on real scans (point cl
 """
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .threads import run_blocks
 
 Z0 = 0.3
+# The fit's ball grows with the noise: thinning q = THIN_GAIN r^2 within [1, THIN_MAX] (r = sigma / spacing).
+THIN_GAIN = 3.0
+THIN_MAX = 36.0
 _FULL = 0.98  # weights above this count as 1: the smoother then skips those points' scaling
 _BLOCK = 1 << 14  # rows per block of the batched fits
 
@@ -140,15 +144,57 @@ def curvature(points, neighbours):
     """Per point: the largest absolute principal curvature of the quadric fitted to the point and its
     ``neighbours`` (m, k) rows of ``points`` (k >= 5; 1 / radius on a sphere)."""
     rows = np.concatenate([np.arange(points.shape[0])[:, None], neighbours], axis=1)
+    return _fitted(points, rows)
+
+
+def _fitted(points, rows):
+    """``curvature`` with the rows of each fit given, the fitted point first."""
     planar = np.ascontiguousarray(points.T)  # 1-D gathers per coordinate
-    out = np.empty(points.shape[0])
+    out = np.empty(rows.shape[0])
 
     def block(start, stop):
         for first in range(start, stop, _BLOCK):
             last = min(first + _BLOCK, stop)
             out[first:last] = _curvature_block(planar, rows[first:last])
 
-    run_blocks(block, points.shape[0], share=0.2)
+    run_blocks(block, rows.shape[0], share=0.2)
+    return out
+
+
+def thinning(ratio):
+    """The thinning q of the points the curvature is fitted at, for a noise / spacing ratio: 1 (every
+    point, a 16-neighbour ball) for small noise; for large noise the first round leaves enough of it that
+    a small ball reads it as curvature, so the ball widens (by sqrt(q)) with the noise."""
+    return float(np.clip(THIN_GAIN * ratio * ratio, 1.0, THIN_MAX))
+
+
+def sampled_curvature(points, neighbours, q):
+    """``curvature`` seen through a ball sqrt(q) times wider at about the same cost: the quadric is fitted
+    at every q-th point (the points are in KD-tree order, so a stride samples space evenly) to its
+    nearest sample points, and each point takes the mean curvature of the sample points among itself and
+    its ``neighbours``. q <= 1 is ``curvature`` itself."""
+    m, k = neighbours.shape
+    if q <= 1.0 or m < q * 4 * (k + 1):  # too few sample points for a fit each
+        return curvature(points, neighbours)
+    chosen = np.unique(np.arange(0.0, m, q).astype(np.int64))
+    sample = points[chosen]
+    tree = cKDTree(sample)
+    at_sample = _fitted(sample, tree.query(sample, k + 1, workers=-1)[1])
+    kappa = np.zeros(m)
+    kappa[chosen] = at_sample
+    taken = np.zeros(m, dtype=bool)
+    taken[chosen] = True
+    out = np.empty(m)
+
+    def block(start, stop):
+        near = np.concatenate([np.arange(start, stop)[:, None], neighbours[start:stop]], axis=1)
+        count = taken[near].sum(axis=1)
+        out[start:stop] = kappa[near].sum(axis=1) / np.maximum(count, 1)
+        return start + np.flatnonzero(count == 0)
+
+    lonely = np.concatenate(run_blocks(block, m))
+    if lonely.size:  # no sample point among the neighbours: the nearest one's
+        out[lonely] = at_sample[tree.query(points[lonely], 1, workers=-1)[1]]
     return out
 
 

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from ..adjacency import umbrella_operator
 from ..smoothing import Cancelled, smooth
 from ..validation import check_fixed, check_positions, check_unit_interval, power_of_two_scale
-from .local_amount import curvature, local_influence
+from .local_amount import local_influence, sampled_curvature, thinning
 from .noise import NoiseEstimate, estimate_noise, matched_alpha, steps_per_round
 from .rfs import RFSMesh, rfs_mesh
 from .sdg import surface_description_graph
@@ -262,7 +262,7 @@ class PointCloudSmoother:
             if local and done == 1 and self.rounds > 1:
                 # Measured on the first round's result, where the noise no longer hides the curvature.
                 influence = local_influence(
-                    curvature(current, index.neighbour),
+                    sampled_curvature(current, index.neighbour, thinning(noise.ratio)),
                     self.rounds * self.iterations_per_round,
                     noise.sigma,
                     noise.spacing,

@@ -3,11 +3,11 @@ and what it does to a run: flat parts keep the full amount, thin parts get less 
 
 import numpy as np
 import pytest
-from pointcloud_sets import noisy_sphere
+from pointcloud_sets import noisy_sphere, sphere_rms
 
 import core
 import core.pointcloud.smooth as pointcloud_smooth
-from core.pointcloud.local_amount import Z0, curvature, local_influence
+from core.pointcloud.local_amount import THIN_MAX, Z0, curvature, local_influence, sampled_curvature, thinning
 from core.pointcloud.spanning_tree import NeighbourIndex
 
 
@@ -108,3 +108,52 @@ def test_curvature_of_a_thin_cylinder():
     cylinder = np.column_stack([0.25 * np.cos(angle), 0.25 * np.sin(angle), height])
     index = NeighbourIndex(cylinder, 16)
     assert np.median(curvature(index.points, index.neighbour)) == pytest.approx(4.0, rel=0.03)
+
+
+def noisy_unit_sphere(n, noise_in_spacings, seed=0):
+    """Unit sphere, Gaussian radial noise of ``noise_in_spacings`` nearest-neighbour spacings."""
+    rng = np.random.default_rng(seed)
+    v = rng.normal(size=(n, 3))
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    spacing = np.median(NeighbourIndex(v, 1).distance[:, 0])
+    return v * (1.0 + rng.normal(scale=noise_in_spacings * spacing, size=(n, 1)))
+
+
+def test_thinning_grows_with_the_noise_within_bounds():
+    assert thinning(0.0) == 1.0 and thinning(0.5) == 1.0  # little noise: every point, as before
+    assert 1.0 < thinning(1.0) < thinning(2.0) < THIN_MAX
+    assert thinning(10.0) == THIN_MAX
+
+
+def test_no_thinning_is_the_plain_fit_bit_for_bit():
+    index = NeighbourIndex(noisy_unit_sphere(3000, 0.5, seed=1), 16)
+    plain = curvature(index.points, index.neighbour)
+    assert np.array_equal(sampled_curvature(index.points, index.neighbour, 1.0), plain)
+    # Too few points for a sample of fits: the plain fit too.
+    assert np.array_equal(sampled_curvature(index.points, index.neighbour, 50.0), plain)
+
+
+def test_sampled_fit_reads_the_curvature_through_noise():
+    """Noise of half a spacing: over 16 neighbours (a ball of ~2.3 spacings) the quadric reads it as
+    curvature several times the sphere's; fitted on every 16th point (a ball 4 times wider) it reads
+    the sphere's."""
+    index = NeighbourIndex(noisy_unit_sphere(20000, 0.5, seed=2), 16)
+    plain = curvature(index.points, index.neighbour)
+    sampled = sampled_curvature(index.points, index.neighbour, 16.0)
+    assert np.median(plain) > 4.0
+    assert np.median(sampled) == pytest.approx(1.0, rel=0.3)
+    assert np.percentile(sampled, 90) < 2.0
+    assert np.isfinite(sampled).all() and sampled.shape == plain.shape
+
+
+def test_large_noise_keeps_the_full_amount_on_a_gentle_surface(monkeypatch):
+    """Noise of ~1.3 spacings on a sphere of ~90 spacings' radius: the first round leaves enough noise
+    that the 16-neighbour fit gives many points a small share; the wider sampled fit does not, and the
+    run removes more of the noise."""
+    points = noisy_sphere(20000, 0.01, seed=1)
+    out, report = core.smooth_point_cloud(points, return_mesh=True)
+    assert report.noise.ratio > 1.0 and thinning(report.noise.ratio) > 4.0
+    monkeypatch.setattr(pointcloud_smooth, "thinning", lambda ratio: 1.0)
+    narrow, narrow_report = core.smooth_point_cloud(points, return_mesh=True)
+    assert np.mean(report.influence < 1) < 0.2 < 0.35 < np.mean(narrow_report.influence < 1)
+    assert sphere_rms(out) < 0.95 * sphere_rms(narrow)
