@@ -9,7 +9,9 @@ and wall time of the smoothing call (conversions to the peers' data structures e
     python bench/bench_points.py                       # 20k and 100k points, every shape and sigma
     python bench/bench_points.py --sizes 20k --shapes sphere,cube --sigmas 0.01
     python bench/bench_points.py --timing 100k,1M      # end-to-end time of core.smooth_point_cloud only
+    python bench/bench_points.py --timing 1M --warm 6  # the same after touching 6 GB of fresh memory
     python bench/bench_points.py --emst 200x5000       # exact EMST of scan rings (rings x points per ring)
+    python bench/bench_points.py --hc-steps 1M --repeat 3   # 66 HC steps alone, float32/64, with/without influence
     python bench/bench_points.py --sparse 1500         # sparse, nearly clean sphere (noise 0.1 x spacing)
     python bench/bench_points.py --alpha 0.01 --iterations-per-round 22   # the previous fixed amount
 
@@ -287,6 +289,12 @@ def quality(args, out):
 
 
 def timing(args, out):
+    if args.warm:
+        # On a VM, memory the guest touches for the first time can cost seconds per GB: touched and freed
+        # here, the run's own allocations find backed pages (the figure is this machine's, not ours).
+        clock = time.perf_counter()
+        np.ones(int(args.warm * (1 << 27)))
+        out(f"(touched {args.warm:g} GB of fresh memory first: {time.perf_counter() - clock:.1f} s)\n")
     out("## End-to-end time of core.smooth_point_cloud (noisy sphere, σ 0.5 %, float32)\n")
     out(
         "| points | total (s) | neighbours | noise | EMST | SDG | RFS | HC | local amount | swapping | amount | faces "
@@ -309,6 +317,32 @@ def timing(args, out):
             )
         if len(totals) > 1:
             out(f"| {n} | median {np.median(totals):.1f} | | | | | | | | | | | |")
+
+
+def hc_steps_timing(args, out):
+    """The HC stage alone: one run's final RFS mesh and local-amount influence, then 66 HC steps on it
+    (one round of the 3 x 66 a noisy 1M sphere gets), float32 and float64, with and without the influence."""
+    from core.adjacency import umbrella_operator
+    from core.smoothing import smooth
+
+    n = parse_count(args.hc_steps)
+    points, _ = noisy("sphere", n, 0.005, seed=args.seed)
+    _, report = core.smooth_point_cloud(points.astype(np.float32), return_mesh=True)
+    operator = umbrella_operator(report.mesh.edges, n)
+    weighted = int((report.influence < 1).sum())
+    out(f"## 66 HC steps on the RFS mesh of a noisy {n}-point sphere ({operator.indptr[-1]} non-zeros)\n")
+    out(f"| precision | influence | seconds ({args.repeat} runs) |")
+    out("|---|---|---|")
+    for dtype in (np.float32, np.float64):
+        start = points.astype(dtype)
+        for influence in (None, report.influence):
+            seconds = []
+            for _ in range(args.repeat):
+                clock = time.perf_counter()
+                smooth(start, None, alpha=0.0033, beta=0.55, iterations=66, operator=operator, influence=influence)
+                seconds.append(time.perf_counter() - clock)
+            what = "none" if influence is None else f"local amount ({weighted} points below 1)"
+            out(f"| {np.dtype(dtype).name} | {what} | " + " / ".join(f"{s:.2f}" for s in seconds) + " |")
 
 
 def sparse(args, out):
@@ -380,6 +414,8 @@ def main():
         default="",
         help="noise removed from a sparse, nearly clean sphere of this many points instead, e.g. 1500",
     )
+    parser.add_argument("--warm", type=float, default=0.0, help="with --timing: touch this many GB of memory first")
+    parser.add_argument("--hc-steps", default="", help="time 66 HC steps alone on one size instead, e.g. 1M")
     parser.add_argument("--repeat", type=int, default=1, help="timing runs per size (the table gives each)")
     parser.add_argument("--rounds", type=int, default=None, help="for our rows (default: the core's)")
     parser.add_argument("--alpha", type=float, default=None)
@@ -397,7 +433,12 @@ def main():
             print(line, flush=True)
             handle.write(line + "\n")
 
-        (emst_timing if args.emst else timing if args.timing else sparse if args.sparse else quality)(args, out)
+        if args.emst:
+            emst_timing(args, out)
+        elif args.hc_steps:
+            hc_steps_timing(args, out)
+        else:
+            (timing if args.timing else sparse if args.sparse else quality)(args, out)
     print(f"\n(written to {report})")
 
 
