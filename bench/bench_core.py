@@ -399,6 +399,44 @@ def bench_size(n_target, args, peers, out):
     return all(verdicts)
 
 
+def amount_timing(sizes, args, out):
+    """core.choose_amount on the benchmark's torus, its probes on the whole mesh and on patches (from
+    core.noise.PATCH_FROM movable vertices up): time, iterations chosen and the largest difference of
+    t(k), the degrees of freedom per vertex, between the two."""
+    from core import noise
+
+    out("| vertices | noise (% of diagonal) | probes on | seconds | iterations chosen | largest t(k) difference |")
+    out("|---|---|---|---|---|---|")
+    for n_target in sizes:
+        vertices, faces = meshes.torus(n_target, ratio=RATIO, minor_radius=MINOR)
+        edges = meshes.edges_from_faces(faces).astype(np.int32)
+        for fraction in (0.001, 0.002):
+            noisy = meshes.add_noise(vertices, fraction=fraction, seed=args.seed)
+            operator = core.umbrella_operator(edges, noisy.shape[0])
+            traces = {}
+            for where, patch_from in (("whole mesh", None), ("patches", noise.PATCH_FROM)):
+                saved = noise.PATCH_FROM
+                noise.PATCH_FROM = noisy.shape[0] + 1 if patch_from is None else patch_from
+                try:
+                    clock = time.perf_counter()
+                    chooser = core.AmountChooser(noisy, operator=operator, beta=args.beta)
+                    for _ in chooser.steps():
+                        pass
+                    seconds = time.perf_counter() - clock
+                finally:
+                    noise.PATCH_FROM = saved
+                traces[where] = chooser.traces
+                difference = ""
+                if where == "patches":
+                    whole = traces["whole mesh"]
+                    common = [k for k in chooser.traces if k in whole]
+                    difference = f"{max(abs(chooser.traces[k] / whole[k] - 1) for k in common):.2%}"
+                out(
+                    f"| {noisy.shape[0]:,} | {100 * fraction:g} | {where} | {seconds:.2f} | "
+                    f"{chooser.amount.iterations} | {difference} |"
+                )
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--sizes", default="100k,1M", help="comma-separated vertex counts, e.g. 100k,1M")
@@ -411,6 +449,9 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--no-peers", action="store_true", help="time core only")
     parser.add_argument("--strict", action="store_true", help="exit 1 when a target is missed")
+    parser.add_argument(
+        "--amount", action="store_true", help="time the mesh Automatic Amount instead (whole mesh vs patches)"
+    )
     args = parser.parse_args(argv)
     if args.quick:
         args.sizes, args.repeats = "5k", 1
@@ -441,7 +482,11 @@ def main(argv=None):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)  # --beta ≤ 0.5 is allowed for comparisons
-        passed = [bench_size(n, args, peers, out) for n in sizes]
+        if args.amount:
+            amount_timing(sizes, args, out)
+            passed = [True]
+        else:
+            passed = [bench_size(n, args, peers, out) for n in sizes]
 
     results = HERE / "results"
     results.mkdir(exist_ok=True)

@@ -12,7 +12,10 @@ detail. It is chosen here from the mesh alone, by generalized cross-validation (
   axis of each sample vertex's 1-ring, taken on the state that minimizes the GCV of the whole
   residual (all three coordinates), so that they belong to a smoothed surface, not to the noise.
 * **Degrees of freedom**: t(k) = tr(S_k) / n, estimated without forming S_k (Hutchinson): random
-  +-1 vectors z go through the same HC iterations, and t = mean of z . S_k z / n.
+  +-1 vectors z go through the same HC iterations, and t = mean of z . S_k z / n. S_k's diagonal is
+  local (a vertex's entry depends on the few rings HC's steps reach), so on big meshes the probes
+  run on patches around evenly spaced seeds and t is read off the patches' inner vertices, far from
+  their cut edges: the same estimate for a fraction of the cost.
 * **GCV(k) = R(k) / (1 - t(k))^2** estimates the noise variance plus the error that is left, up to a
   constant, without knowing the noise; its minimum is the amount that leaves the least error. GCV
   is flat near its minimum, and flat in k where its resolution ends (a few iterations on lightly
@@ -32,7 +35,9 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import ArrayLike
+from scipy.sparse import csgraph
 
 from .adjacency import Umbrella, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError
@@ -44,6 +49,13 @@ MAX_ITERATIONS = 200  # the most the automatic amount chooses: bounds the cost o
 SAMPLE_VERTICES = 4096  # vertices the residual and normals are measured on
 PROBE_ENTRIES = 60_000  # +-1 probe entries (vertices x probes) for the trace: at least 3 probes, at most 24
 _MIN_NEIGHBOURS = 3  # a 1-ring needs three points to define a plane
+# Probes on patches from this many movable vertices up: PATCH_SEEDS balls of PATCH_RINGS rings, the
+# trace read on vertices at least PATCH_MARGIN rings inside (where S_k sees no cut).
+PATCH_FROM = 250_000
+PATCH_SEEDS = 8
+PATCH_RINGS = 48
+PATCH_MARGIN = 16
+PATCH_PROBE_ENTRIES = 180_000  # more probe entries on the patches' fewer vertices: less noise in t, still cheap
 _SEED = 20_161_999  # the probes' seed: fixed, so the choice is reproducible
 
 
@@ -183,13 +195,25 @@ class AmountChooser:
         ]
         self.y = np.asarray(start[self.rows], dtype=np.float64)
 
-        self.probe_count = probe_count = int(min(24, max(3, 3 * math.ceil(PROBE_ENTRIES / (3 * movable.size)))))
-        probes = np.random.default_rng(_SEED).choice(np.array([-1.0, 1.0], start.dtype), size=(n, probe_count))
-        probes[fixed_mask] = 0.0  # the trace over the movable vertices only
+        # The trace's mesh: the whole one, or patches of it (see the module docstring).
+        probe_operator, probe_fixed, inner = operator, fixed_mask, None
+        if movable.size >= PATCH_FROM:
+            probe_operator, probe_fixed, inner = _patches(operator, fixed_mask, movable)
+        self.trace_count = movable.size if inner is None else int(np.count_nonzero(~probe_fixed[inner]))
+        entries = PROBE_ENTRIES if inner is None else PATCH_PROBE_ENTRIES
+        self.probe_count = probe_count = int(min(24, max(3, 3 * math.ceil(entries / (3 * self.trace_count)))))
+        probes = np.random.default_rng(_SEED).choice(
+            np.array([-1.0, 1.0], start.dtype), size=(probe_operator.n_vertices, probe_count)
+        )
+        probes[probe_fixed] = 0.0  # the trace over the movable vertices only
         with warnings.catch_warnings():  # alpha = 0 lies outside Theorem 5.2's region: on purpose, see above
             warnings.simplefilter("ignore", ConvergenceWarning)
-            self.runs = [_Run(probes[:, i : i + 3], operator, fixed_mask, beta) for i in range(0, probe_count, 3)]
+            self.runs = [
+                _Run(probes[:, i : i + 3], probe_operator, probe_fixed, beta) for i in range(0, probe_count, 3)
+            ]
             self.data = _Run(start, operator, fixed_mask, beta)
+        if inner is not None:
+            probes[np.setdiff1d(np.arange(probe_operator.n_vertices), inner)] = 0.0  # read on inner vertices only
         # Each probe block as its run holds it: (3, n), in the run's vertex order.
         self.planar_probes = [
             np.ascontiguousarray((probes[:, i : i + 3] if run.order is None else probes[run.order, i : i + 3]).T)
@@ -201,7 +225,7 @@ class AmountChooser:
         if self.amount is not None:
             yield 1.0
             return
-        operator, rows, movable, data, runs = self.operator, self.rows, self.movable, self.data, self.runs
+        operator, rows, data, runs = self.operator, self.rows, self.data, self.runs
         use_normals, probe_count = self.use_normals, self.probe_count
         ring = _ring_of(rows, operator) if use_normals else None
         points = np.zeros((self.n, 3)) if use_normals else None  # the state at ``ring``, for the normals
@@ -219,7 +243,7 @@ class AmountChooser:
             trace = sum(
                 float(np.einsum("ij,ij->", run.planar(), planar)) for run, planar in zip(runs, self.planar_probes)
             )
-            t = min(trace / (probe_count * movable.size), 0.999)
+            t = min(trace / (probe_count * self.trace_count), 0.999)
             state = data.at(rows)
             residual = self.y - state
             steps.append(k)
@@ -238,6 +262,7 @@ class AmountChooser:
                 break  # well past the amount chosen
             yield k / MAX_ITERATIONS
         self.amount = self._amount(steps, traces, residuals, normals, done)
+        self.traces = dict(zip(steps, traces))  # t(k) at each checkpoint, for inspection
         yield 1.0
 
     def result(self):
@@ -256,6 +281,24 @@ class AmountChooser:
         minimum = max(float(score.min()), 0.0)
         sigma = math.sqrt(minimum) if self.use_normals else math.sqrt(minimum / 3)
         return MeshAmount(0.0, self.beta, int(chosen), sigma, self.edge_length, int(done))
+
+
+def _patches(operator, fixed_mask, movable):
+    """(umbrella, fixed mask, inner vertices) of the patches: every vertex within PATCH_RINGS rings of
+    PATCH_SEEDS evenly spaced movable vertices, with the edges among them; inner ones lie at most
+    PATCH_RINGS - PATCH_MARGIN rings from a seed. Vertices numbered in increasing original order."""
+    n = operator.n_vertices
+    graph = sp.csr_matrix((np.ones(operator.indices.size), operator.indices, operator.indptr), shape=(n, n))
+    seeds = movable[np.linspace(0, movable.size - 1, PATCH_SEEDS).round().astype(np.int64)]
+    rings = csgraph.dijkstra(graph, indices=seeds, unweighted=True, limit=PATCH_RINGS + 0.5, min_only=True)
+    chosen = np.flatnonzero(rings <= PATCH_RINGS)
+    number = np.full(n, -1, dtype=np.int64)
+    number[chosen] = np.arange(chosen.size)
+    owner, neighbour = _neighbours(chosen, operator)
+    keep = number[neighbour] >= 0
+    edges = np.stack([owner[keep], number[neighbour[keep]]], axis=1)
+    inner = number[chosen[rings[chosen] <= PATCH_RINGS - PATCH_MARGIN]]
+    return umbrella_operator(edges, chosen.size), fixed_mask[chosen], inner
 
 
 def _neighbours(rows, operator):

@@ -178,3 +178,46 @@ def test_no_kept_result_when_nothing_ran():
     for _ in chooser.steps():
         pass
     assert chooser.amount.iterations == 0 and chooser.result() is None
+
+
+def noisy_torus_grid(around=500, across=100, ratio=0.4, seed=0):
+    """A triangulated torus grid (every vertex of degree 6: the same connectivity everywhere) with
+    Gaussian noise of ``ratio`` edge lengths on every coordinate, and its edges."""
+    a, b = np.meshgrid(np.arange(around) * 2 * np.pi / around, np.arange(across) * 2 * np.pi / across, indexing="ij")
+    ring = 1.0 + 0.35 * np.cos(b)
+    vertices = np.stack([ring * np.cos(a), ring * np.sin(a), 0.35 * np.sin(b)], axis=-1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(around), np.arange(across), indexing="ij")
+    corner = [((i + di) % around) * across + (j + dj) % across for di, dj in ((0, 0), (1, 0), (1, 1), (0, 1))]
+    faces = np.concatenate(
+        [np.stack([corner[0], corner[1], corner[2]], -1), np.stack([corner[0], corner[2], corner[3]], -1)]
+    )
+    edges = edges_of(faces.reshape(-1, 3))
+    noise_size = ratio * edge_length(vertices, edges)
+    return vertices + np.random.default_rng(seed).normal(0.0, noise_size, vertices.shape), edges
+
+
+def test_patches_estimate_the_trace_of_the_whole_mesh(monkeypatch):
+    """On big meshes the probes run on patches; their inner vertices give the whole mesh's t(k), and
+    the same amount. (Patches made to start small here, so that a test-sized mesh gets them.)"""
+    noisy, edges = noisy_torus_grid()
+    fixed = np.zeros(len(noisy), dtype=bool)
+    fixed[::17] = True
+
+    def choose():
+        chooser = core.AmountChooser(noisy, edges, beta=0.6, fixed=fixed)
+        for _ in chooser.steps():
+            pass
+        return chooser
+
+    whole = choose()
+    assert whole.runs[0].smoothing.shape[0] == len(noisy) and whole.trace_count == np.count_nonzero(~fixed)
+    monkeypatch.setattr(noise, "PATCH_FROM", 0)
+    monkeypatch.setattr(noise, "PATCH_RINGS", 30)
+    monkeypatch.setattr(noise, "PATCH_MARGIN", 12)
+    patched = choose()
+    assert patched.runs[0].smoothing.shape[0] < 0.5 * len(noisy)  # the probes ran on patches
+    assert patched.trace_count < patched.runs[0].smoothing.shape[0]  # ... read on their inner vertices
+    assert patched.traces.keys() == whole.traces.keys()
+    for k, t in whole.traces.items():
+        assert patched.traces[k] == pytest.approx(t, rel=0.01)
+    assert patched.amount.iterations == whole.amount.iterations
