@@ -30,6 +30,9 @@ _INT32_LIMIT = 2**31  # incidence and edge numbers below this are handled as int
 class RFSMesh:
     faces: np.ndarray  # (f, 3) vertex indices
     edges: np.ndarray  # (e, 2) the edges of the faces, each once
+    # Incidence 3*f + j (the edge of face f opposite its vertex j): the incidence across that edge, -1
+    # if none. Set by rfs_mesh from the grouping it already made, so edge swapping need not regroup.
+    other: np.ndarray | None = None
 
 
 def _normals_from_offsets(offset, row, degree):
@@ -285,7 +288,15 @@ def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
     good = quality >= min_quality
     faces, normals = faces[good], normals[:, good]
     alive, inc = _prune(points, faces, normals)
+    # The kept faces' incidences, still grouped by edge (ties in face order), at most two per edge.
+    live = inc.order[alive[inc.order // 3]]
+    live_edge = inc.edge_of[live]
     # The mesh's edges: those with a face left (inc.edges is sorted, like a fresh Incidence's).
     used = np.zeros(inc.edges.shape[0], dtype=bool)
-    used[inc.edge_of.reshape(-1, 3)[alive].ravel()] = True
-    return RFSMesh(faces[alive], inc.edges[used])
+    used[live_edge] = True
+    number = np.cumsum(alive) - 1  # the kept faces' new numbers
+    live = 3 * number[live // 3] + live % 3
+    pair = np.flatnonzero(live_edge[1:] == live_edge[:-1])
+    other = np.full(3 * int(np.count_nonzero(alive)), -1, dtype=np.int64)
+    other[live[pair]], other[live[pair + 1]] = live[pair + 1], live[pair]
+    return RFSMesh(faces[alive], inc.edges[used], other)

@@ -234,7 +234,7 @@ class PointCloudSmoother:
         mesh = rfs_mesh(current, graph.edges, min_quality=self.min_quality)
         lap("rfs")
         yield self._finished("rfs")
-        swapper = EdgeSwapper(mesh.faces, m) if self.swap and self.rounds > 1 else None
+        swapper = EdgeSwapper(mesh.faces, m, mesh.other, mesh.edges) if self.swap and self.rounds > 1 else None
         # HC runs in the input's precision, as on meshes (float32 halves its memory traffic); the mesh's
         # geometry (swapping, curvature) stays in float64, which holds every float32 value exactly.
         precision = np.float32 if start.dtype == np.float32 else np.float64

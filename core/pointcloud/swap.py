@@ -42,9 +42,14 @@ class EdgeSwapper:
     the other side of that edge (-1: none); ``keys`` are the sorted edge keys low * n + high.
     """
 
-    def __init__(self, faces, n):
+    def __init__(self, faces, n, other=None, edges=None):
+        """``other`` and ``edges`` (an RFSMesh's, for these faces) spare regrouping the incidences."""
         self.n = max(int(n), 1)
         self.faces = np.array(faces, dtype=np.int64).reshape(-1, 3)
+        if other is not None:
+            self.other = np.array(other, dtype=np.int64)  # a copy: the passes update it
+            self.keys = np.asarray(edges, dtype=np.int64)[:, 0] * self.n + np.asarray(edges, dtype=np.int64)[:, 1]
+            return
         inc = Incidence(self.faces, self.n)
         if inc.edge_count.size and inc.edge_count.max() > 2:
             raise ValueError("edge swapping needs a mesh with at most two faces per edge")

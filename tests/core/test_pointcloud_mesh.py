@@ -291,6 +291,34 @@ def test_swapper_state_stays_that_of_its_faces():
     assert total > 0
 
 
+@settings(max_examples=10, deadline=None)
+@given(st.integers(30, 300), st.integers(0, 2**31 - 1), st.floats(0.0, 0.3))
+def test_rfs_mesh_hands_the_swapper_the_state_a_fresh_build_gives(n, seed, noise):
+    # rfs_mesh pairs the kept faces' incidences from its own grouping; the swapper then starts from
+    # exactly what regrouping the faces gives.
+    from core.pointcloud.swap import EdgeSwapper
+
+    rng = np.random.default_rng(seed)
+    points = rng.random((n, 3))
+    points[:, 2] *= noise
+    index, tree, graph = build_sdg(points, k=8)
+    mesh = rfs_mesh(index.points, graph.edges, min_quality=0.2)
+    given_state = EdgeSwapper(mesh.faces, index.n_points, mesh.other, mesh.edges)
+    fresh = EdgeSwapper(mesh.faces, index.n_points)
+    assert np.array_equal(given_state.other, fresh.other)
+    assert np.array_equal(given_state.keys, fresh.keys)
+
+
+def test_rfs_mesh_swapper_state_on_a_noisy_sphere():
+    from core.pointcloud.swap import EdgeSwapper
+
+    index, tree, graph = build_sdg(noisy_sphere(3000, 0.01, seed=4))
+    mesh = rfs_mesh(index.points, graph.edges)
+    fresh = EdgeSwapper(mesh.faces, index.n_points)
+    assert (fresh.other >= 0).mean() > 0.5  # mostly interior edges: the comparison means something
+    assert np.array_equal(EdgeSwapper(mesh.faces, index.n_points, mesh.other, mesh.edges).other, fresh.other)
+
+
 def test_results_do_not_depend_on_the_thread_count(monkeypatch):
     import core
     from core.pointcloud import threads
