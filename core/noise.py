@@ -213,7 +213,9 @@ class AmountChooser:
             ]
             self.data = _Run(start, operator, fixed_mask, beta)
         if inner is not None:
-            probes[np.setdiff1d(np.arange(probe_operator.n_vertices), inner)] = 0.0  # read on inner vertices only
+            outer = np.ones(probe_operator.n_vertices, dtype=bool)
+            outer[inner] = False
+            probes[outer] = 0.0  # read on the inner vertices only
         # Each probe block as its run holds it: (3, n), in the run's vertex order.
         self.planar_probes = [
             np.ascontiguousarray((probes[:, i : i + 3] if run.order is None else probes[run.order, i : i + 3]).T)

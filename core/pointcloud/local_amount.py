@@ -43,12 +43,10 @@ def _normals(xx, yy, zz, xy, xz, yz):
     off = xy * xy + xz * xz + yz * yz
     spread = np.sqrt(((xx - mean) ** 2 + (yy - mean) ** 2 + (zz - mean) ** 2 + 2.0 * off) / 6.0)
     safe = np.where(spread > 0, spread, 1.0)
+    # det((M - mean I) / spread) / 2 = cos(3 angle) of the trigonometric solution.
     bx, by, bz = (xx - mean) / safe, (yy - mean) / safe, (zz - mean) / safe
-    half_det = (
-        bx * (by * bz - (yz / safe) ** 2)
-        - xy / safe * (xy / safe * bz - yz / safe * xz / safe)
-        + xz / safe * (xy / safe * yz / safe - by * xz / safe)
-    ) / 2.0
+    bxy, bxz, byz = xy / safe, xz / safe, yz / safe
+    half_det = (bx * (by * bz - byz * byz) - bxy * (bxy * bz - byz * bxz) + bxz * (bxy * byz - by * bxz)) / 2.0
     angle = np.arccos(np.clip(half_det, -1.0, 1.0)) / 3.0
     smallest = mean + 2.0 * spread * np.cos(angle + 2.0 * np.pi / 3.0)
     rows = np.stack(
