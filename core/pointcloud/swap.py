@@ -48,7 +48,8 @@ class EdgeSwapper:
         self.faces = np.array(faces, dtype=np.int64).reshape(-1, 3)
         if other is not None:
             self.other = np.array(other, dtype=np.int64)  # a copy: the passes update it
-            self.keys = np.asarray(edges, dtype=np.int64)[:, 0] * self.n + np.asarray(edges, dtype=np.int64)[:, 1]
+            low, high = np.asarray(edges, dtype=np.int64).T
+            self.keys = low * self.n + high
             return
         inc = Incidence(self.faces, self.n)
         if inc.edge_count.size and inc.edge_count.max() > 2:
