@@ -21,6 +21,43 @@ def _normals_block(points, faces):
     return normal, double_area, e1, e2
 
 
+def smallest_eigenvectors(xx, yy, zz, xy, xz, yz):
+    """Unit eigenvectors of the smallest eigenvalue of the symmetric 3 x 3 matrices given by their six
+    entries (each (s,)): the eigenvalue in closed form (trigonometric), the vector as the longest cross
+    product of two rows of the matrix minus it. Vectorized, where a batched eigh spends most of its time
+    on per-matrix overhead; rows with no clear smallest direction (collinear points) fall back to eigh."""
+    mean = (xx + yy + zz) / 3.0
+    off = xy * xy + xz * xz + yz * yz
+    spread = np.sqrt(((xx - mean) ** 2 + (yy - mean) ** 2 + (zz - mean) ** 2 + 2.0 * off) / 6.0)
+    safe = np.where(spread > 0, spread, 1.0)
+    # det((M - mean I) / spread) / 2 = cos(3 angle) of the trigonometric solution.
+    bx, by, bz = (xx - mean) / safe, (yy - mean) / safe, (zz - mean) / safe
+    bxy, bxz, byz = xy / safe, xz / safe, yz / safe
+    half_det = (bx * (by * bz - byz * byz) - bxy * (bxy * bz - byz * bxz) + bxz * (bxy * byz - by * bxz)) / 2.0
+    angle = np.arccos(np.clip(half_det, -1.0, 1.0)) / 3.0
+    smallest = mean + 2.0 * spread * np.cos(angle + 2.0 * np.pi / 3.0)
+    rows = np.stack(
+        [
+            np.stack([xx - smallest, xy, xz], axis=1),
+            np.stack([xy, yy - smallest, yz], axis=1),
+            np.stack([xz, yz, zz - smallest], axis=1),
+        ]
+    )
+    crosses = np.stack([np.cross(rows[0], rows[1]), np.cross(rows[0], rows[2]), np.cross(rows[1], rows[2])])
+    lengths = np.einsum("csi,csi->cs", crosses, crosses)
+    best = lengths.argmax(axis=0)
+    normal = crosses[best, np.arange(best.size)]
+    length = np.sqrt(lengths[best, np.arange(best.size)])
+    # A cross product this short against the matrix's size: two eigenvalues (nearly) tie at the bottom.
+    unclear = ~(length > 1e-9 * (mean * 3.0) ** 2)
+    length[unclear] = 1.0
+    normal /= length[:, None]
+    if unclear.any():
+        matrices = np.stack([xx, xy, xz, xy, yy, yz, xz, yz, zz], axis=1)[unclear].reshape(-1, 3, 3)
+        normal[unclear] = np.linalg.eigh(matrices)[1][:, :, 0]
+    return normal
+
+
 def face_normals(points, faces):
     """Unit normals of the faces as a (3, f) array (one contiguous row per component); NaN for a
     degenerate face. The normal follows the face's vertex order (right-hand rule)."""
@@ -117,10 +154,10 @@ def faces_of_keys(keys, n):
 
 def group_by_edge(low, high, n):
     """The pairs (low, high) in [0, n)^2 grouped by edge as (order, edge_start, edges, edge_of):
-    ``order`` is np.argsort(low * n + high, kind="stable") (int64), ``edge_start`` where each
-    distinct pair's run begins in that order, ``edges`` the distinct pairs (int64, sorted) and
-    ``edge_of`` each input pair's edge number; None where the counting kernels are missing or the
-    indices do not fit in int32.
+    ``order`` is np.argsort(low * n + high, kind="stable"), ``edge_start`` where each distinct
+    pair's run begins in that order, ``edges`` the distinct pairs (int64, sorted) and ``edge_of``
+    each input pair's edge number (``order`` and ``edge_of`` int32: half the bytes to scatter and
+    gather); None where the counting kernels are missing or the indices do not fit in int32.
 
     Two counting passes (core.adjacency.pairs_in_order) group the pairs by low vertex, each
     vertex's pairs by high vertex, ties in input order; the runs of equal pairs are then read off
@@ -142,16 +179,17 @@ def group_by_edge(low, high, n):
         np.not_equal(high_sorted[1:], high_sorted[:-1], out=new[1:])
         row_start = indptr[:-1]
         new[row_start[row_start < indptr[1:]]] = True  # a new low vertex starts a new edge
-    before = np.zeros(size + 1, dtype=np.int64)  # edges starting before each position
-    np.cumsum(new, out=before[1:])
+    before = np.zeros(size + 1, dtype=np.int32)  # edges starting before each position
+    np.cumsum(new, dtype=np.int32, out=before[1:])  # a bool input without dtype= is summed far slower
     edge_start = np.flatnonzero(new)
-    edge_of = np.empty(size, dtype=np.int64)
-    edge_of[order] = before[1:] - 1
+    edge_of = np.empty(size, dtype=np.int32)
+    edge_of[order] = before[1:]
+    edge_of -= 1
     per_low = before[indptr[1:]] - before[indptr[:-1]]
     edges = np.empty((edge_start.size, 2), dtype=np.int64)
     edges[:, 0] = np.repeat(np.arange(n, dtype=np.int64), per_low)
     edges[:, 1] = high_sorted[edge_start]
-    return order.astype(np.int64), edge_start, edges, edge_of
+    return order, edge_start, edges, edge_of
 
 
 class Incidence:
@@ -159,8 +197,9 @@ class Incidence:
 
     Incidence 3*f + j is the edge of face f opposite its vertex j. ``order`` sorts incidences by
     edge; ``edge_start``/``edge_count`` delimit each distinct edge's run in that order;
-    ``edge_of[i]`` is the edge number of incidence i; ``edges`` are the distinct edges (low, high)
-    and ``keys`` their int64 keys low * n + high, both sorted.
+    ``edge_of[i]`` is the edge number of incidence i (``order`` and ``edge_of`` int32 where the
+    numbers fit); ``edges`` are the distinct edges (low, high) and ``keys`` their int64 keys
+    low * n + high, both sorted.
     """
 
     def __init__(self, faces, n):
@@ -184,8 +223,10 @@ class Incidence:
             new = np.concatenate(([True], sorted_keys[1:] != sorted_keys[:-1])) if keys.size else np.zeros(0, bool)
             self.edge_start = np.flatnonzero(new)
             self.edge_count = np.diff(np.append(self.edge_start, keys.size))
-            edge_number = np.cumsum(new) - 1
+            edge_number = np.cumsum(new, dtype=np.int64) - 1
             self.edge_of = np.empty(keys.size, dtype=np.int64)
             self.edge_of[self.order] = edge_number
+            if max(n, keys.size) < 2**31:  # the counting path's types
+                self.order, self.edge_of = self.order.astype(np.int32), self.edge_of.astype(np.int32)
             self.keys = sorted_keys[self.edge_start]
             self.edges = np.stack([self.keys // max(n, 1), self.keys % max(n, 1)], axis=1)

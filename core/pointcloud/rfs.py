@@ -18,10 +18,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..adjacency import umbrella_operator
-from .geometry import Incidence, face_normals, faces_of_keys, normals_and_quality, triple_keys
+from .geometry import (
+    Incidence,
+    face_normals,
+    faces_of_keys,
+    normals_and_quality,
+    smallest_eigenvectors,
+    triple_keys,
+)
 from .threads import run_blocks
 
-_CHUNK = 1 << 18
 _PAIR_BLOCK = 1 << 16  # incidences per block of _best_pairs
 _INT32_LIMIT = 2**31  # incidence and edge numbers below this are handled as int32
 
@@ -42,18 +48,12 @@ def _normals_from_offsets(offset, row, degree):
     origin) and each offset's vertex ``row``."""
     n = degree.size
     total = [np.bincount(row, offset[j], minlength=n) for j in range(3)]
-    cov = np.empty((n, 3, 3))
-    for i in range(3):
-        for j in range(i, 3):
-            # Centre on the mean of the vertex and its neighbours (the vertex is the origin here).
-            cov[:, i, j] = cov[:, j, i] = np.bincount(row, offset[i] * offset[j], minlength=n) - total[i] * total[j] / (
-                degree + 1.0
-            )
-    normal = np.empty((n, 3))
-    for start in range(0, n, _CHUNK):
-        block = slice(start, min(start + _CHUNK, n))
-        normal[block] = np.linalg.eigh(cov[block])[1][:, :, 0]  # ascending eigenvalues: normal first
-    return normal
+    # Centre on the mean of the vertex and its neighbours (the vertex is the origin here).
+    entries = [
+        np.bincount(row, offset[i] * offset[j], minlength=n) - total[i] * total[j] / (degree + 1.0)
+        for i, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+    ]
+    return smallest_eigenvectors(*entries)
 
 
 def _corona_block(points, indptr, indices, first, last, max_gap, keys_of=None):
@@ -119,7 +119,8 @@ def _best_pairs(normals, forward, edges, order, start, count):
     two incidences of the pair with the largest dihedral angle, and that angle's cos. Edges are
     handled in buckets of equal face count, so the all-pairs arrays have no padding.
 
-    The cos comes from the faces' normals (see ``incidence_cos``): each incidence contributes its
+    The cos comes from the faces' unit normals, ``normals`` (f, 3) (a face's normal in one cache
+    line: the incidences' faces are scattered), as in ``incidence_cos``: each incidence contributes its
     face's normal, signed by the direction in which the face runs along the edge. The pairs are
     visited in np.triu_indices order keeping a running minimum that only a strictly smaller cos
     replaces, so ties go to the first pair (as np.argmin would); NaN (a degenerate face) never
@@ -138,8 +139,10 @@ def _best_pairs(normals, forward, edges, order, start, count):
             incidence = order[start[edges[rows]][:, None] + np.arange(width)[None, :]]  # (rows, width)
             face = incidence // 3
             sign = np.where(forward[incidence], 1.0, -1.0)
-            # Gathered row by row (each row's incidences are adjacent), then one contiguous row per slot.
-            v = [np.ascontiguousarray((normals[c][face] * sign).T) for c in range(3)]
+            # Gathered face by face, then one contiguous row per slot and component.
+            signed = np.take(normals, face, axis=0)  # take: a fast path that indexing with [] misses
+            signed *= sign[:, :, None]
+            v = [np.ascontiguousarray(signed[:, :, c].T) for c in range(3)]
             best = np.full(rows.size, np.inf)
             pick = np.zeros(rows.size, dtype=np.intp)
             cos = np.empty(rows.size)
@@ -187,17 +190,19 @@ def keep_best_pairs(points, faces, normals=None):
     edge keeps because another edge drops it, and lose about half of the faces. An edge's best
     pair is recomputed only after it lost a face. Each round works only on the incidences of the
     edges still overfull (kept sorted by edge), so the long tail of rounds costs little.
+    ``normals``: the faces' unit normals as face_normals gives them (3, f), if the caller has them.
     """
-    return _prune(points, faces, normals)[0]
+    return _prune(points, faces, None if normals is None else np.ascontiguousarray(normals.T))[0]
 
 
 def _prune(points, faces, normals=None, settled=None):
-    """keep_best_pairs, also returning the faces' Incidence. ``settled`` (optional, one int per
-    edge of the Incidence, preset to -1) receives the round in which each overfull edge settled."""
+    """keep_best_pairs, also returning the faces' Incidence; ``normals`` as (f, 3) rows. ``settled``
+    (optional, one int per edge of the Incidence, preset to -1) receives the round in which each
+    overfull edge settled."""
     n_faces = faces.shape[0]
     inc = Incidence(faces, max(points.shape[0], 1))
     if normals is None:
-        normals = face_normals(points, faces)
+        normals = np.ascontiguousarray(face_normals(points, faces).T)
     # Whether each incidence's face runs along its edge from the edge's low end (incidence_cos).
     # Slot j's edge runs from slot j+1 to slot j+2; it starts at the edge's low end when that is lower.
     forward = (faces[:, [1, 2, 0]] <= faces[:, [2, 0, 1]]).reshape(-1)
@@ -218,7 +223,7 @@ def _prune(points, faces, normals=None, settled=None):
     # bytes to move in every round.
     overfull = inc.edge_count > 2
     narrow = np.int32 if max(3 * n_faces, n_edges) < _INT32_LIMIT else np.int64
-    order = inc.order[np.repeat(overfull, inc.edge_count)].astype(narrow)
+    order = inc.order[np.repeat(overfull, inc.edge_count)].astype(narrow, copy=False)
     edge = np.repeat(np.flatnonzero(overfull).astype(narrow), inc.edge_count[overfull])
     rounds = 0
     while order.size:
@@ -286,7 +291,7 @@ def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
     faces = faces_of_keys(corona_faces(points, edges, max_gap, keys=True), max(n, 1))
     normals, quality = normals_and_quality(points, faces)
     good = quality >= min_quality
-    faces, normals = faces[good], normals[:, good]
+    faces, normals = faces[good], normals.T[good]  # (f, 3) rows for the pruning
     alive, inc = _prune(points, faces, normals)
     # The kept faces' incidences, still grouped by edge (ties in face order), at most two per edge.
     live = inc.order[alive[inc.order // 3]]

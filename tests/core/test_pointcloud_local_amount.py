@@ -7,6 +7,7 @@ from pointcloud_sets import noisy_sphere, sphere_rms
 
 import core
 import core.pointcloud.smooth as pointcloud_smooth
+from core.pointcloud.geometry import smallest_eigenvectors
 from core.pointcloud.local_amount import THIN_MAX, Z0, curvature, local_influence, sampled_curvature, thinning
 from core.pointcloud.spanning_tree import NeighbourIndex
 
@@ -84,8 +85,6 @@ def test_explicit_steps_are_taken_in_full():
 
 
 def test_closed_form_normals_agree_with_eigh():
-    from core.pointcloud.local_amount import _normals
-
     rng = np.random.default_rng(4)
     spread = rng.normal(size=(2000, 17, 3)) * [1.0, 0.7, 0.02]  # flat patches ...
     spread[:200] *= [1.0, 1e-9, 1e-9]  # ... and collinear ones: no clear smallest direction
@@ -93,7 +92,7 @@ def test_closed_form_normals_agree_with_eigh():
     patch = np.einsum("ski,sji->skj", spread, rotation)
     matrices = np.einsum("ski,skj->sij", patch, patch)
     entries = [matrices[:, i, j] for i, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))]
-    ours = _normals(*entries)
+    ours = smallest_eigenvectors(*entries)
     reference = np.linalg.eigh(matrices)[1][:, :, 0]
     assert np.allclose(np.linalg.norm(ours, axis=1), 1.0)
     assert np.abs(np.abs(np.einsum("si,si->s", ours[200:], reference[200:])) - 1.0).max() < 1e-9

@@ -394,7 +394,8 @@ def test_group_by_edge_equals_a_stable_sort_of_the_keys(size, n, seed):
     order, edge_start, edges, edge_of = group_by_edge(low, high, n)
     reference = np.argsort(keys, kind="stable")
     np.testing.assert_array_equal(order, reference)
-    assert order.dtype == np.int64 and edges.dtype == np.int64 and edges.shape == (edge_start.size, 2)
+    assert order.dtype == edge_of.dtype == np.int32  # the documented narrow types
+    assert edges.dtype == np.int64 and edges.shape == (edge_start.size, 2)
     distinct, first_at, number = np.unique(keys[reference], return_index=True, return_inverse=True)
     np.testing.assert_array_equal(edge_start, first_at)
     np.testing.assert_array_equal(edges, np.stack([distinct // n, distinct % n], axis=1).reshape(-1, 2))
@@ -454,12 +455,12 @@ def test_best_pairs_equal_argmin_over_all_pairs_with_ties_and_nan(monkeypatch, b
     order = np.concatenate([[0, 3, 6]] + [rng.choice(np.arange(9, 3 * n_faces), w, replace=False) for w in widths[1:]])
     start = np.concatenate(([0], np.cumsum(widths)[:-1]))
     edges = np.array([6, 0, 2, 5, 1, 7, 4, 0])
-    got = _best_pairs(normals, forward, edges, order, start, widths)
+    got = _best_pairs(normals.T, forward, edges, order, start, widths)
     want = _best_pairs_reference(normals, forward, edges, order, start, widths)
     for a, b in zip(got, want):
         np.testing.assert_array_equal(a, b)
     assert np.isinf(got[2][1])  # the all-NaN edge: first pair, cos inf
-    empty = _best_pairs(normals, forward, np.zeros(0, dtype=np.int64), order, start, widths)
+    empty = _best_pairs(normals.T, forward, np.zeros(0, dtype=np.int64), order, start, widths)
     assert all(x.size == 0 for x in empty)
 
 
