@@ -4,9 +4,10 @@ import numpy as np
 
 from ..adjacency import pairs_in_order
 from .sdg import unique_sorted
-from .threads import run_blocks
+from .threads import run_chunks
 
 SQRT3 = np.sqrt(3.0)
+_CHUNK = 1 << 16  # faces per piece of element-wise work: its temporaries stay small
 
 
 def _normals_block(points, faces):
@@ -66,7 +67,7 @@ def face_normals(points, faces):
     def block(lo, hi):
         out[:, lo:hi] = _normals_block(points, faces[lo:hi])[0]
 
-    run_blocks(block, faces.shape[0])
+    run_chunks(block, faces.shape[0], _CHUNK)
     return out
 
 
@@ -79,17 +80,18 @@ def _quality(double_area, e1, e2):
 
 
 def normals_and_quality(points, faces):
-    """face_normals and the faces' Bank & Smith quality q = 4*sqrt(3)*A / (l1^2 + l2^2 + l3^2) (1 for
-    equilateral, 0 degenerate), in one pass over the faces."""
-    normals = np.empty((3, faces.shape[0]))
+    """face_normals, but as (f, 3) rows (a face's normal in one cache line), and the faces' Bank &
+    Smith quality q = 4*sqrt(3)*A / (l1^2 + l2^2 + l3^2) (1 for equilateral, 0 degenerate), in one
+    pass over the faces."""
+    normals = np.empty((faces.shape[0], 3))
     quality = np.empty(faces.shape[0])
 
     def block(lo, hi):
         normal, double_area, e1, e2 = _normals_block(points, faces[lo:hi])
-        normals[:, lo:hi] = normal
+        normals[lo:hi] = normal.T
         quality[lo:hi] = _quality(double_area, e1, e2)
 
-    run_blocks(block, faces.shape[0])
+    run_chunks(block, faces.shape[0], _CHUNK)
     return normals, quality
 
 
@@ -203,13 +205,14 @@ class Incidence:
     """
 
     def __init__(self, faces, n):
-        f = faces.astype(np.int64)
-        # Edge opposite vertex j: (f[(j+1)%3], f[(j+2)%3]).
-        narrow = f.astype(np.int32) if n < 2**31 else f  # half the bytes to move before the grouping
-        first = narrow[:, [1, 2, 0]].ravel()
-        second = narrow[:, [2, 0, 1]].ravel()
-        low, high = np.minimum(first, second), np.maximum(first, second)
-        del first, second
+        # int32 where the vertex numbers fit: half the bytes to move before the grouping.
+        f = np.asarray(faces).astype(np.int32 if n < 2**31 else np.int64, copy=False).reshape(-1, 3)
+        # Edge opposite vertex j: (f[(j+1)%3], f[(j+2)%3]), its ends ordered, column by column.
+        low, high = np.empty(f.shape, f.dtype), np.empty(f.shape, f.dtype)
+        for j in range(3):
+            np.minimum(f[:, (j + 1) % 3], f[:, (j + 2) % 3], out=low[:, j])
+            np.maximum(f[:, (j + 1) % 3], f[:, (j + 2) % 3], out=high[:, j])
+        low, high = low.reshape(-1), high.reshape(-1)
         grouped = group_by_edge(low, high, n)
         if grouped is not None:
             self.order, self.edge_start, self.edges, self.edge_of = grouped

@@ -26,8 +26,9 @@ from .geometry import (
     smallest_eigenvectors,
     triple_keys,
 )
-from .threads import run_blocks
+from .threads import run_blocks, run_chunks
 
+_CORONA_CHUNK = 1 << 15  # vertices per piece of the corona's work: its temporaries stay small
 _PAIR_BLOCK = 1 << 16  # incidences per block of _best_pairs
 _INT32_LIMIT = 2**31  # incidence and edge numbers below this are handled as int32
 
@@ -106,8 +107,11 @@ def corona_faces(points, edges, max_gap=np.pi, keys=False):
     indptr = umbrella.indptr.astype(np.int64)
     indices = umbrella.indices.astype(np.int64)
     keys_of = max(n, 1) if keys else None
-    parts = run_blocks(
-        lambda first, last: _corona_block(points, indptr, indices, first, last, max_gap, keys_of), n, share=0.2
+    parts = run_chunks(
+        lambda first, last: _corona_block(points, indptr, indices, first, last, max_gap, keys_of),
+        n,
+        _CORONA_CHUNK,
+        share=0.2,
     )
     if keys:
         return parts
@@ -205,24 +209,27 @@ def _prune(points, faces, normals=None, settled=None):
         normals = np.ascontiguousarray(face_normals(points, faces).T)
     # Whether each incidence's face runs along its edge from the edge's low end (incidence_cos).
     # Slot j's edge runs from slot j+1 to slot j+2; it starts at the edge's low end when that is lower.
-    forward = (faces[:, [1, 2, 0]] <= faces[:, [2, 0, 1]]).reshape(-1)
+    forward = np.empty(faces.shape, dtype=bool)
+    for j in range(3):
+        np.less_equal(faces[:, (j + 1) % 3], faces[:, (j + 2) % 3], out=forward[:, j])
+    forward = forward.reshape(-1)
     n_edges = inc.edge_count.size
+    # Incidence and edge numbers in int32 when they fit: half the bytes to move in every round.
+    narrow = np.int32 if max(3 * n_faces, n_edges) < _INT32_LIMIT else np.int64
     alive = np.ones(n_faces, dtype=bool)
     known = np.zeros(n_edges, dtype=bool)  # best pair cached and still valid
-    first = np.full(n_edges, -1, dtype=np.int64)
-    second = np.full(n_edges, -1, dtype=np.int64)
+    first = np.full(n_edges, -1, dtype=narrow)
+    second = np.full(n_edges, -1, dtype=narrow)
     best_cos = np.zeros(n_edges)
-    count = np.zeros(n_edges, dtype=np.int64)
-    start = np.zeros(n_edges, dtype=np.int64)
+    count = np.zeros(n_edges, dtype=narrow)
+    start = np.zeros(n_edges, dtype=narrow)
     # Scratch, reset after each use: per face the top priority and whether a candidate keeps it;
     # per edge whether a candidate would delete a kept face.
     top = np.full(n_faces, -1, dtype=np.int64)
     kept = np.zeros(n_faces, dtype=bool)
     flag = np.zeros(n_edges, dtype=bool)
-    # Incidences of overfull edges, sorted by edge (inc.order is); int32 when they fit: half the
-    # bytes to move in every round.
+    # Incidences of overfull edges, sorted by edge (inc.order is).
     overfull = inc.edge_count > 2
-    narrow = np.int32 if max(3 * n_faces, n_edges) < _INT32_LIMIT else np.int64
     order = inc.order[np.repeat(overfull, inc.edge_count)].astype(narrow, copy=False)
     edge = np.repeat(np.flatnonzero(overfull).astype(narrow), inc.edge_count[overfull])
     rounds = 0
@@ -262,7 +269,7 @@ def _prune(points, faces, normals=None, settled=None):
         kept[pair_b[candidate]] = True
         # ... and that delete no face another candidate keeps. These settle together: none deletes
         # a face another keeps, so each one's best pair is the same in whatever order they go.
-        inside = np.flatnonzero(np.repeat(candidate, run_count))  # the candidates' incidences
+        inside = np.repeat(candidate, run_count)  # the candidates' incidences
         at, at_edge = order[inside], edge[inside]
         at_face = at // 3
         other = (at != first[at_edge]) & (at != second[at_edge])
@@ -278,8 +285,10 @@ def _prune(points, faces, normals=None, settled=None):
         rounds += 1
         alive[dead] = False
         known[inc.edge_of[(3 * dead[:, None] + np.arange(3)).ravel()]] = False
+        del inside, at, at_edge, at_face, other, dead  # before the compaction allocates its copies
         # Drop the incidences of the dead faces and of the settled edges (now exactly two faces).
         survive = alive[face]
+        del face
         survive &= ~np.repeat(settle, run_count)
         order, edge = order[survive], edge[survive]
     return alive, inc
@@ -291,7 +300,8 @@ def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
     faces = faces_of_keys(corona_faces(points, edges, max_gap, keys=True), max(n, 1))
     normals, quality = normals_and_quality(points, faces)
     good = quality >= min_quality
-    faces, normals = faces[good], normals.T[good]  # (f, 3) rows for the pruning
+    # int32 while the pruning holds them (half the memory), int64 as the mesh's.
+    faces, normals = faces[good].astype(np.int32 if n < _INT32_LIMIT else np.int64), normals[good]
     alive, inc = _prune(points, faces, normals)
     # The kept faces' incidences, still grouped by edge (ties in face order), at most two per edge.
     live = inc.order[alive[inc.order // 3]]
@@ -304,4 +314,4 @@ def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
     pair = np.flatnonzero(live_edge[1:] == live_edge[:-1])
     other = np.full(3 * int(np.count_nonzero(alive)), -1, dtype=np.int64)
     other[live[pair]], other[live[pair + 1]] = live[pair + 1], live[pair]
-    return RFSMesh(faces[alive], inc.edges[used], other)
+    return RFSMesh(faces[alive].astype(np.int64), inc.edges[used], other)

@@ -22,3 +22,16 @@ def blocks(size, share=1.0):
 def run_blocks(function, size, share=1.0):
     """[function(start, stop) for each block], the blocks run in parallel threads (core.parallel's pool)."""
     return run_all([lambda part=part: function(*part) for part in blocks(size, share)])
+
+
+def run_chunks(function, size, chunk, share=1.0):
+    """[function(start, stop) for consecutive chunks of at most ``chunk`` elements], in order (one
+    empty chunk for size 0): the chunks of each thread's block run one after another, so the
+    temporaries of element-wise work stay small and are reused instead of filling fresh memory."""
+
+    def block(first, last):
+        return [function(start, min(start + chunk, last)) for start in range(first, last, chunk)] or [
+            function(first, last)
+        ]
+
+    return [result for results in run_blocks(block, size, share) for result in results]

@@ -42,6 +42,19 @@ def test_row_blocks_cover_every_row_once():
     assert bounds[0] == 0 and bounds[-1] == 6 and np.all(np.diff(bounds) > 0)
 
 
+@pytest.mark.parametrize("threads", ["1", "3"])
+@pytest.mark.parametrize("size, chunk", [(0, 4), (1, 4), (10, 3), (10, 10), (250_000, 70_000)])
+def test_chunks_cover_the_range_in_order_each_at_most_chunk_long(monkeypatch, threads, size, chunk):
+    from core.pointcloud.threads import run_chunks
+
+    monkeypatch.setenv("HC_SMOOTH_THREADS", threads)
+    parts = run_chunks(lambda start, stop: (start, stop), size, chunk)
+    starts, stops = np.array(parts).T
+    assert starts[0] == 0 and stops[-1] == size and np.array_equal(starts[1:], stops[:-1])
+    assert np.all(stops - starts <= chunk) and (size == 0 or np.all(stops > starts))
+    assert len(parts) >= -(-size // chunk)
+
+
 def test_thread_cap_from_the_environment(monkeypatch):
     monkeypatch.delenv("HC_SMOOTH_THREADS", raising=False)
     uncapped = parallel.thread_count()
