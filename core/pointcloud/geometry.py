@@ -144,14 +144,23 @@ def triple_keys(x, y, z, n):
     return np.stack([first, middle, last], axis=1)[keep]
 
 
-def faces_of_keys(keys, n):
-    """Distinct faces from the triple_keys of faces (in any number of parts)."""
+def faces_of_keys(keys, n, dtype=np.int64):
+    """Distinct faces (f, 3) of ``dtype`` from the triple_keys of faces (in any number of parts)."""
     if isinstance(keys, (list, tuple)):
         keys = np.concatenate(keys) if len(keys) != 1 else keys[0]
     if keys.ndim == 2:  # n^3 too large for keys: the triples themselves
-        return np.unique(keys, axis=0).reshape(-1, 3)
+        return np.unique(keys, axis=0).reshape(-1, 3).astype(dtype, copy=False)
     keys = unique_sorted(keys)
-    return np.stack([keys // (n * n), (keys // n) % n, keys % n], axis=1)
+    faces = np.empty((keys.size, 3), dtype=dtype)
+    first = keys // (n * n)
+    faces[:, 0] = first
+    keys -= first * (n * n)  # (middle, last) as middle * n + last
+    del first
+    middle = keys // n
+    faces[:, 1] = middle
+    keys -= middle * n
+    faces[:, 2] = keys
+    return faces
 
 
 def group_by_edge(low, high, n):

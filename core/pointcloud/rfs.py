@@ -297,11 +297,14 @@ def _prune(points, faces, normals=None, settled=None):
 def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
     """Build the RFS mesh of ``points`` (n, 3) float64 from graph ``edges`` (m, 2)."""
     n = points.shape[0]
-    faces = faces_of_keys(corona_faces(points, edges, max_gap, keys=True), max(n, 1))
+    # int32 while the mesh is built when the vertex numbers fit (half the memory), int64 as the mesh's.
+    index = np.int32 if n < _INT32_LIMIT else np.int64
+    faces = faces_of_keys(corona_faces(points, edges, max_gap, keys=True), max(n, 1), index)
     normals, quality = normals_and_quality(points, faces)
     good = quality >= min_quality
-    # int32 while the pruning holds them (half the memory), int64 as the mesh's.
-    faces, normals = faces[good].astype(np.int32 if n < _INT32_LIMIT else np.int64), normals[good]
+    # np.compress: rows picked by a mask several times faster than indexing with it.
+    faces = np.compress(good, faces, axis=0)
+    normals = np.compress(good, normals, axis=0)
     alive, inc = _prune(points, faces, normals)
     # The kept faces' incidences, still grouped by edge (ties in face order), at most two per edge.
     live = inc.order[alive[inc.order // 3]]
@@ -314,4 +317,4 @@ def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
     pair = np.flatnonzero(live_edge[1:] == live_edge[:-1])
     other = np.full(3 * int(np.count_nonzero(alive)), -1, dtype=np.int64)
     other[live[pair]], other[live[pair + 1]] = live[pair + 1], live[pair]
-    return RFSMesh(faces[alive].astype(np.int64), inc.edges[used], other)
+    return RFSMesh(np.compress(alive, faces, axis=0).astype(np.int64), np.compress(used, inc.edges, axis=0), other)
