@@ -85,10 +85,15 @@ class NeighbourIndex:
         m = self.points.shape[0]
         self.k = int(min(k, max(m - 1, 0)))
         if self.k > 0:
-            distance, neighbour = self.tree.query(self.points, self.k + 1, workers=-1)
-            # Points are distinct, so each point is its own unique nearest (distance 0): column 0.
-            self.distance = np.ascontiguousarray(distance[:, 1:])
-            self.neighbour = np.ascontiguousarray(neighbour[:, 1:].astype(np.int64))
+            self.distance = np.empty((m, self.k))
+            self.neighbour = np.empty((m, self.k), dtype=np.int64)
+            step = max(1, _QUERY_ENTRIES // (self.k + 1))  # in blocks: small result arrays, reused
+            for start in range(0, m, step):
+                rows = slice(start, min(start + step, m))
+                distance, neighbour = self.tree.query(self.points[rows], self.k + 1, workers=-1)
+                # Points are distinct, so each point is its own unique nearest (distance 0): column 0.
+                self.distance[rows] = distance[:, 1:]
+                self.neighbour[rows] = neighbour[:, 1:]
         else:
             self.distance = np.zeros((m, 0))
             self.neighbour = np.zeros((m, 0), dtype=np.int64)
