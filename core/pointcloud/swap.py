@@ -22,20 +22,10 @@ geometry of the moved points; ``swap_pass`` is one pass on a fresh mesh.
 import numpy as np
 
 from .geometry import Incidence, _normals_block
-from .threads import run_blocks
+from .threads import run_chunks
 
 _MIN_GAIN = 1e-9  # radians; ignores swaps that only win by rounding
 _CHUNK = 1 << 16  # elements per step within a thread: its temporaries stay in cache and get reused
-
-
-def _in_chunks(function, size):
-    """function(start, stop) over range(size) in chunks, the chunks split over the threads; returns
-    the results in order."""
-
-    def block(lo, hi):
-        return [function(start, min(start + _CHUNK, hi)) for start in range(lo, hi, _CHUNK)]
-
-    return [result for results in run_blocks(block, size) for result in results]
 
 
 def _next(i):
@@ -85,7 +75,7 @@ def _face_normal_rows(points, faces, out):
     def chunk(lo, hi):
         out[lo:hi] = _normals_block(points, faces[lo:hi])[0].T
 
-    _in_chunks(chunk, faces.shape[0])
+    run_chunks(chunk, faces.shape[0], _CHUNK)
     return out
 
 
@@ -197,7 +187,7 @@ class EdgeSwapper:
             good = gain > _MIN_GAIN  # NaN (a degenerate face) never wins
             return tuple(x[good] for x in (i1, i2, c, d, gain))
 
-        parts = _in_chunks(chunk, other.size)
+        parts = run_chunks(chunk, other.size, _CHUNK)
         i1, i2, c, d, gain = (np.concatenate([part[k] for part in parts]) for k in range(5))
         return (i1, i2, flat[_next(i1)], flat[_previous(i1)], c, d), gain
 
@@ -311,7 +301,7 @@ def _replaced(keys, gone, new):
         into = out[lo:hi]
         into[~is_new[lo:hi]] = np.compress(keep[kept_from(lo) : kept_from(hi)], keys[kept_from(lo) : kept_from(hi)])
 
-    _in_chunks(block, keys.size)
+    run_chunks(block, keys.size, _CHUNK)
     out[new_at] = new
     return out
 
