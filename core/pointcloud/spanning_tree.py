@@ -332,14 +332,17 @@ def boruvka_emst(index):
     floor = np.zeros(m)
     tree_u, tree_v, tree_w = [], [], []
     while n_components > 1:
-        label_src, label_dst = label[src], label[dst]
-        crossing = label_src != label_dst
-        # A point none of whose neighbours is foreign stays so: components only grow.
-        offers = np.zeros(m, dtype=bool)
-        offers[src[crossing]] = True
-        exhausted |= ~offers
-        src, dst, weight = src[crossing], dst[crossing], weight[crossing]
-        label_src, label_dst = label_src[crossing], label_dst[crossing]
+        if n_components == m:  # every point its own component: each kNN pair crosses (points are distinct)
+            label_src, label_dst = src, dst
+        else:
+            label_src, label_dst = label[src], label[dst]
+            crossing = label_src != label_dst
+            # A point none of whose neighbours is foreign stays so: components only grow.
+            offers = np.zeros(m, dtype=bool)
+            offers[src[crossing]] = True
+            exhausted |= ~offers
+            src, dst, weight = src[crossing], dst[crossing], weight[crossing]
+            label_src, label_dst = label_src[crossing], label_dst[crossing]
 
         cached = np.flatnonzero(cache_index >= 0)
         merged_in = cached[label[cache_index[cached]] == label[cached]]
