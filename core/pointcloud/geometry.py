@@ -59,13 +59,15 @@ def smallest_eigenvectors(xx, yy, zz, xy, xz, yz):
     return normal
 
 
-def face_normals(points, faces):
-    """Unit normals of the faces as a (3, f) array (one contiguous row per component); NaN for a
-    degenerate face. The normal follows the face's vertex order (right-hand rule)."""
-    out = np.empty((3, faces.shape[0]))
+def face_normals(points, faces, out=None):
+    """Unit normals of the faces as (f, 3) rows (a face's normal is one gather: faces are reached in
+    scattered order), in ``out`` if given; NaN for a degenerate face. The normal follows the face's
+    vertex order (right-hand rule)."""
+    if out is None:
+        out = np.empty((faces.shape[0], 3))
 
     def block(lo, hi):
-        out[:, lo:hi] = _normals_block(points, faces[lo:hi])[0]
+        out[lo:hi] = _normals_block(points, faces[lo:hi])[0].T
 
     run_chunks(block, faces.shape[0], _CHUNK)
     return out
@@ -80,9 +82,8 @@ def _quality(double_area, e1, e2):
 
 
 def normals_and_quality(points, faces):
-    """face_normals, but as (f, 3) rows (a face's normal in one cache line), and the faces' Bank &
-    Smith quality q = 4*sqrt(3)*A / (l1^2 + l2^2 + l3^2) (1 for equilateral, 0 degenerate), in one
-    pass over the faces."""
+    """face_normals and the faces' Bank & Smith quality q = 4*sqrt(3)*A / (l1^2 + l2^2 + l3^2) (1 for
+    equilateral, 0 degenerate), in one pass over the faces."""
     normals = np.empty((faces.shape[0], 3))
     quality = np.empty(faces.shape[0])
 
@@ -102,7 +103,7 @@ def incidence_starts(faces):
 
 def incidence_cos(normals, faces, x, y, starts=None):
     """cos of the dihedral angle between the faces of incidences x and y of one edge (incidence
-    3*f + j: the edge of face f opposite its slot j), from the faces' unit normals (3, f).
+    3*f + j: the edge of face f opposite its slot j), from the faces' unit normals (f, 3).
 
     The vector from the edge into face f, perpendicular to the edge, is s * (n_f x e) for the
     edge's direction e, with s = +1 when the face runs along the edge in direction e (its slot
@@ -115,13 +116,14 @@ def incidence_cos(normals, faces, x, y, starts=None):
     if starts is None:
         starts = incidence_starts(faces)
     same = starts[x] == starts[y]
-    dot = normals[0][fx] * normals[0][fy] + normals[1][fx] * normals[1][fy] + normals[2][fx] * normals[2][fy]
+    dot = dot_rows(normals[fx], normals[fy])
     return np.where(same, dot, -dot)
 
 
-def _dot(x, y):
-    # Component-wise: much faster than a reduction over a length-3 last axis.
-    return x[..., 0] * y[..., 0] + x[..., 1] * y[..., 1] + x[..., 2] * y[..., 2]
+def dot_rows(x, y):
+    """Row-wise dot products of (k, 3) arrays, component by component (much faster than a reduction
+    over a length-3 axis), summed left to right."""
+    return x[:, 0] * y[:, 0] + x[:, 1] * y[:, 1] + x[:, 2] * y[:, 2]
 
 
 def triple_keys(x, y, z, n):

@@ -194,19 +194,18 @@ def keep_best_pairs(points, faces, normals=None):
     edge keeps because another edge drops it, and lose about half of the faces. An edge's best
     pair is recomputed only after it lost a face. Each round works only on the incidences of the
     edges still overfull (kept sorted by edge), so the long tail of rounds costs little.
-    ``normals``: the faces' unit normals as face_normals gives them (3, f), if the caller has them.
+    ``normals``: the faces' face_normals, if the caller has them.
     """
-    return _prune(points, faces, None if normals is None else np.ascontiguousarray(normals.T))[0]
+    return _prune(points, faces, normals)[0]
 
 
 def _prune(points, faces, normals=None, settled=None):
-    """keep_best_pairs, also returning the faces' Incidence; ``normals`` as (f, 3) rows. ``settled``
-    (optional, one int per edge of the Incidence, preset to -1) receives the round in which each
-    overfull edge settled."""
+    """keep_best_pairs, also returning the faces' Incidence. ``settled`` (optional, one int per
+    edge of the Incidence, preset to -1) receives the round in which each overfull edge settled."""
     n_faces = faces.shape[0]
     inc = Incidence(faces, max(points.shape[0], 1))
     if normals is None:
-        normals = np.ascontiguousarray(face_normals(points, faces).T)
+        normals = face_normals(points, faces)
     # Whether each incidence's face runs along its edge from the edge's low end (incidence_cos).
     # Slot j's edge runs from slot j+1 to slot j+2; it starts at the edge's low end when that is lower.
     forward = np.empty(faces.shape, dtype=bool)

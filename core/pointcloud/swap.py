@@ -21,7 +21,7 @@ geometry of the moved points; ``swap_pass`` is one pass on a fresh mesh.
 
 import numpy as np
 
-from .geometry import Incidence, _normals_block
+from .geometry import Incidence, dot_rows, face_normals
 from .threads import run_chunks
 
 _MIN_GAIN = 1e-9  # radians; ignores swaps that only win by rounding
@@ -67,21 +67,6 @@ def _unit_cross(u, v):
         y /= length
         z /= length
     return x, y, z
-
-
-def _face_normal_rows(points, faces, out):
-    """geometry.face_normals as (f, 3) rows in ``out``: a face's normal is then one gather, not three."""
-
-    def chunk(lo, hi):
-        out[lo:hi] = _normals_block(points, faces[lo:hi])[0].T
-
-    run_chunks(chunk, faces.shape[0], _CHUNK)
-    return out
-
-
-def _dot_rows(x, y):
-    """Row-wise dot products of (k, 3) arrays, summed left to right as geometry.incidence_cos does."""
-    return x[:, 0] * y[:, 0] + x[:, 1] * y[:, 1] + x[:, 2] * y[:, 2]
 
 
 def _angle(cos, same):
@@ -170,7 +155,7 @@ class EdgeSwapper:
         # normal each, and every candidate only the normals of its two new faces.
         if self._normals is None:
             self._normals = np.empty((self.faces.shape[0], 3))
-        normals = _face_normal_rows(points, self.faces, self._normals)
+        normals = face_normals(points, self.faces, out=self._normals)
         self._key_runs()  # before the threads need them
 
         def chunk(lo, hi):
@@ -205,7 +190,7 @@ class EdgeSwapper:
         cd = points[d] - pc
         new_a, new_b = _unit_cross(cd, points[a] - pc), _unit_cross(cd, points[b] - pc)
         own_1, own_2 = normals[i1 // 3], normals[i2 // 3]
-        before = _angle(_dot_rows(own_1, own_2), a_after_d)
+        before = _angle(dot_rows(own_1, own_2), a_after_d)
         after = _angle(new_a[0] * new_b[0] + new_a[1] * new_b[1] + new_a[2] * new_b[2], None)  # both c -> d
         for incidence, own, new, new_start in (
             (f1_oa, own_1, new_b, b),
@@ -217,7 +202,7 @@ class EdgeSwapper:
             # -1 (no face beyond) indexes a valid row and slot; those terms are dropped below.
             normal = normals[beyond // 3]
             beyond_start = flat[_next(beyond)]  # where the edge starts in each face (incidence_starts)
-            term = _angle(_dot_rows(own, normal), flat[_next(incidence)] == beyond_start)
+            term = _angle(dot_rows(own, normal), flat[_next(incidence)] == beyond_start)
             term[beyond < 0] = 0.0  # an outer edge without a face beyond counts the same before and after
             before += term
             term = _angle(
