@@ -22,6 +22,14 @@ detail. It is chosen here from the mesh alone, by generalized cross-validation (
   noisy meshes with sharp edges): the amount chosen is the largest k whose GCV is within
   ``TOLERANCE`` of the minimum, i.e. the most smoothing the estimate cannot tell from the best.
 * The square root of the minimum GCV is the noise estimate (standard deviation along the normals).
+* **Light noise on coarse meshes**: where that picks at most ``FINE_MAX`` iterations, whole steps at
+  the given beta are too coarse to say how much smoothing is wanted: k steps smooth a low frequency
+  as much as k (1 - beta) steps of the gentlest kind, and below beta 0.75 a step also overshoots the
+  mesh's highest frequency (its factor 1 - 4 (1 - beta) is negative). The choice is then made once
+  more on steps of beta ``FINE_BETA`` (the gentlest step that removes that frequency outright, as
+  trimesh's Taubin filter does), and taken where it smooths more than the whole steps did: the whole
+  steps are the most GCV could not tell from its minimum, so they bound the amount from below. The
+  amount says so in its beta.
 
 Where the noise is large against a thin part (a tube a few edges around), the amount with the least
 error also shrinks that part by a few per cent; core.volume.restore_volume gives the volume back.
@@ -57,6 +65,8 @@ PATCH_RINGS = 48
 PATCH_MARGIN = 16
 PATCH_PROBE_ENTRIES = 180_000  # more probe entries on the patches' fewer vertices: less noise in t, still cheap
 _SEED = 20_161_999  # the probes' seed: fixed, so the choice is reproducible
+FINE_MAX = 3  # choices of at most this many iterations are made again on gentler steps (see above) ...
+FINE_BETA = 0.75  # ... of this beta
 
 
 @dataclass(frozen=True)
@@ -153,8 +163,9 @@ def choose_amount(
     """The HC amount (alpha, iterations) for a noisy mesh at the given beta: see the module docstring.
 
     ``positions`` (n, 3), ``edges`` (m, 2) as for ``hc_smooth`` (or a prebuilt ``operator``), ``fixed``
-    the vertices that never move. Returns a MeshAmount with alpha = 0 and the iterations chosen; a mesh
-    with nothing to smooth gets 0 iterations.
+    the vertices that never move. Returns a MeshAmount with alpha = 0, the iterations chosen and the
+    beta to run them with (the given one, or FINE_BETA on light noise); a mesh with nothing to smooth
+    gets 0 iterations.
     """
     chooser = AmountChooser(positions, edges, beta=beta, fixed=fixed, operator=operator)
     for _ in chooser.steps():
@@ -181,6 +192,8 @@ class AmountChooser:
         self.edge_length = _median_edge_length(start, operator)
         self.amount = None
         self._kept = None  # the data run's state at the amount chosen so far: the result, if the choice stays
+        self._fine = None  # the choice made again on gentler steps, where it is taken (light noise)
+        self._start, self._fixed_mask = start, fixed_mask
         if movable.size == 0:
             self.amount = MeshAmount(0.0, beta, 0, 0.0, self.edge_length, 0)
             return
@@ -265,12 +278,21 @@ class AmountChooser:
             yield k / MAX_ITERATIONS
         self.amount = self._amount(steps, traces, residuals, normals, done)
         self.traces = dict(zip(steps, traces))  # t(k) at each checkpoint, for inspection
+        if self.beta < FINE_BETA and 1 <= self.amount.iterations <= FINE_MAX:
+            fine = AmountChooser(self._start, beta=FINE_BETA, fixed=self._fixed_mask, operator=self.operator)
+            for fraction in fine.steps():
+                yield min(done / MAX_ITERATIONS + fraction, 0.999)
+            smooths = fine.amount.iterations * (1.0 - FINE_BETA)  # a low frequency's share, as above
+            if smooths > self.amount.iterations * (1.0 - self.beta):
+                self._fine, self.amount = fine, fine.amount
         yield 1.0
 
     def result(self):
-        """The positions after ``amount.iterations`` HC iterations (alpha 0, this beta, these fixed
+        """The positions after ``amount.iterations`` HC iterations (alpha 0, ``amount.beta``, these fixed
         vertices, simultaneous) if the data run passed through them on its way, else None: then the
         caller runs them. Bit for bit what core.Smoothing gives for that run, without running it again."""
+        if self._fine is not None:
+            return self._fine.result()
         if self.amount is None or self._kept is None or self._kept[0] != self.amount.iterations:
             return None
         return self.data.positions(self._kept[1])

@@ -147,7 +147,8 @@ def run(jobs, props, chunk=None):
                 if fraction < 1.0:
                     yield (number + share * fraction) / len(jobs)
             job.amount = chooser.amount
-            iterations, job_settings = job.amount.iterations, {**settings, "alpha": job.amount.alpha}
+            iterations = job.amount.iterations
+            job_settings = {**settings, "alpha": job.amount.alpha, "beta": job.amount.beta}
             if job.influence is None and settings["mode"] == "simultaneous" and not settings["tolerance"]:
                 done = chooser.result()  # the choice ran exactly these iterations on its way: not again
         if done is not None:
@@ -251,6 +252,9 @@ def summary(jobs, props):
         chosen = "/".join(str(job.iterations_run) for job in jobs)
         noise = "/".join(f"{amount.ratio:.2f}" for amount in amounts)
         ran = f"automatic amount: noise {noise}x edge length, {chosen} iterations, alpha 0"
+        gentler = sorted({amount.beta for amount in amounts if amount.beta != settings_of(props)["beta"]})
+        if gentler:  # light noise: the amount ran on gentler steps than the beta set (core.noise)
+            ran += ", beta " + "/".join(f"{beta:g}" for beta in gentler)
         if any(job.volume_offset for job in jobs):
             ran += ", volume kept"
     else:

@@ -49,13 +49,17 @@ def test_automatic_amount_is_the_default_and_keeps_the_volume(scene, capfd):
     edges = edges_of(obj.data)
     assert bpy.ops.object.hc_smooth() == {"FINISHED"}
     amount = core.choose_amount(before, edges, beta=BETA)
-    smoothed = core.hc_smooth(before, edges, alpha=0.0, beta=BETA, iterations=amount.iterations)
+    assert amount.beta == core.noise.FINE_BETA  # light noise on a coarse mesh: gentler steps (core.noise)
+    smoothed = core.hc_smooth(before, edges, alpha=0.0, beta=amount.beta, iterations=amount.iterations)
     triangles = core.metrics.fan_triangles(np.array(faces_of(obj.data)))
     expected = core.volume.restore_volume(before, smoothed, triangles)[0].astype(np.float32)
     np.testing.assert_allclose(positions_of(obj.data), expected, rtol=0, atol=1e-6)
     assert abs(volume_change(before, positions_of(obj.data), obj.data)) < 1e-5
     report = capfd.readouterr().out
-    assert f"automatic amount: noise {amount.ratio:.2f}x edge length, {amount.iterations} iterations" in report
+    assert (
+        f"automatic amount: noise {amount.ratio:.2f}x edge length, {amount.iterations} iterations, alpha 0, beta 0.75"
+        in report
+    )
     assert "volume kept" in report
     obj.data.vertices.foreach_set("co", before.ravel())
     obj.data.update()

@@ -168,8 +168,36 @@ def test_the_choice_hands_back_the_run_it_made_bit_for_bit(ratio, dtype):
     assert kept is not None  # the choice stayed where the run last kept its state
     with warnings.catch_warnings():  # alpha 0 on purpose, as the chooser runs it
         warnings.simplefilter("ignore", core.ConvergenceWarning)
-        fresh = core.hc_smooth(noisy, edges, alpha=0.0, beta=0.6, iterations=chooser.amount.iterations, fixed=fixed)
+        amount = chooser.amount
+        fresh = core.hc_smooth(noisy, edges, alpha=0.0, beta=amount.beta, iterations=amount.iterations, fixed=fixed)
     assert kept.dtype == dtype and np.array_equal(kept.view(np.uint8), fresh.view(np.uint8))
+
+
+@pytest.mark.parametrize("ratio, seed, taken", [(0.15, 0, True), (0.1, 0, False), (0.3, 0, False)])
+def test_light_noise_is_chosen_again_on_gentler_steps_where_they_smooth_more(monkeypatch, ratio, seed, taken):
+    """Where whole steps pick at most FINE_MAX iterations, the choice is made again with beta FINE_BETA
+    and taken only where it smooths a low frequency more (k' (1 - 0.75) > k (1 - 0.6)); the result
+    handed back is then that run, bit for bit."""
+    vertices, faces = bumpy_sphere(3)
+    edges = edges_of(faces)
+    noisy = with_normal_noise(vertices, ratio, edges, seed)[0]
+    with monkeypatch.context() as patch:
+        patch.setattr(noise, "FINE_MAX", 0)
+        whole = core.choose_amount(noisy, edges, beta=0.6)
+        gentle = core.choose_amount(noisy, edges, beta=noise.FINE_BETA)
+    chooser = core.AmountChooser(noisy, edges, beta=0.6)
+    for _ in chooser.steps():
+        pass
+    amount = chooser.amount
+    eligible = whole.iterations <= noise.FINE_MAX
+    assert taken == (eligible and gentle.iterations * 0.25 > whole.iterations * 0.4)
+    assert (amount.beta, amount.iterations) == ((0.75, gentle.iterations) if taken else (0.6, whole.iterations))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", core.ConvergenceWarning)
+        fresh = core.hc_smooth(noisy, edges, alpha=0.0, beta=amount.beta, iterations=amount.iterations)
+    assert np.array_equal(chooser.result(), fresh)
+    # A beta at least as gentle as FINE_BETA is never chosen again.
+    assert core.choose_amount(noisy, edges, beta=0.8).beta == 0.8
 
 
 def test_no_kept_result_when_nothing_ran():
