@@ -142,6 +142,12 @@ def hc_default(case):
     return result, settings
 
 
+def _amount_label(params):
+    """'12 it.', or with the gentler steps the Automatic Amount takes on light noise '4 it., beta 0.75'."""
+    gentler = params["beta"] != hc_default_settings()["beta"]
+    return f"{params['iterations']} it." + (f", beta {params['beta']:g}" if gentler else "")
+
+
 def hc_fixed(case, params):
     return quiet(
         core.hc_smooth,
@@ -483,7 +489,7 @@ def quality(args, out, record):
         best_peer = min(peer_defaults, key=peer_defaults.get) if peer_defaults else None
         chosen = m["HC Smooth default"]["params"]
         cells = [
-            pct(ours_rms) + (f" ({chosen['iterations']} it.)" if "noise" in chosen else ""),
+            pct(ours_rms) + (f" ({_amount_label(chosen)})" if "noise" in chosen else ""),
             f"{pct(best['rms'])} ({label(best['params'])})" if best else "–",
         ]
         cells += [pct(m[p.name]["rms"]) for p in peers]
