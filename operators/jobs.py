@@ -252,7 +252,8 @@ def summary(jobs, props):
         chosen = "/".join(str(job.iterations_run) for job in jobs)
         noise = "/".join(f"{amount.ratio:.2f}" for amount in amounts)
         ran = f"automatic amount: noise {noise}x edge length, {chosen} iterations, alpha 0"
-        gentler = sorted({amount.beta for amount in amounts if amount.beta != settings_of(props)["beta"]})
+        beta = settings_of(props)["beta"]
+        gentler = sorted({amount.beta for amount in amounts if amount.beta != beta})
         if gentler:  # light noise: the amount ran on gentler steps than the beta set (core.noise)
             ran += ", beta " + "/".join(f"{beta:g}" for beta in gentler)
         if any(job.volume_offset for job in jobs):

@@ -262,33 +262,12 @@ class EdgeSwapper:
 
 
 def _replaced(keys, gone, new):
-    """The sorted keys without the sorted keys ``gone`` (all present) and with as many sorted keys
-    ``new`` (all absent): the merge, filled block by block with no full-size copy of the kept keys."""
-    gone_at = np.searchsorted(keys, gone)
+    """The sorted keys without the sorted keys ``gone`` (all present) and with the sorted keys ``new``
+    (all absent)."""
     keep = np.ones(keys.size, dtype=bool)
-    keep[gone_at] = False
-    # Where the new keys land: their place among the kept keys (as np.insert's), plus the new
-    # keys before them.
-    new_at = np.searchsorted(keys, new)
-    new_at -= np.searchsorted(gone_at, new_at)
-    new_at += np.arange(new.size)
-    is_new = np.zeros(keys.size, dtype=bool)
-    is_new[new_at] = True
-    kept_before_gone = gone_at - np.arange(gone.size)
-    out = np.empty_like(keys)
-
-    def kept_from(place):
-        # The kept key that lands at ``place`` (or the first after it) and its index in ``keys``.
-        k = place - np.searchsorted(new_at, place)
-        return k + np.searchsorted(kept_before_gone, k, side="right")
-
-    def block(lo, hi):
-        into = out[lo:hi]
-        into[~is_new[lo:hi]] = np.compress(keep[kept_from(lo) : kept_from(hi)], keys[kept_from(lo) : kept_from(hi)])
-
-    run_chunks(block, keys.size, _CHUNK)
-    out[new_at] = new
-    return out
+    keep[np.searchsorted(keys, gone)] = False
+    kept = keys[keep]
+    return np.insert(kept, np.searchsorted(kept, new), new)
 
 
 def swap_pass(points, faces, *, rounds=3):
