@@ -16,6 +16,7 @@ smoothing call (conversion into CGAL / MeshLab structures excluded).
     python bench/bench_quality_points.py --sizes 100k --methods ours,jet,pca --kinds normal
     python bench/bench_quality_points.py --objects cow,bunny --sigmas 0.0025,0.005 --methods ours,jet
     python bench/bench_quality_points.py --methods ours,uniform,jet  # with and without the local amount
+    python bench/bench_quality_points.py --objects plate --sigmas 0.005,0.01 --methods ours,jet --steps 8,20
 
 The report goes to stdout and bench/results/ (markdown and JSON).
 """
@@ -75,8 +76,16 @@ def main():
     parser.add_argument("--sigmas", default=SIGMAS)
     parser.add_argument("--methods", default=",".join(METHODS), help=f"keys among {', '.join(METHODS)}")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--steps", default="", help="also ours with these fixed HC steps per round (alpha matched), e.g. 8,20"
+    )
     args = parser.parse_args()
     methods = {key: METHODS[key] for key in inputs.parse_list(args.methods)}
+    for steps in inputs.parse_list(args.steps, int):
+        methods[f"steps{steps}"] = (
+            f"HC Smooth, {steps} steps per round",
+            lambda points, steps=steps: bench_points.hc_rfs(points, iterations_per_round=steps),
+        )
     results = ROOT / "bench" / "results"
     results.mkdir(exist_ok=True)
     stamp = time.strftime("%Y%m%d-%H%M%S")
