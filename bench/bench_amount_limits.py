@@ -29,6 +29,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
 import bench_quality as bq  # noqa: E402
 import bench_quality_inputs as inputs  # noqa: E402
+from report import Report  # noqa: E402
 
 import core  # noqa: E402
 
@@ -86,15 +87,7 @@ def main():
     parser.add_argument("--iterations", type=int, default=40)
     args = parser.parse_args()
     peers = [p for p in bq.PEERS if p.run is not None and bq.available(p)]
-    results = ROOT / "bench" / "results"
-    results.mkdir(exist_ok=True)
-    report = results / f"bench_amount_limits-{time.strftime('%Y%m%d-%H%M%S')}.md"
-    with report.open("w") as handle:
-
-        def out(line):
-            print(line, flush=True)
-            handle.write(line + "\n")
-
+    with Report("bench_amount_limits") as out:
         out(f"`{' '.join(['bench/bench_amount_limits.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
         out(f"Peers at their defaults: {', '.join(p.name for p in peers)}. RMS in % of the diagonal.\n")
         out("| mesh | noise | σ | best peer default | HC Smooth default | oracle, α 0 | GCV | Cp, true σ |")
@@ -129,7 +122,6 @@ def main():
             f"\nBelow the best peer's default (bold), of {cells}: HC Smooth default {counts['default']}, "
             f"oracle {counts['oracle']}, GCV {counts['gcv']}, Cp with the true σ {counts['cp']}."
         )
-    print(f"\n(written to {report})")
 
 
 if __name__ == "__main__":

@@ -31,6 +31,8 @@ from scipy.spatial import cKDTree
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+from report import Report  # noqa: E402
+
 import core  # noqa: E402
 
 # --- shapes: sampling and exact distance --------------------------------------------------------------
@@ -424,22 +426,13 @@ def main():
     parser.add_argument("--iterations-per-round", type=int, default=None)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
-    results = ROOT / "bench" / "results"
-    results.mkdir(exist_ok=True)
-    report = results / f"bench_points-{time.strftime('%Y%m%d-%H%M%S')}.md"
-    with report.open("w") as handle:
-
-        def out(line):
-            print(line, flush=True)
-            handle.write(line + "\n")
-
+    with Report("bench_points") as out:
         if args.emst:
             emst_timing(args, out)
         elif args.hc_steps:
             hc_steps_timing(args, out)
         else:
             (timing if args.timing else sparse if args.sparse else quality)(args, out)
-    print(f"\n(written to {report})")
 
 
 if __name__ == "__main__":

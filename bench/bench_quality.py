@@ -40,6 +40,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
 import bench_quality_inputs as inputs  # noqa: E402
 import meshes  # noqa: E402
+from report import Report  # noqa: E402
 
 import core  # noqa: E402
 import settings_spec  # noqa: E402
@@ -699,25 +700,15 @@ def main():
     parser.add_argument("--plot-case", default="bunny/normal/0.004", help="mesh/kind/sigma of the figure")
     parser.add_argument("--plot-iterations", type=int, default=300)
     args = parser.parse_args()
-    results = ROOT / "bench" / "results"
-    results.mkdir(exist_ok=True)
-    stamp = time.strftime("%Y%m%d-%H%M%S")
-    report = results / f"bench_quality-{stamp}.md"
     record = []
-    with report.open("w") as handle:
-
-        def out(line):
-            print(line, flush=True)
-            handle.write(line + "\n")
-
+    with Report("bench_quality") as out:
         out(f"`{' '.join(['bench/bench_quality.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
         if args.plot:
             plot(args, out)
         else:
             quality(args, out, record)
-    if record:
-        (results / f"bench_quality-{stamp}.json").write_text(json.dumps(record))
-    print(f"\n(written to {report})")
+        if record:
+            out.sibling(".json").write_text(json.dumps(record))
 
 
 if __name__ == "__main__":

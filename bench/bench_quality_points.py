@@ -34,6 +34,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
 import bench_points  # noqa: E402
 import bench_quality_inputs as inputs  # noqa: E402
+from report import Report  # noqa: E402
 
 SIGMAS = "0.001,0.0025,0.005,0.01"
 
@@ -86,17 +87,8 @@ def main():
             f"HC Smooth, {steps} steps per round",
             lambda points, steps=steps: bench_points.hc_rfs(points, iterations_per_round=steps),
         )
-    results = ROOT / "bench" / "results"
-    results.mkdir(exist_ok=True)
-    stamp = time.strftime("%Y%m%d-%H%M%S")
-    report = results / f"bench_quality_points-{stamp}.md"
     record = []
-    with report.open("w") as handle:
-
-        def out(line):
-            print(line, flush=True)
-            handle.write(line + "\n")
-
+    with Report("bench_quality_points") as out:
         import os
 
         out(
@@ -184,8 +176,7 @@ def main():
                 f"\n{methods[key][0]} removed at least jet's share of the noise in {won} of {len(pairs)} cells; "
                 f"largest |radius change| {100 * max(abs(o['radius']) for o, _ in pairs):.2f} %."
             )
-    (results / f"bench_quality_points-{stamp}.json").write_text(json.dumps(record))
-    print(f"\n(written to {report})")
+        out.sibling(".json").write_text(json.dumps(record))
 
 
 if __name__ == "__main__":
