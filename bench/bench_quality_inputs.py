@@ -20,8 +20,8 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "bench"))
 import meshes  # noqa: E402
+from report import RESULTS  # noqa: E402
 
-RESULTS = ROOT / "bench" / "results"
 BPY45 = ROOT / ".envs" / "bpy45" / "bin" / "python"
 
 REAL = {"bunny": "bunny.obj", "cow": "cow.obj", "bone": "bone.ply", "airplane": "airplane.obj"}

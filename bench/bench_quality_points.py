@@ -23,6 +23,7 @@ The report goes to stdout and bench/results/ (markdown and JSON).
 
 import argparse
 import json
+import os
 import pathlib
 import sys
 import time
@@ -89,8 +90,6 @@ def main():
         )
     record = []
     with Report("bench_quality_points") as out:
-        import os
-
         out(
             f"`{' '.join(['bench/bench_quality_points.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}, "
             f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}\n"
