@@ -57,10 +57,11 @@ def paths(case, iterations):
         rms, residual, trace = [], [], []
         for _ in range(iterations):
             data.advance(1)
-            positions = data.result().positions
+            smoothed = data.result().positions
+            positions = smoothed
             if case.closed:
-                positions = core.volume.restore_volume(case.noisy, positions, case.faces)[0]
-            along = np.einsum("ij,ij->i", case.noisy - data.result().positions, normals)
+                positions = core.volume.restore_volume(case.noisy, smoothed, case.faces)[0]
+            along = np.einsum("ij,ij->i", case.noisy - smoothed, normals)
             total = 0.0
             for block, probe in blocks:
                 block.advance(1)

@@ -255,7 +255,7 @@ def summary(jobs, props):
         beta = settings_of(props)["beta"]
         gentler = sorted({amount.beta for amount in amounts if amount.beta != beta})
         if gentler:  # light noise: the amount ran on gentler steps than the beta set (core.noise)
-            ran += ", beta " + "/".join(f"{beta:g}" for beta in gentler)
+            ran += ", beta " + "/".join(f"{value:g}" for value in gentler)
         if any(job.volume_offset for job in jobs):
             ran += ", volume kept"
     else:
