@@ -6,7 +6,7 @@ iterations; closed meshes get their volume back as the operator does) three pick
 
 * oracle: the least true RMS distance to the clean surface, the most any choice of (beta, iterations)
   at alpha 0 can reach;
-* GCV: the least generalized cross-validation score over every (beta, iterations), as core.noise
+* GCV: the least generalized cross-validation score over every (beta, iterations), as core.mesh_amount
   computes it but given the clean normals;
 * Cp: Mallows' Cp, the unbiased estimate of the error given the *true* noise sigma and the clean
   normals, R(k) + sigma^2 (2 t(k) - 1), which no mesh-only estimate can beat on average.

@@ -123,23 +123,11 @@ def hc_default_settings():
 
 def hc_default(case):
     """HC Smooth's default result: what the operator and the command line give with nothing changed
-    (with the Automatic Amount on by default: the amount core.choose_amount picks, that HC run, and on
-    closed meshes core.volume.restore_volume, as operators/jobs.py runs them)."""
-    settings = hc_default_settings()
-    automatic = getattr(settings_spec, "MESH_AUTO_AMOUNT", None)
-    if automatic is None or not automatic.default:
-        return hc_fixed(case, settings), settings
-    amount = core.choose_amount(case.noisy, case.edges, beta=settings["beta"])
-    settings = {
-        "alpha": amount.alpha,
-        "beta": amount.beta,
-        "iterations": amount.iterations,
-        "noise": amount.sigma / case.diagonal,
-        "noise_over_edge": amount.ratio,
-    }
-    result = hc_fixed(case, settings)
-    if case.closed:  # as the operator: closed parts get their volume back
-        result = core.volume.restore_volume(case.noisy, result, case.faces)[0]
+    (core.smooth_mesh, the pipeline they all run)."""
+    result, report = core.smooth_mesh(case.noisy, case.edges, faces=case.faces, closed=case.closed, return_report=True)
+    settings = {"alpha": report.alpha, "beta": report.beta, "iterations": report.iterations}
+    if report.amount is not None:
+        settings.update(noise=report.amount.sigma / case.diagonal, noise_over_edge=report.amount.ratio)
     return result, settings
 
 
@@ -622,7 +610,7 @@ def plot(args, out):
         beta=defaults["beta"],
     )
     follow(f"HC (α 0, β {defaults['beta']:g}: the Automatic Amount's path)", "hc", alpha=0.0, beta=defaults["beta"])
-    amount = core.choose_amount(case.noisy, case.edges, beta=defaults["beta"])
+    chosen, report = core.smooth_mesh(case.noisy, case.edges, faces=case.faces, closed=case.closed, return_report=True)
     follow("Laplacian (paper 3.1)", "plain")
     try:  # trimesh counts the λ and the μ pass as one iteration each: a pair costs what an HC iteration does
         values = [case.rms(trimesh_taubin(case, {"lamb": 0.5, "nu": 0.5, "iterations": 2 * int(k)})) for k in steps]
@@ -633,20 +621,15 @@ def plot(args, out):
     styles = [("#7f8c8d", "-"), ("#c0392b", "-"), ("#2c3e50", "--"), ("#2980b9", "-.")]  # in the order followed
     for (name, (x, y)), (colour, line) in zip(curves.items(), styles):
         axes.plot(x, 100 * y, line, color=colour, lw=2, label=name)
-    chosen = quiet(
-        core.hc_smooth, case.noisy, case.edges, alpha=0.0, beta=defaults["beta"], iterations=amount.iterations
-    )
-    if case.closed:
-        chosen = core.volume.restore_volume(case.noisy, chosen, case.faces)[0]
     axes.plot(
-        [amount.iterations],
+        [report.iterations],
         [100 * case.rms(chosen)],
         "o",
         color="#c0392b",
         ms=9,
         mfc="white",
         mew=2,
-        label=f"HC Smooth's default: {amount.iterations} iterations chosen, volume kept",
+        label=f"HC Smooth's default: {report.iterations} iterations chosen, volume kept",
     )
     axes.axhline(100 * case.rms(case.noisy), color="grey", lw=1, ls=":", label="noisy input")
     axes.set_xscale("log")
@@ -679,8 +662,8 @@ def plot(args, out):
     for i, k in enumerate(steps):
         out(f"| {k} | " + " | ".join(pct(y[i]) for _, y in curves.values()) + " |")
     out(
-        f"\nHC Smooth's default (Automatic Amount): {amount.iterations} iterations (noise estimate "
-        f"{amount.sigma / case.diagonal:.3%} of the diagonal), RMS {pct(case.rms(chosen))} %"
+        f"\nHC Smooth's default (Automatic Amount): {report.iterations} iterations (noise estimate "
+        f"{report.amount.sigma / case.diagonal:.3%} of the diagonal), RMS {pct(case.rms(chosen))} %"
     )
     out(f"\nwritten {path}")
 

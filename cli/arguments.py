@@ -206,6 +206,7 @@ Settings = settings_spec.settings_class(
 class Plan:
     settings: Settings  # the mesh settings (unused with --points)
     files: list  # [(input path, output path)]
+    given: frozenset = frozenset()  # the mesh settings given on the command line (the rest are defaults)
     points: bool = False
     point_options: dict = field(default_factory=dict)  # PointSettings fields given on the command line
     objects: list = field(default_factory=list)
@@ -259,6 +260,7 @@ def parse(argv):
     files = plan_outputs(inputs, args.output_dir, args.format, args.in_place, args.overwrite)
     return Plan(
         settings=settings,
+        given=frozenset(setting.name for name, setting in MESH_OPTIONS.items() if getattr(args, name) is not None),
         files=files,
         points=args.points,
         point_options=point_options,

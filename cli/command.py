@@ -212,12 +212,12 @@ def smooth_objects(objects, plan, settings, outcome):
     if plan.points:
         smooth_point_clouds(objects, settings, outcome)
     else:
-        smooth_meshes(objects, settings, outcome)
+        smooth_meshes(objects, settings, outcome, plan.given)
     outcome.objects = len(objects)
 
 
-def smooth_meshes(objects, settings, outcome):
-    """A mesh shared by several objects is smoothed once."""
+def smooth_meshes(objects, settings, outcome, given=frozenset()):
+    """A mesh shared by several objects is smoothed once. ``given``: the settings named on the command line."""
     for obj in objects:
         if obj.type != "MESH":
             raise FileError(
@@ -229,13 +229,13 @@ def smooth_meshes(objects, settings, outcome):
     jobs = [jobs_module.make_job(obj, settings) for obj in unique_data(objects)]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)  # said once, at the start
-        for _ in jobs_module.run(jobs, settings):
+        for _ in jobs_module.run(jobs, settings, given=given):
             pass
     for job in jobs:
         jobs_module.write(job, settings)
         outcome.changes.append(jobs_module.measure(job))
         outcome.vertices += len(job.positions)
-        outcome.iterations = max(outcome.iterations, job.iterations_run)
+        outcome.iterations = max(outcome.iterations, job.report.iterations)
 
 
 def smooth_point_clouds(objects, settings, outcome):

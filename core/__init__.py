@@ -4,15 +4,23 @@ The same package loads as ``core`` in tests and tools and as ``bl_ext.<repo>.hc_
 Blender, so everything inside uses relative imports.
 """
 
-from . import metrics, topology, volume
+from . import mesh_amount, metrics, topology, volume
 from .adjacency import Umbrella, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, in_convergence_region
+from .mesh_amount import AmountChooser, MeshAmount, choose_amount
+from .mesh_smoother import AUTO, DEFAULT_ALPHA, DEFAULT_BETA, DEFAULT_ITERATIONS, MeshReport, MeshSmoother, smooth_mesh
 from .metrics import Change, measure_change
-from .noise import AmountChooser, MeshAmount, choose_amount
 from .pointcloud import smooth_point_cloud
 from .smoothing import METHODS, MODES, Cancelled, Smoothing, SmoothResult, hc_smooth, laplacian_smooth, smooth
 
 __all__ = [
+    "AUTO",
+    "DEFAULT_ALPHA",
+    "DEFAULT_BETA",
+    "DEFAULT_ITERATIONS",
+    "MeshReport",
+    "MeshSmoother",
+    "smooth_mesh",
     "Cancelled",
     "Change",
     "ConvergenceWarning",
@@ -29,6 +37,7 @@ __all__ = [
     "hc_smooth",
     "in_convergence_region",
     "laplacian_smooth",
+    "mesh_amount",
     "metrics",
     "measure_change",
     "smooth",

@@ -40,9 +40,12 @@ class Change:
 def fan_triangles(faces):
     """Triangles (t, 3) of a fan from each face's first corner (triangles come back as they are, no copy).
 
-    ``faces``: an (f, k) integer array, or a pair (offsets, corner_verts) as Blender stores polygons
+    ``faces``: an (f, k) integer array, a list of faces (vertex index sequences, of any sizes), or a pair
+    (offsets, corner_verts) as Blender stores polygons
     (offsets of length f + 1: face i has corners corner_verts[offsets[i]:offsets[i + 1]]).
     """
+    if isinstance(faces, list) and len({len(face) for face in faces}) > 1:  # a list of faces of mixed sizes
+        faces = (np.cumsum([0] + [len(face) for face in faces]), np.concatenate(faces))
     if isinstance(faces, tuple):
         offsets, corners = (_indices(a) for a in faces)
         if (

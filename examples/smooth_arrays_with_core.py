@@ -56,12 +56,16 @@ def main():
     if not args:  # the try-out sphere: make it noisy
         positions += np.random.default_rng(0).normal(scale=0.02, size=positions.shape).astype(np.float32)
 
+    # What the operator runs: the Automatic Amount chooses the iterations from the noise (numbers given
+    # to smooth_mesh, as to the operator, are used exactly instead).
+    automatic, report = core.smooth_mesh(positions, edges, faces=faces, return_report=True)
+    print(f"Automatic Amount: {report.iterations} iterations, alpha {report.alpha:g}, beta {report.beta:g}")
     hc = core.hc_smooth(positions, edges, alpha=0.1, beta=0.6, iterations=10)
     laplacian = core.laplacian_smooth(positions, edges, iterations=10)
-    for label, result in (("HC", hc), ("Laplacian", laplacian)):
+    for label, result in (("Automatic", automatic), ("HC", hc), ("Laplacian", laplacian)):
         print(f"{label:10s} {core.measure_change(positions, result, faces=faces).summary()}")
 
-    mesh.vertices.foreach_set("co", hc.ravel())
+    mesh.vertices.foreach_set("co", automatic.ravel())
     mesh.update()
 
 

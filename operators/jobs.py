@@ -4,8 +4,6 @@ Shared by the Object-mode and Edit-mode operators (and the command line): every 
 validated before any mesh is written, so a failure leaves every mesh as it was.
 """
 
-import time
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,31 +29,37 @@ class Job:
     corners: tuple = None  # (corner_verts, corner_edges) while ``closed`` is None
     influence: np.ndarray = None  # float32 (n,) weights of the influence group, if any
     key_block: object = None  # the active shape key that holds ``positions``, if any
-    operator: object = None
     result: np.ndarray = None
-    iterations_run: int = 0
-    seconds: float = 0.0
+    report: object = None  # the core.MeshReport of the run: what ran, what the Automatic Amount chose
     change: object = None  # core.Change of the result, measured once for every report
-    amount: object = None  # core.MeshAmount the Automatic Amount chose, if it ran
-    volume_offset: float = 0.0  # the largest offset along the normals that gave closed parts their volume back
     measured_input: object = None  # Future of the core.metrics.InputMeasure the report compares with
 
 
-def settings_of(props):
-    """The core arguments from operator, scene or command-line settings. Numbers are taken in single
-    precision, as Blender's float properties hold them, so every route runs the same numbers."""
+def core_options(props, given=frozenset()):
+    """The core.MeshSmoother arguments from operator, scene or command-line settings.
+
+    Numbers are taken in single precision, as Blender's float properties hold them, so every route runs
+    the same numbers. ``given``: the names the caller set explicitly (Blender's ``is_property_set``, the
+    options on a command line). The Automatic Amount (HC with Automatic Amount on) chooses only what was
+    not given: alpha or iterations given switch it off, and then every number runs as set.
+    """
+    automatic = props.method == "HC" and props.auto_amount and not {"alpha", "iterations"} & set(given)
     return dict(
         method=CORE_METHOD[props.method],
-        alpha=as_property(props.alpha),
-        beta=as_property(props.beta),
+        alpha=core.AUTO if automatic else as_property(props.alpha),
+        beta=core.AUTO if automatic and "beta" not in given else as_property(props.beta),
+        iterations=core.AUTO if automatic else props.iterations,
         mode=props.mode.lower(),
         tolerance=as_property(props.tolerance),
     )
 
 
-def automatic(props):
-    """Whether the Automatic Amount chooses the iterations (HC only; the Laplacian variants run as set)."""
-    return props.method == "HC" and props.auto_amount
+def convergence_warning(jobs):
+    """The convergence-region warning for what ran, or None. The Automatic Amount runs alpha 0 for the few
+    iterations it chooses (no drift): only its beta can warn."""
+    reports = [job.report for job in jobs if job.report.method == "hc"]
+    messages = {core.convergence_message(1.0 if r.amount else r.alpha, r.beta) for r in reports} - {None}
+    return min(messages) if messages else None
 
 
 def as_property(value):
@@ -123,72 +127,26 @@ def make_job(obj, props, extra_fixed=None):
     )
 
 
-# Of a job with the Automatic Amount, the part of its progress bar the choice takes: its runs (the data
-# and the probes) go about twice as far as the smoothing that follows.
-CHOOSING_SHARE = 2 / 3
-
-
-def run(jobs, props, chunk=None):
-    """Smooth every job; a generator yielding the fraction done after each chunk of iterations.
-
-    chunk=None runs each job in one slice. A chunked run advances the same core.Smoothing, so its
-    result is the one-slice result bit for bit.
-    """
-    settings = settings_of(props)
+def run(jobs, props, chunk=None, given=frozenset()):
+    """Smooth every job with core.MeshSmoother; a generator yielding the fraction done after each chunk of
+    iterations (chunk=None: each job in one slice; the result is the same bit for bit)."""
+    options = core_options(props, given)
     for number, job in enumerate(jobs):
-        start = time.perf_counter()
         input_measure(job)  # on the other core while this one builds the operator
-        job.operator = core.umbrella_operator(job.edges, len(job.positions))
-        iterations, job_settings, share, done = props.iterations, settings, 0.0, None
-        if automatic(props):
-            chooser = core.AmountChooser(job.positions, operator=job.operator, beta=settings["beta"], fixed=job.fixed)
-            share = CHOOSING_SHARE
-            for fraction in chooser.steps():  # the longer half of the work: progress and Esc work here too
-                if fraction < 1.0:
-                    yield (number + share * fraction) / len(jobs)
-            job.amount = chooser.amount
-            iterations = job.amount.iterations
-            job_settings = {**settings, "alpha": job.amount.alpha, "beta": job.amount.beta}
-            if job.influence is None and settings["mode"] == "simultaneous" and not settings["tolerance"]:
-                done = chooser.result()  # the choice ran exactly these iterations on its way: not again
-        if done is not None:
-            job.result, job.iterations_run = done, iterations
-        else:
-            smoothing = _smoothing(job, iterations, job_settings)
-            for fraction in smoothing.steps(chunk):
-                if fraction < 1.0:
-                    yield (number + share + (1.0 - share) * fraction) / len(jobs)
-            result = smoothing.result()
-            job.result, job.iterations_run = result.positions, result.iterations
-        if job.amount is not None and input_measure(job).result().closed:
-            keep_volume(job)
-        job.seconds = time.perf_counter() - start
-        yield (number + 1) / len(jobs)
-
-
-def _smoothing(job, iterations, settings):
-    with warnings.catch_warnings():  # the operators report the convergence region themselves
-        warnings.simplefilter("ignore", core.ConvergenceWarning)
-        return core.Smoothing(
+        smoother = core.MeshSmoother(
             job.positions,
-            None,
-            operator=job.operator,
-            iterations=iterations,
+            job.edges,
+            faces=job.faces,
+            closed=lambda job=job: input_measure(job).result().closed,
             fixed=job.fixed,
             influence=job.influence,
-            **settings,
+            **options,
         )
-
-
-def keep_volume(job):
-    """Give each closed part of the result the volume it had (Automatic Amount): a uniform offset of its
-    moving vertices along their normals. Fixed vertices and those of influence 0 stay bit for bit."""
-    movable = ~job.fixed if job.influence is None else ~job.fixed & (job.influence > 0.0)
-    restored, offsets = core.volume.restore_volume(job.positions, job.result, job.faces, movable=movable)
-    result = restored.astype(job.result.dtype)
-    result[~movable] = job.result[~movable]
-    job.result = result
-    job.volume_offset = float(np.abs(offsets).max()) if offsets.size else 0.0
+        for fraction in smoother.steps(chunk):
+            if fraction < 1.0:
+                yield (number + fraction) / len(jobs)
+        job.result, job.report = smoother.result, smoother.report
+        yield (number + 1) / len(jobs)
 
 
 def write(job, props):
@@ -229,7 +187,7 @@ def release(job):
     mode builds a BMesh) can reuse their memory instead of fresh pages."""
     measure(job)
     job.positions = job.result = job.edges = job.faces = job.fixed = job.influence = None
-    job.corners = job.operator = job.measured_input = None
+    job.corners = job.measured_input = None
 
 
 def summary(jobs, props):
@@ -243,23 +201,20 @@ def summary(jobs, props):
             changes.append(f"volume {change.volume_change:+.2%}")
         else:
             changes.append(f"size {change.bbox_change:+.2%}")
-    iterations = max((job.iterations_run for job in jobs), default=0)
-    seconds = sum(job.seconds for job in jobs)
+    reports = [job.report for job in jobs]
+    seconds = sum(report.seconds for report in reports)
     where = " (new shape key)" if props.output == "SHAPE_KEY" else ""
     names = f"{len(jobs)} objects" if len(jobs) > 1 else f"'{jobs[0].obj.name}'"  # what the user selected
-    amounts = [job.amount for job in jobs if job.amount is not None]
+    amounts = [report for report in reports if report.amount is not None]
     if amounts:
-        chosen = "/".join(str(job.iterations_run) for job in jobs)
-        noise = "/".join(f"{amount.ratio:.2f}" for amount in amounts)
+        chosen = "/".join(str(report.iterations) for report in reports)
+        noise = "/".join(f"{report.amount.ratio:.2f}" for report in amounts)
         ran = f"automatic amount: noise {noise}x edge length, {chosen} iterations, alpha 0"
-        beta = settings_of(props)["beta"]
-        gentler = sorted({amount.beta for amount in amounts if amount.beta != beta})
-        if gentler:  # light noise: the amount ran on gentler steps than the beta set (core.noise)
-            ran += ", beta " + "/".join(f"{value:g}" for value in gentler)
-        if any(job.volume_offset for job in jobs):
+        ran += ", beta " + "/".join(sorted({f"{report.beta:.3g}" for report in amounts}))
+        if any(report.volume_offset for report in reports):
             ran += ", volume kept"
     else:
-        ran = f"{iterations} iterations"
+        ran = f"{max(report.iterations for report in reports)} iterations"
     return (
         f"{METHOD_LABEL[props.method]} on {names}{where}: {ran}, {moved} vertices moved, "
         f"{seconds:.2f} s, " + ", ".join(changes)

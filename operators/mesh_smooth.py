@@ -25,6 +25,10 @@ from .properties import (
 
 # Above this many vertex-iterations, an interactive run becomes modal (progress, Esc cancels).
 MODAL_WORK = 5_000_000
+# What a run reads of its settings: a snapshot, so that a modal run does not see later edits.
+MeshSettings = settings_spec.settings_class("MeshSettings", settings_spec.MESH, "A snapshot of the mesh settings.")
+# The numbers the Automatic Amount chooses unless the caller sets them (core.MeshSmoother).
+AMOUNT_NUMBERS = ("alpha", "beta", "iterations")
 
 
 class SmoothProperties:
@@ -80,10 +84,14 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
 
     def _report_done(self, jobs):
         self.report({"INFO"}, jobs_module.summary(jobs, self))
-        if self.method == "HC":
-            message = core.convergence_message(1.0 if jobs_module.automatic(self) else self.alpha, self.beta)
-            if message:
-                self.report({"WARNING"}, message)
+        message = jobs_module.convergence_warning(jobs)
+        if message:
+            self.report({"WARNING"}, message)
+
+    def _run(self, jobs, chunk=None):
+        """The run's generator, on a snapshot of the settings and with the numbers the caller set."""
+        given = frozenset(name for name in AMOUNT_NUMBERS if self.properties.is_property_set(name))
+        return jobs_module.run(jobs, MeshSettings.of(self), chunk=chunk, given=given)
 
     def execute(self, context):
         return self._run_now(context)
@@ -93,7 +101,7 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
         nothing is written and the mode is restored; bugs go on to Blender with their traceback."""
         try:
             jobs = self.prepare(context) if jobs is None else jobs
-            for _ in jobs_module.run(jobs, self):
+            for _ in self._run(jobs):
                 pass
         except (InputError, ValueError) as error:  # bad input, or a run that blew up
             self.abandon(context)
@@ -118,11 +126,11 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
             self.abandon(context)
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
-        work = sum(len(job.positions) for job in self._jobs) * self.iterations
-        if work < MODAL_WORK:
+        vertices = sum(len(job.positions) for job in self._jobs)
+        iterations = core.mesh_amount.MAX_ITERATIONS if self.auto_amount else self.iterations
+        if vertices * iterations < MODAL_WORK:
             return self._run_now(context, self._jobs)
-        chunk = max(1, int(MODAL_WORK // max(1, work // max(1, self.iterations))))
-        return self.start_modal(context, jobs_module.run(self._jobs, self, chunk=chunk))
+        return self.start_modal(context, self._run(self._jobs, chunk=max(1, MODAL_WORK // max(1, vertices))))
 
     def modal_finish(self, context):
         self.finish(context, self._jobs)

@@ -283,8 +283,16 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
             self.report({level}, text)
         return {"FINISHED"}
 
-    def execute(self, context):
+    def snapshot(self):
+        """The settings this run reads (a modal run must not see later edits). Alpha or Steps per Round
+        set by the caller are used as set: the Automatic Amount chooses only what was left unset."""
         settings = PointSettings.of(self)
+        if any(self.properties.is_property_set(name) for name in ("alpha", "iterations_per_round")):
+            settings.auto_amount = False
+        return settings
+
+    def execute(self, context):
+        settings = self.snapshot()
         try:
             clouds = self._clouds(context, settings)
             for _ in run(clouds, settings):
@@ -298,7 +306,7 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
         """Interactively: run step by step from a timer, with progress, and Esc to cancel."""
         if bpy.app.background or context.window is None:
             return self.execute(context)
-        self._settings = PointSettings.of(self)
+        self._settings = self.snapshot()
         try:
             self._clouds_pending = self._clouds(context, self._settings)
             for cloud in self._clouds_pending:  # check the settings before the first timer tick

@@ -19,8 +19,13 @@ class HCSmoothSettings(bpy.types.PropertyGroup):
     __annotations__ = annotations(settings_spec.MESH)
 
     def copy_to(self, properties, names=OPERATOR_SETTINGS):
-        """Set these settings on an operator's properties (a button's OperatorProperties)."""
+        """Set these settings on an operator's properties (a button's OperatorProperties). What the
+        operator takes as set it uses as given, so with the Automatic Amount on the numbers it chooses
+        are left unset: Alpha and Iterations (greyed out) always, Beta unless the user changed it."""
+        automatic = self.method == "HC" and self.auto_amount
         for name in names:
+            if automatic and (name in ("alpha", "iterations") or name == "beta" and not self.is_property_set(name)):
+                continue
             setattr(properties, name, getattr(self, name))
 
 

@@ -49,7 +49,7 @@ def test_automatic_amount_is_the_default_and_keeps_the_volume(scene, capfd):
     edges = edges_of(obj.data)
     assert bpy.ops.object.hc_smooth() == {"FINISHED"}
     amount = core.choose_amount(before, edges, beta=BETA)
-    assert amount.beta == core.noise.FINE_BETA  # light noise on a coarse mesh: gentler steps (core.noise)
+    assert amount.beta == core.mesh_amount.FINE_BETA  # light noise on a coarse mesh: gentler steps (core.mesh_amount)
     smoothed = core.hc_smooth(before, edges, alpha=0.0, beta=amount.beta, iterations=amount.iterations)
     triangles = core.metrics.fan_triangles(np.array(faces_of(obj.data)))
     expected = core.volume.restore_volume(before, smoothed, triangles)[0].astype(np.float32)
@@ -69,6 +69,59 @@ def test_automatic_amount_is_the_default_and_keeps_the_volume(scene, capfd):
     obj.data.update()
     assert bpy.ops.object.hc_smooth(method="LAPLACIAN", iterations=2) == {"FINISHED"}  # HC only
     assert np.array_equal(positions_of(obj.data), core.laplacian_smooth(before, edges, iterations=2))
+
+
+@pytest.mark.parametrize(
+    "given, numbers",
+    [
+        (dict(alpha=0.1, beta=0.6, iterations=10), (ALPHA, BETA, 10)),
+        (dict(iterations=5), (ALPHA, BETA, 5)),
+        (dict(alpha=0.25), (0.25, BETA, 10)),
+    ],
+)
+def test_numbers_a_caller_sets_are_used_exactly(scene, capfd, given, numbers):
+    """Alpha or Iterations set from Python: the Automatic Amount (on by default) does not run; every
+    number runs as set (the others at their defaults), bit for bit what core.hc_smooth gives."""
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    assert bpy.ops.object.hc_smooth(**given) == {"FINISHED"}
+    alpha, beta, iterations = numbers
+    expected = core.hc_smooth(before, edges_of(obj.data), alpha=alpha, beta=beta, iterations=iterations)
+    assert np.array_equal(positions_of(obj.data), expected)
+    report = capfd.readouterr().out
+    assert f": {iterations} iterations," in report and "automatic" not in report
+
+
+def test_edit_mode_uses_the_iterations_set(scene):
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    assert bpy.ops.mesh.hc_smooth(iterations=5) == {"FINISHED"}
+    bpy.ops.object.mode_set(mode="OBJECT")
+    expected = core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=5)
+    assert np.array_equal(positions_of(obj.data), expected)
+
+
+@pytest.mark.filterwarnings("ignore:HC is proven to converge only")
+def test_a_beta_set_is_kept_by_the_automatic_amount(scene, capfd):
+    """Light noise on a coarse mesh: unset, the Automatic Amount takes gentler steps (beta 0.75); a
+    Beta the caller sets is used as set."""
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    edges = edges_of(obj.data)
+    assert bpy.ops.object.hc_smooth(beta=0.6) == {"FINISHED"}
+    amount = core.choose_amount(before, edges, beta=BETA)
+    chooser = core.AmountChooser(before, edges, beta=BETA)
+    chooser.fine_beta = None
+    for _ in chooser.steps():
+        pass
+    assert amount.beta == 0.75 and chooser.amount.beta == BETA
+    smoothed = core.hc_smooth(before, edges, alpha=0.0, beta=BETA, iterations=chooser.amount.iterations)
+    triangles = core.metrics.fan_triangles(np.array(faces_of(obj.data)))
+    expected = core.volume.restore_volume(before, smoothed, triangles)[0].astype(np.float32)
+    np.testing.assert_allclose(positions_of(obj.data), expected, rtol=0, atol=1e-6)
+    assert f"{chooser.amount.iterations} iterations, alpha 0, beta 0.6," in capfd.readouterr().out
 
 
 def test_hc_keeps_volume_far_better_than_laplacian(scene, capfd):

@@ -50,12 +50,17 @@ def test_manual_amount_uses_alpha_and_steps_as_set(scene):
         before, alpha=float(np.float32(0.05)), beta=float(np.float32(0.55)), rounds=2, iterations_per_round=7
     )
     assert np.array_equal(positions_of(obj.data), expected)
-    # The manual values are ignored while the amount is automatic.
+    # Numbers the caller sets are used as set, with the Automatic Amount left on: Steps per Round alone
+    # runs with the default alpha.
     obj.data.vertices.foreach_set("co", before.ravel())
     bpy.ops.object.hc_smooth_points(alpha=0.05, iterations_per_round=7, rounds=2)
-    assert np.array_equal(
-        positions_of(obj.data), core.smooth_point_cloud(before, beta=float(np.float32(0.55)), rounds=2)
+    assert np.array_equal(positions_of(obj.data), expected)
+    obj.data.vertices.foreach_set("co", before.ravel())
+    bpy.ops.object.hc_smooth_points(rounds=2, iterations_per_round=5)
+    expected = core.smooth_point_cloud(
+        before, alpha=float(np.float32(0.01)), beta=float(np.float32(0.55)), rounds=2, iterations_per_round=5
     )
+    assert np.array_equal(positions_of(obj.data), expected)
 
 
 def test_automatic_amount_follows_the_noise(scene):

@@ -150,7 +150,7 @@ def test_every_route_gives_the_same_result_with_a_tolerance(scene, addon, tmp_pa
         (job,) = [jobs.make_job(obj, props)]
         list(jobs.run([job], props, chunk=chunk))
         assert np.array_equal(bits(job.result), bits(expected.positions)), chunk
-        assert job.iterations_run == expected.iterations
+        assert job.report.iterations == expected.iterations
     source = tmp_path / "scan.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(source))
     assert (

@@ -299,7 +299,7 @@ def test_edit_mode_counts_unselected_vertices(settings):
 def test_menu_entries_call_the_operator_of_the_mode(settings):
     noisy_sphere()
     panel = ui_module(".panel")
-    settings.iterations = 23
+    settings.auto_amount, settings.iterations = False, 23
     layout = RecordingLayout()
     panel.draw_object_menu_entry(types.SimpleNamespace(layout=layout), bpy.context)
     ((idname, properties),) = layout.buttons()
@@ -310,6 +310,26 @@ def test_menu_entries_call_the_operator_of_the_mode(settings):
     ((idname, properties),) = layout.buttons()
     assert idname == "mesh.hc_smooth" and properties.iterations == 23
     bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def test_buttons_leave_the_automatic_amount_its_numbers(settings):
+    """With the Automatic Amount on, a button passes neither Alpha nor Iterations (the operator would take
+    them as given and run them), and Beta only once the user changed it."""
+    noisy_sphere()
+    panel = ui_module(".panel")
+    settings.iterations, settings.alpha = 23, 0.3  # greyed out while the Automatic Amount is on
+
+    def button():
+        layout = RecordingLayout()
+        panel.draw_object_menu_entry(types.SimpleNamespace(layout=layout), bpy.context)
+        ((_, properties),) = layout.buttons()
+        return vars(properties)
+
+    passed = button()
+    assert passed["auto_amount"] is True and not {"alpha", "iterations", "beta"} & set(passed)
+    settings.beta = 0.7
+    passed = button()
+    assert passed["beta"] == pytest.approx(0.7) and not {"alpha", "iterations"} & set(passed)
 
 
 # --- presets --------------------------------------------------------------------------------------------

@@ -79,6 +79,15 @@ def test_triangles_come_back_without_a_copy_in_either_layout():
     assert np.array_equal(same, triangles) and same.base is not None  # a view of the corner array
 
 
+def test_a_list_of_faces_of_mixed_sizes_is_fanned_like_its_polygons():
+    positions, faces = sm.pentagonal_prism()
+    as_lists = [list(face) for face in faces]
+    assert len({len(face) for face in as_lists}) > 1
+    assert np.array_equal(fan_triangles(as_lists), fan_triangles(polygons(faces)))
+    change = core.measure_change(positions, positions * 1.1, faces=as_lists)
+    assert change.volume_change == pytest.approx(1.1**3 - 1)
+
+
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 @pytest.mark.parametrize("offset", [0.0, 1e3])
 def test_volume_in_the_arrays_precision_far_from_the_origin(dtype, offset):

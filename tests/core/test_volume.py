@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from test_mesh_noise import icosphere
+from test_mesh_amount import icosphere
 
 import core
 from core.volume import restore_volume, vertex_normals

@@ -190,6 +190,7 @@ class AmountChooser:
         fixed_mask = check_fixed(fixed, n) | operator.isolated
         self.movable = movable = np.flatnonzero(~fixed_mask)
         self.edge_length = _median_edge_length(start, operator)
+        self.fine_beta = FINE_BETA  # light noise: choose again on steps of this beta (None: never)
         self.amount = None
         self._kept = None  # the data run's state at the amount chosen so far: the result, if the choice stays
         self._fine = None  # the choice made again on gentler steps, where it is taken (light noise)
@@ -278,11 +279,11 @@ class AmountChooser:
             yield k / MAX_ITERATIONS
         self.amount = self._amount(steps, traces, residuals, normals, done)
         self.traces = dict(zip(steps, traces))  # t(k) at each checkpoint, for inspection
-        if self.beta < FINE_BETA and 1 <= self.amount.iterations <= FINE_MAX:
-            fine = AmountChooser(self._start, beta=FINE_BETA, fixed=self._fixed_mask, operator=self.operator)
+        if self.fine_beta is not None and self.beta < self.fine_beta and 1 <= self.amount.iterations <= FINE_MAX:
+            fine = AmountChooser(self._start, beta=self.fine_beta, fixed=self._fixed_mask, operator=self.operator)
             for fraction in fine.steps():
                 yield min(done / MAX_ITERATIONS + fraction, 0.999)
-            smooths = fine.amount.iterations * (1.0 - FINE_BETA)  # a low frequency's share, as above
+            smooths = fine.amount.iterations * (1.0 - self.fine_beta)  # a low frequency's share, as above
             if smooths > self.amount.iterations * (1.0 - self.beta):
                 self._fine, self.amount = fine, fine.amount
         yield 1.0

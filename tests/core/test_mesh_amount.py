@@ -1,4 +1,4 @@
-"""core.choose_amount: the Automatic Amount for meshes (core/noise.py)."""
+"""core.choose_amount: the Automatic Amount for meshes (core/mesh_amount.py)."""
 
 import warnings
 
@@ -7,7 +7,7 @@ import pytest
 
 import core
 from bench.meshes import icosphere  # pure NumPy, no bench requirements
-from core import noise
+from core import mesh_amount as noise
 
 
 def edges_of(faces):

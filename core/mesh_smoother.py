@@ -1,0 +1,279 @@
+"""The mesh pipeline: choose the amount, smooth, give closed parts their volume back.
+
+``smooth_mesh`` is the mesh twin of ``smooth_point_cloud``, and ``MeshSmoother`` runs it in slices for
+callers that show progress and let the user cancel (the operators, the command line). Every route that
+smooths a mesh (operators, command line, demo, benchmarks, examples) goes through here, so they all
+run the same numbers.
+
+Numbers a caller gives are used exactly. The Automatic Amount (HC only) chooses what is left at
+``"auto"``: with ``iterations="auto"`` and ``alpha="auto"`` it chooses the iterations from the mesh's
+own noise (core.mesh_amount) with alpha 0 and gives every closed part its volume back
+(core.volume); with ``beta="auto"`` it may take gentler steps on light noise. Either number given
+switches it off: the other then takes its default (``DEFAULT_ALPHA``, ``DEFAULT_ITERATIONS``) and
+the run is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
+"""
+
+import time
+import warnings
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from . import volume
+from .adjacency import Umbrella, umbrella_operator
+from .convergence import ConvergenceWarning
+from .mesh_amount import AmountChooser, MeshAmount
+from .metrics import fan_triangles
+from .smoothing import METHODS, Cancelled, Smoothing
+from .topology import closed_from_triangles
+from .validation import check_choice, check_fixed, check_influence, check_positions
+
+AUTO = "auto"
+DEFAULT_ALPHA = 0.1
+DEFAULT_BETA = 0.6
+DEFAULT_ITERATIONS = 10
+# Of a run with the Automatic Amount, the part of its progress the choice takes: its runs (the data and
+# the probes) go about twice as far as the smoothing that follows.
+CHOOSING_SHARE = 2 / 3
+
+
+@dataclass(frozen=True)
+class MeshReport:
+    """What a mesh run did.
+
+    Attributes
+    ----------
+    method, alpha, beta : the smoother and the numbers it ran with (chosen or given).
+    iterations : int
+        Iterations run (fewer than asked when the tolerance stopped the run early).
+    amount : MeshAmount or None
+        What the Automatic Amount chose and the noise it estimated; None when the numbers were given.
+    volume_offset : float
+        The largest uniform offset along the normals that gave a closed part its volume back (0: none).
+    seconds : float
+        Wall time of the whole run.
+    """
+
+    method: str
+    alpha: float
+    beta: float
+    iterations: int
+    amount: MeshAmount | None
+    volume_offset: float
+    seconds: float
+
+
+def _auto_or(value, name):
+    """``value`` if it is a number (checked later, with the rest), AUTO if it says so."""
+    if isinstance(value, str):
+        if value == AUTO:
+            return AUTO
+        raise ValueError(f"{name} must be '{AUTO}' or a number, got {value!r}")
+    return value
+
+
+class MeshSmoother:
+    """``smooth_mesh`` in slices: everything is checked on construction; ``steps()`` yields the fraction
+    of the run done after each slice, as core.Smoothing.steps does; once it is exhausted ``result`` and
+    ``report`` are set. Abandoning the generator cancels: the input is never modified.
+
+    Parameters are those of ``smooth_mesh``; ``operator`` is a prebuilt ``umbrella_operator`` (then
+    ``edges`` is not read).
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> edges = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]
+    >>> run = core.MeshSmoother(positions, edges, alpha=0.1, beta=0.6, iterations=3)
+    >>> fractions = list(run.steps(chunk=1))
+    >>> [round(f, 2) for f in fractions]
+    [0.33, 0.67, 1.0]
+    >>> run.report.iterations
+    3
+    """
+
+    def __init__(
+        self,
+        positions: ArrayLike,
+        edges: ArrayLike | None = None,
+        *,
+        faces: ArrayLike | None = None,
+        closed: bool | Callable[[], bool] | None = None,
+        method: str = "hc",
+        alpha: float | str = AUTO,
+        beta: float | str = AUTO,
+        iterations: int | str = AUTO,
+        mode: str = "simultaneous",
+        tolerance: float = 0.0,
+        fixed: ArrayLike | None = None,
+        influence: ArrayLike | None = None,
+        operator: Umbrella | None = None,
+    ) -> None:
+        self.positions = start = check_positions(positions)
+        n = start.shape[0]
+        self.method = check_choice(method, "method", METHODS)
+        alpha, beta, iterations = _auto_or(alpha, "alpha"), _auto_or(beta, "beta"), _auto_or(iterations, "iterations")
+        self.automatic = self.method == "hc" and alpha == AUTO and iterations == AUTO
+        self.beta_given = beta != AUTO
+        self.alpha = DEFAULT_ALPHA if alpha == AUTO else alpha
+        self.beta = DEFAULT_BETA if beta == AUTO else beta
+        self.iterations = DEFAULT_ITERATIONS if iterations == AUTO else iterations
+        self.mode = mode
+        self.tolerance = tolerance
+        if operator is None:
+            operator = umbrella_operator(edges, n)
+        elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
+            raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
+        self.operator = operator
+        self.fixed = check_fixed(fixed, n)
+        self.influence = check_influence(influence, n)
+        self.faces = None if faces is None else fan_triangles(faces)
+        self._closed = closed
+        # Checks every number now (a Smoothing is cheap to make: the heavy parts are built on first use).
+        self._smoothing(self.alpha, self.beta, self.iterations)
+        self.result = None
+        self.report = None
+
+    def closed(self) -> bool:
+        """Whether the faces enclose a volume (asked only when the volume is to be given back)."""
+        if callable(self._closed):
+            self._closed = bool(self._closed())
+        elif self._closed is None:
+            self._closed = self.faces is not None and closed_from_triangles(self.faces)
+        return self._closed
+
+    def _smoothing(self, alpha, beta, iterations):
+        with warnings.catch_warnings():  # callers report the convergence region themselves
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            return Smoothing(
+                self.positions,
+                None,
+                method=self.method,
+                alpha=alpha,
+                beta=beta,
+                iterations=iterations,
+                mode=self.mode,
+                tolerance=self.tolerance,
+                fixed=self.fixed,
+                influence=self.influence,
+                operator=self.operator,
+            )
+
+    def steps(self, chunk: int | None = None) -> Iterator[float]:
+        """Run in slices of ``chunk`` iterations (all at once if None), yielding the fraction done."""
+        start = time.perf_counter()
+        alpha, beta, iterations, share, amount, done = self.alpha, self.beta, self.iterations, 0.0, None, None
+        if self.automatic:
+            chooser = AmountChooser(self.positions, operator=self.operator, beta=self.beta, fixed=self.fixed)
+            if self.beta_given:
+                chooser.fine_beta = None  # the caller's beta is used as given
+            share = CHOOSING_SHARE
+            for fraction in chooser.steps():
+                if fraction < 1.0:
+                    yield share * fraction
+            amount = chooser.amount
+            alpha, beta, iterations = amount.alpha, amount.beta, amount.iterations
+            if self.influence is None and self.mode == "simultaneous" and not self.tolerance:
+                done = chooser.result()  # the choice ran exactly these iterations on its way: not again
+        if done is not None:
+            result, ran = done, iterations
+        else:
+            smoothing = self._smoothing(alpha, beta, iterations)
+            for fraction in smoothing.steps(chunk):
+                if fraction < 1.0:
+                    yield share + (1.0 - share) * fraction
+            smoothed = smoothing.result()
+            result, ran = smoothed.positions, smoothed.iterations
+        offset = 0.0
+        if self.automatic and self.closed():
+            result, offset = self._keep_volume(result)
+        self.result = result
+        self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, time.perf_counter() - start)
+        yield 1.0
+
+    def _keep_volume(self, result):
+        """Each closed part's volume given back by a uniform offset of its moving vertices along their
+        normals. Fixed vertices and those of influence 0 stay bit for bit."""
+        movable = ~self.fixed if self.influence is None else ~self.fixed & (self.influence > 0.0)
+        restored, offsets = volume.restore_volume(self.positions, result, self.faces, movable=movable)
+        restored = restored.astype(result.dtype)
+        restored[~movable] = result[~movable]
+        return restored, float(np.abs(offsets).max()) if offsets.size else 0.0
+
+    def run(self, progress: Callable[[float], bool | None] | None = None) -> np.ndarray:
+        """All slices; ``progress(fraction)`` after each, False cancels (raises core.Cancelled)."""
+        for fraction in self.steps(None if progress is None else 1):
+            if progress is not None and fraction < 1.0 and progress(fraction) is False:
+                raise Cancelled(f"cancelled at {fraction:.0%}")
+        return self.result
+
+
+def smooth_mesh(
+    positions: ArrayLike,
+    edges: ArrayLike | None = None,
+    *,
+    return_report: bool = False,
+    progress: Callable[[float], bool | None] | None = None,
+    **options,
+) -> np.ndarray | tuple[np.ndarray, MeshReport]:
+    """Smooth a mesh as the HC Smooth operator does: the Automatic Amount unless numbers are given.
+
+    Parameters
+    ----------
+    positions : (n, 3) float32 or float64 array
+        Vertex positions; never modified. The result has the same shape and dtype.
+    edges : (m, 2) integer array
+        Vertex pairs, undirected; order, direction, duplicates and self-loops do not matter.
+    faces : (f, k) integer array, or (offsets, corner_verts), optional
+        The faces; needed to give closed parts their volume back (Automatic Amount).
+    closed : bool, optional
+        Whether the faces enclose a volume (found from the faces if not given).
+    method : {"hc", "plain", "central", "original"}
+        HC (paper section 4) or a Laplacian variant (3.1-3.3).
+    alpha, beta : float or "auto"
+        HC's weights (paper section 4). ``"auto"``: see below.
+    iterations : int or "auto"
+        How many iterations to run.
+    mode : {"simultaneous", "sequential"}
+        The paper's Algorithm 1, or Gauss-Seidel in increasing vertex order.
+    tolerance : float
+        Stop once the largest move of an iteration is below ``tolerance`` x the bounding-box diagonal.
+    fixed : bool mask or vertex indices, optional
+        Vertices that never move.
+    influence : (n,) floats in [0, 1], optional
+        Each vertex moves by this share of each iteration's move (0 stays bit-identical).
+    return_report : bool
+        Also return a MeshReport (what ran, what was chosen).
+    progress : callable, optional
+        ``progress(fraction)`` after each iteration; False cancels (raises core.Cancelled).
+
+    With ``alpha`` and ``iterations`` both ``"auto"`` (the default) and method HC, the Automatic Amount
+    chooses the iterations from the mesh's own noise, runs them with alpha 0 and gives each closed part
+    its volume back; ``beta="auto"`` lets it take gentler steps on light noise. A number for either of
+    ``alpha`` or ``iterations`` switches it off; the other then takes its default (0.1, 10).
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> rng = np.random.default_rng(0)
+    >>> u, v = np.meshgrid(np.linspace(0, 1, 20), np.linspace(0, 1, 20))
+    >>> flat = np.stack([u.ravel(), v.ravel(), np.zeros(400)], axis=1)
+    >>> noisy = flat + [0, 0, 1] * rng.normal(scale=0.01, size=(400, 1))
+    >>> grid = np.arange(400).reshape(20, 20)
+    >>> edges = np.concatenate([np.stack([grid[:, :-1].ravel(), grid[:, 1:].ravel()], 1),
+    ...                         np.stack([grid[:-1].ravel(), grid[1:].ravel()], 1)])
+    >>> smoothed, report = core.smooth_mesh(noisy, edges, return_report=True)
+    >>> bool(np.abs(smoothed[:, 2]).std() < np.abs(noisy[:, 2]).std())
+    True
+    >>> report.amount is not None, report.alpha
+    (True, 0.0)
+    >>> same = core.smooth_mesh(noisy, edges, alpha=0.1, beta=0.6, iterations=10)
+    >>> bool(np.array_equal(same, core.hc_smooth(noisy, edges, alpha=0.1, beta=0.6, iterations=10)))
+    True
+    """
+    run = MeshSmoother(positions, edges, **options)
+    run.run(progress)
+    return (run.result, run.report) if return_report else run.result
