@@ -41,15 +41,12 @@ class Outcome:
     blender_lines: list = field(default_factory=list)  # what Blender printed while a failed file ran
 
     def change_text(self):
+        """core.Change.brief of the mesh that moved furthest (relative to its size)."""
         if not self.changes:
             return "-"
-        worst = max(self.changes, key=lambda c: abs(c.volume_change if c.volume_change is not None else c.bbox_change))
-        text = (
-            f"volume {worst.volume_change:+.3%}"
-            if worst.volume_change is not None
-            else f"size {worst.bbox_change:+.3%}"
-        )
-        return text if len(self.changes) == 1 else f"{text} (largest of {len(self.changes)})"
+        worst = max(self.changes, key=lambda c: c.max_displacement / c.bbox_diagonal_before if c.moved else 0.0)
+        text = worst.brief()
+        return text if len(self.changes) == 1 else f"{text} (the furthest of {len(self.changes)} meshes)"
 
     def amount_text(self):
         """How much smoothing ran: '10 iterations', or for point clouds '3 rounds of 15 steps (45 steps)'."""

@@ -34,6 +34,9 @@ AUTO = "auto"
 DEFAULT_ALPHA = 0.1
 DEFAULT_BETA = 0.6
 DEFAULT_ITERATIONS = 10
+# The Automatic Amount's deviation limit, in estimated noise (standard deviations along the normals): the
+# farthest a vertex may move when the caller set no limit.
+DEVIATION_IN_NOISE = 4.0
 # Of a run with the Automatic Amount, the part of its progress the choice takes: its runs (the data and
 # the probes) go about twice as far as the smoothing that follows.
 CHOOSING_SHARE = 2 / 3
@@ -52,6 +55,8 @@ class MeshReport:
         What the Automatic Amount chose and the noise it estimated; None when the numbers were given.
     volume_offset : float
         The largest uniform offset along the normals that gave a closed part its volume back (0: none).
+    max_deviation : float
+        The deviation limit the run kept to (0: none).
     seconds : float
         Wall time of the whole run.
     """
@@ -62,6 +67,7 @@ class MeshReport:
     iterations: int
     amount: MeshAmount | None
     volume_offset: float
+    max_deviation: float
     seconds: float
 
 
@@ -110,6 +116,7 @@ class MeshSmoother:
         tolerance: float = 0.0,
         fixed: ArrayLike | None = None,
         influence: ArrayLike | None = None,
+        max_deviation: float | str = AUTO,
         operator: Umbrella | None = None,
     ) -> None:
         self.positions = start = check_positions(positions)
@@ -121,6 +128,7 @@ class MeshSmoother:
         self.alpha = DEFAULT_ALPHA if alpha == AUTO else alpha
         self.beta = DEFAULT_BETA if beta == AUTO else beta
         self.iterations = DEFAULT_ITERATIONS if iterations == AUTO else iterations
+        self.max_deviation = _auto_or(max_deviation, "max_deviation")
         self.mode = mode
         self.tolerance = tolerance
         if operator is None:
@@ -133,7 +141,7 @@ class MeshSmoother:
         self.faces = None if faces is None else fan_triangles(faces)
         self._closed = closed
         # Checks every number now (a Smoothing is cheap to make: the heavy parts are built on first use).
-        self._smoothing(self.alpha, self.beta, self.iterations)
+        self._smoothing(self.alpha, self.beta, self.iterations, 0.0 if self.max_deviation == AUTO else max_deviation)
         self.result = None
         self.report = None
 
@@ -145,7 +153,7 @@ class MeshSmoother:
             self._closed = self.faces is not None and closed_from_triangles(self.faces)
         return self._closed
 
-    def _smoothing(self, alpha, beta, iterations):
+    def _smoothing(self, alpha, beta, iterations, max_deviation):
         with warnings.catch_warnings():  # callers report the convergence region themselves
             warnings.simplefilter("ignore", ConvergenceWarning)
             return Smoothing(
@@ -159,6 +167,7 @@ class MeshSmoother:
                 tolerance=self.tolerance,
                 fixed=self.fixed,
                 influence=self.influence,
+                max_deviation=max_deviation,
                 operator=self.operator,
             )
 
@@ -166,6 +175,7 @@ class MeshSmoother:
         """Run in slices of ``chunk`` iterations (all at once if None), yielding the fraction done."""
         start = time.perf_counter()
         alpha, beta, iterations, share, amount, done = self.alpha, self.beta, self.iterations, 0.0, None, None
+        limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
         if self.automatic:
             chooser = AmountChooser(self.positions, operator=self.operator, beta=self.beta, fixed=self.fixed)
             if self.beta_given:
@@ -176,12 +186,14 @@ class MeshSmoother:
                     yield share * fraction
             amount = chooser.amount
             alpha, beta, iterations = amount.alpha, amount.beta, amount.iterations
-            if self.influence is None and self.mode == "simultaneous" and not self.tolerance:
+            if self.max_deviation == AUTO:
+                limit = DEVIATION_IN_NOISE * amount.sigma
+            if self.influence is None and self.mode == "simultaneous" and not self.tolerance and not limit:
                 done = chooser.result()  # the choice ran exactly these iterations on its way: not again
         if done is not None:
             result, ran = done, iterations
         else:
-            smoothing = self._smoothing(alpha, beta, iterations)
+            smoothing = self._smoothing(alpha, beta, iterations, limit)
             for fraction in smoothing.steps(chunk):
                 if fraction < 1.0:
                     yield share + (1.0 - share) * fraction
@@ -190,8 +202,10 @@ class MeshSmoother:
         offset = 0.0
         if self.automatic and self.closed():
             result, offset = self._keep_volume(result)
+            if limit:  # the offset keeps to the limit too
+                result = _within(result, self.positions, limit)
         self.result = result
-        self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, time.perf_counter() - start)
+        self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, limit, time.perf_counter() - start)
         yield 1.0
 
     def _keep_volume(self, result):
@@ -209,6 +223,17 @@ class MeshSmoother:
             if progress is not None and fraction < 1.0 and progress(fraction) is False:
                 raise Cancelled(f"cancelled at {fraction:.0%}")
         return self.result
+
+
+def _within(points, start, radius):
+    """``points`` projected onto the balls of ``radius`` around ``start`` (rows beyond it only)."""
+    away = points - start
+    lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
+    over = lengths > radius
+    if over.any():
+        points = points.copy()
+        points[over] = start[over] + away[over] * (radius / lengths[over])[:, None].astype(points.dtype)
+    return points
 
 
 def smooth_mesh(
@@ -245,6 +270,10 @@ def smooth_mesh(
         Vertices that never move.
     influence : (n,) floats in [0, 1], optional
         Each vertex moves by this share of each iteration's move (0 stays bit-identical).
+    max_deviation : float or "auto"
+        The farthest any vertex may end from its input position, in the positions' units (every
+        iteration ends with a projection onto that ball); 0: no limit. ``"auto"``: with the Automatic
+        Amount ``DEVIATION_IN_NOISE`` times the noise it estimated, else no limit.
     return_report : bool
         Also return a MeshReport (what ran, what was chosen).
     progress : callable, optional

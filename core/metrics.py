@@ -1,4 +1,5 @@
-"""What a smoothing run changed: displacement, bounding box and, for closed meshes, enclosed volume."""
+"""What a smoothing run changed: how far vertices moved (largest, RMS, and on average along the normals:
+the shrinkage the paper is about), the bounding box and, for closed meshes, the enclosed volume."""
 
 import math
 from dataclasses import dataclass
@@ -9,6 +10,7 @@ from numpy.typing import ArrayLike
 from . import parallel
 from .topology import closed_from_triangles
 from .validation import bbox_diagonal, check_positions, row_lengths
+from .volume import vertex_normals
 
 
 @dataclass(frozen=True)
@@ -17,6 +19,8 @@ class Change:
     moved: int  # vertices whose position differs at all
     mean_displacement: float
     max_displacement: float
+    rms_displacement: float
+    normal_displacement: float | None  # mean move along the input's vertex normals (< 0: inwards); None: no faces
     bbox_diagonal_before: float
     bbox_diagonal_after: float
     bbox_change: float  # relative change of the bounding-box diagonal
@@ -26,15 +30,42 @@ class Change:
     volume_change: float | None  # relative; None when not closed (or no faces)
 
     def summary(self):
-        parts = [
-            f"{self.moved} of {self.n_vertices} vertices moved (mean {self.mean_displacement:.3g}, "
-            f"max {self.max_displacement:.3g})"
-        ]
+        """The report's words, the same in the operators, the command line and the demo: how many vertices
+        moved, the largest and the RMS move and the mean move along the normals (in % of the size, the
+        input's bounding-box diagonal, and in the positions' units), and the volume change of a closed mesh."""
+        parts = [f"{self.moved} of {_count(self.n_vertices, 'vertex', 'vertices')} moved"]
+        if self.moved:
+            parts.append(f"largest move {self._of_size(self.max_displacement)}")
+            parts.append(f"RMS {self._of_size(self.rms_displacement)}")
+            if self.normal_displacement is not None:
+                parts.append(f"along the normals {self._of_size(self.normal_displacement, '+')}")
         if self.volume_change is not None:
             parts.append(f"volume {self.volume_change:+.2%}")
-        else:
-            parts.append(f"bounding box {self.bbox_change:+.2%}")
         return ", ".join(parts)
+
+    def brief(self):
+        """The summary's two headline figures, for a table: the largest move and the volume change."""
+        text = f"largest move {self._of_size(self.max_displacement)}"
+        return text + (f", volume {self.volume_change:+.2%}" if self.volume_change is not None else "")
+
+    def _of_size(self, length, sign=""):
+        """'0.31 % (0.0124)': a length in % of the size and in the positions' units."""
+        share = length / self.bbox_diagonal_before if self.bbox_diagonal_before else 0.0
+        return f"{share:{sign}.2%} ({length:{sign}.3g})"
+
+
+def _count(number, one, many):
+    return f"{number} {one if number == 1 else many}"
+
+
+def _rms(lengths):
+    if not lengths.size:
+        return 0.0
+    scale = float(lengths.max())  # no overflow or underflow in the squares
+    if scale == 0.0:
+        return 0.0
+    scaled = lengths / lengths.dtype.type(scale)
+    return scale * math.sqrt(float(np.einsum("i,i->", scaled, scaled, dtype=np.float64)) / lengths.size)
 
 
 def fan_triangles(faces):
@@ -204,19 +235,22 @@ class InputMeasure:
     frame: _Frame
     corners: tuple | None  # the triangles' corner columns of a closed surface, for the result's volume
     volume_units: float | None  # the input's volume in frame.unit³
+    normals: np.ndarray | None = None  # the input's unit vertex normals (faces given), for the move along them
 
 
 def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> InputMeasure:
     """The input's side of ``measure_change`` (same arguments, without ``after``)."""
     before = check_positions(before, "before")
     closed = closed if faces is not None else False
-    corners = None
-    if faces is not None and closed is not False:  # an open surface has no volume to compare
+    corners = normals = None
+    if faces is not None:
         triangles = fan_triangles(faces)
-        if triangles.size and triangles.max() >= before.shape[0]:
+        if triangles.size and (triangles.max() >= before.shape[0] or triangles.min() < 0):
             raise ValueError("faces refer to vertices that do not exist")
-        closed = closed_from_triangles(triangles) if closed is None else bool(closed)
-        corners = _corner_columns(triangles) if closed else None
+        normals = vertex_normals(_in_frame(before, _Frame.of(before))[0], triangles).astype(before.dtype)
+        if closed is not False:  # an open surface has no volume to compare
+            closed = closed_from_triangles(triangles) if closed is None else bool(closed)
+            corners = _corner_columns(triangles) if closed else None
     frame = _Frame.of(before)
     return InputMeasure(
         n_vertices=before.shape[0],
@@ -225,6 +259,7 @@ def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> 
         frame=frame,
         corners=corners,
         volume_units=frame.units(before, corners) if corners is not None else None,
+        normals=normals,
     )
 
 
@@ -246,7 +281,11 @@ def measure_change(
 
     def displacements():  # in the arrays' own precision (a report, not a result): no float64 copies
         diagonal = bbox_diagonal(after)
-        return diagonal, row_lengths(after - before, max(measured.diagonal, diagonal))
+        moves = after - before
+        along = None
+        if measured.normals is not None and moves.size:
+            along = float(np.einsum("ij,ij->i", moves, measured.normals).mean(dtype=np.float64))
+        return diagonal, row_lengths(moves, max(measured.diagonal, diagonal)), along
 
     # A big closed mesh: its volume in parts on every thread, beside the displacements.
     volume_tasks, volume_total = [], None
@@ -256,7 +295,7 @@ def measure_change(
         volume_tasks, volume_total = _volume_tasks(after, measured.corners, measured.frame, parts)
     tasks = [displacements, *volume_tasks]
     results = parallel.run_all(tasks) if len(tasks) > 2 else [task() for task in tasks]
-    diag_after, displacement = results[0]
+    diag_after, displacement, along = results[0]
     after_units = volume_total(results[1:]) if volume_total else None
     diag_before, unit = measured.diagonal, measured.frame.unit
     volume_before = volume_after = volume_change = None
@@ -269,6 +308,8 @@ def measure_change(
         moved=int(np.count_nonzero(displacement)),
         mean_displacement=float(displacement.mean(dtype=np.float64)) if displacement.size else 0.0,
         max_displacement=float(displacement.max()) if displacement.size else 0.0,
+        rms_displacement=_rms(displacement),
+        normal_displacement=along,
         bbox_diagonal_before=diag_before,
         bbox_diagonal_after=diag_after,
         bbox_change=(diag_after - diag_before) / diag_before if diag_before else 0.0,

@@ -25,6 +25,7 @@ from .validation import (
     check_fixed,
     check_influence,
     check_iterations,
+    check_max_deviation,
     check_positions,
     check_tolerance,
     check_unit_interval,
@@ -61,11 +62,14 @@ def smooth(
     operator: Umbrella | None = None,
     progress: Callable[[int, int], bool | None] | None = None,
     influence: ArrayLike | None = None,
+    max_deviation: float = 0.0,
 ) -> SmoothResult:
     """Run one of the smoothers and report how many iterations ran. See ``hc_smooth`` for the arguments.
 
     ``method`` is ``"hc"`` or a Laplacian variant (``"plain"``, ``"central"``, ``"original"``);
     ``alpha`` weights q (central) or o (original, hc); ``beta`` is HC's weight of b_i in d_i.
+    ``max_deviation``: the farthest any vertex may end an iteration from its input position, in the
+    positions' units (each iteration ends with a projection onto that ball); 0 = no limit.
     Raises ``DivergenceError`` instead of returning a result that is not finite or has blown up.
     """
     run = Smoothing(
@@ -81,6 +85,7 @@ def smooth(
         original=original,
         operator=operator,
         influence=influence,
+        max_deviation=max_deviation,
         stacklevel=4,
     )
     if progress is None:
@@ -119,6 +124,7 @@ class Smoothing:
         original: ArrayLike | None = None,
         operator: Umbrella | None = None,
         influence: ArrayLike | None = None,
+        max_deviation: float = 0.0,
         stacklevel: int = 2,
     ) -> None:
         self.method = method = check_choice(method, "method", METHODS)
@@ -127,6 +133,7 @@ class Smoothing:
         self.beta = check_unit_interval(beta, "beta")
         self.iterations = check_iterations(iterations)
         tolerance = check_tolerance(tolerance)
+        max_deviation = check_max_deviation(max_deviation)
         start = check_positions(positions)
         n = start.shape[0]
         if original is None or original is positions:
@@ -164,6 +171,7 @@ class Smoothing:
         influence_moves = _Influence.of(weights, fixed_mask, start.dtype)
         # The iterations work on planar copies, one contiguous row per coordinate (see core.parallel).
         self.current = _planar(start, self.order)
+        limit = _Limit(self.current.copy(), max_deviation) if max_deviation > 0.0 and self.iterations > 0 else None
         self.step = _step_for(
             operator,
             fixed_mask,
@@ -174,6 +182,7 @@ class Smoothing:
             self.beta,
             start.dtype,
             influence_moves,
+            limit,
         )  # (keeps α o, never o itself)
         # A step that writes into ``spare`` swaps it with ``current`` every iteration.
         self.spare = np.empty_like(self.current) if self.step.writes_out else None
@@ -277,6 +286,26 @@ class _Influence:
         np.copyto(p_rows, blended, where=self.partial[rows])
         if self.zero is not None:
             np.copyto(p_rows, q_rows, where=self.zero[rows])
+
+
+class _Limit:
+    """The deviation limit: a vertex ends every iteration at most ``radius`` from its input position (a
+    projection onto the ball around it). Applied to rows in place while they are in cache, after the
+    influence; fixed vertices never leave their position, so it never touches them."""
+
+    def __init__(self, start, radius):
+        self.start = start  # planar (3, n), in the run's vertex order
+        self.radius = radius
+
+    def apply(self, p, rows=slice(None)):
+        p_rows, start = p[:, rows], self.start[:, rows]
+        away = np.subtract(p_rows, start)
+        squares = np.einsum("ij,ij->j", away, away)
+        over = np.flatnonzero(squares > self.radius * self.radius)
+        if over.size:
+            scale = (self.radius / np.sqrt(squares[over])).astype(p.dtype)
+            for k in range(p_rows.shape[0]):
+                p_rows[k, over] = start[k, over] + away[k, over] * scale
 
 
 def _box(points):
@@ -384,8 +413,9 @@ class _Step:
 
     writes_out = False
 
-    def __init__(self, fixed_mask, origin, method, alpha, beta, influence):
+    def __init__(self, fixed_mask, origin, method, alpha, beta, influence, limit):
         self.influence = influence  # an _Influence or None
+        self.limit = limit  # a _Limit or None
         self.movable = ~fixed_mask
         self.fixed_index = np.flatnonzero(fixed_mask)
         self.method, self.alpha, self.beta = method, alpha, beta
@@ -408,9 +438,9 @@ def _zero_rows(array, index):
             row[index] = 0.0
 
 
-def _step_for(operator, fixed_mask, origin, method, mode, alpha, beta, dtype, influence):
+def _step_for(operator, fixed_mask, origin, method, mode, alpha, beta, dtype, influence, limit):
     kind = _SequentialStep if mode == "sequential" else _SimultaneousStep
-    return kind(operator, fixed_mask, origin, method, alpha, beta, dtype, influence)
+    return kind(operator, fixed_mask, origin, method, alpha, beta, dtype, influence, limit)
 
 
 class _SimultaneousStep(_Step):
@@ -418,8 +448,8 @@ class _SimultaneousStep(_Step):
 
     writes_out = True
 
-    def __init__(self, operator, fixed_mask, origin, method, alpha, beta, dtype, influence):
-        super().__init__(fixed_mask, origin, method, alpha, beta, influence)
+    def __init__(self, operator, fixed_mask, origin, method, alpha, beta, dtype, influence, limit):
+        super().__init__(fixed_mask, origin, method, alpha, beta, influence, limit)
         dtype = np.dtype(dtype)
         self.blocks = parallel.RowBlocks(operator.indptr, operator.indices, operator.n_vertices)
         # Each block resets its own fixed rows.
@@ -459,6 +489,8 @@ class _SimultaneousStep(_Step):
             p[:, rows] = sums
             if self.influence is not None:
                 self.influence.apply(p, q, rows)
+            if self.limit is not None:
+                self.limit.apply(p, rows)
 
         def block_step(block):
             block.neighbour_sums(q, combine)
@@ -498,6 +530,8 @@ class _SimultaneousStep(_Step):
             p_rows -= sums
             if self.influence is not None:
                 self.influence.apply(p, q, rows)
+            if self.limit is not None:
+                self.limit.apply(p, rows)
 
         def first_pass(block):
             block.neighbour_sums(q, first)
@@ -519,8 +553,8 @@ class _SequentialStep(_Step):
     threads; the solve itself takes all coordinates in one call (see core.triangular).
     """
 
-    def __init__(self, operator, fixed_mask, origin, method, alpha, beta, dtype, influence):
-        super().__init__(fixed_mask, origin, method, alpha, beta, influence)
+    def __init__(self, operator, fixed_mask, origin, method, alpha, beta, dtype, influence, limit):
+        super().__init__(fixed_mask, origin, method, alpha, beta, influence, limit)
         self.gauss_seidel = _GaussSeidel(operator, self.movable, self.neighbour_weight, dtype)
 
     def __call__(self, q, out=None):
@@ -534,6 +568,8 @@ class _SequentialStep(_Step):
             self.gauss_seidel.each_coordinate(lambda k: self._correct(q[k], p[k], k), len(p))
         if self.influence is not None:
             self.influence.apply(p, q)
+        if self.limit is not None:
+            self.limit.apply(p)
         return p
 
     def _correct(self, q, p, k):

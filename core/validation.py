@@ -151,6 +151,13 @@ def check_influence(influence, n_vertices):
     return weights
 
 
+def check_max_deviation(value):
+    """The deviation limit: a finite distance >= 0 (0: no limit)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (0.0 <= value < math.inf):
+        raise ValueError(f"max_deviation must be a distance >= 0 (0 for no limit), got {value!r}")
+    return float(value)
+
+
 def check_unit_interval(value, name):
     """Return ``value`` as a float in [0, 1], or raise ValueError."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value):

@@ -23,7 +23,7 @@ class Job:
     mesh: object
     positions: np.ndarray  # float32 (n, 3): the mesh's, or its active shape key's
     edges: np.ndarray
-    faces: np.ndarray  # (t, 3) triangles of a closed or all-triangle mesh, else None (not needed)
+    faces: np.ndarray  # (t, 3) triangles (a fan of each face), None for a mesh without faces
     fixed: np.ndarray  # bool (n,)
     closed: bool | None = False  # the faces enclose a volume; None: not checked yet (see input_measure)
     corners: tuple = None  # (corner_verts, corner_edges) while ``closed`` is None
@@ -91,8 +91,9 @@ def make_job(obj, props, extra_fixed=None):
         faces, closed, corners = corner_verts.reshape(-1, 3), None, (corner_verts, corner_edges)
     else:
         closed = core.topology.closed_from_corners(edges, corner_verts, corner_edges)
-        # Triangulated once per mesh, for the volume in the report (only the positions change).
-        faces = core.metrics.fan_triangles(mesh_io.read_faces(mesh, corner_verts)) if closed else None
+        # Triangulated once per mesh, for the volume and the normals in the report (only the positions change).
+        faces = mesh_io.read_faces(mesh, corner_verts)
+        faces = core.metrics.fan_triangles(faces) if faces is not None else None
     fixed = np.zeros(n, dtype=bool) if extra_fixed is None else extra_fixed.copy()
     if props.vertex_group:
         group = obj.vertex_groups.get(props.vertex_group)
@@ -172,7 +173,7 @@ def _measure_input(job):
     closed = job.closed
     if closed is None:
         closed = core.topology.closed_from_corners(job.edges, *job.corners)
-    return core.metrics.measure_input(job.positions, job.faces if closed else None, closed=closed)
+    return core.metrics.measure_input(job.positions, job.faces, closed=closed)
 
 
 def measure(job):
@@ -191,31 +192,34 @@ def release(job):
 
 
 def summary(jobs, props):
-    """One line for the status bar: method, iterations, vertices moved, time, volume or size change."""
-    moved = 0
-    changes = []
-    for job in jobs:
-        change = measure(job)
-        moved += change.moved
-        if change.volume_change is not None:
-            changes.append(f"volume {change.volume_change:+.2%}")
-        else:
-            changes.append(f"size {change.bbox_change:+.2%}")
+    """One line for the status bar: method, what ran, time, then what changed (core.Change.summary, the
+    words the command line and the demo use too; with several objects, each one's after its name)."""
     reports = [job.report for job in jobs]
     seconds = sum(report.seconds for report in reports)
     where = " (new shape key)" if props.output == "SHAPE_KEY" else ""
     names = f"{len(jobs)} objects" if len(jobs) > 1 else f"'{jobs[0].obj.name}'"  # what the user selected
-    amounts = [report for report in reports if report.amount is not None]
-    if amounts:
-        chosen = "/".join(str(report.iterations) for report in reports)
-        noise = "/".join(f"{report.amount.ratio:.2f}" for report in amounts)
-        ran = f"automatic amount: noise {noise}x edge length, {chosen} iterations, alpha 0"
-        ran += ", beta " + "/".join(sorted({f"{report.beta:.3g}" for report in amounts}))
-        if any(report.volume_offset for report in reports):
-            ran += ", volume kept"
+    ran = amount_words(reports)
+    if len(jobs) == 1:
+        changed = measure(jobs[0]).summary()
     else:
-        ran = f"{max(report.iterations for report in reports)} iterations"
-    return (
-        f"{METHOD_LABEL[props.method]} on {names}{where}: {ran}, {moved} vertices moved, "
-        f"{seconds:.2f} s, " + ", ".join(changes)
-    )
+        changed = "; ".join(f"'{job.obj.name}': {measure(job).summary()}" for job in jobs)
+    return f"{METHOD_LABEL[props.method]} on {names}{where}: {ran}, {seconds:.2f} s; {changed}"
+
+
+def amount_words(reports):
+    """What ran: '12 iterations' or, chosen, 'automatic amount: noise 0.45x edge length, 12 iterations,
+    alpha 0, beta 0.6, volume kept, moves at most 0.0123'."""
+    amounts = [report for report in reports if report.amount is not None]
+    iterations = "/".join(str(report.iterations) for report in reports) if amounts else None
+    if not amounts:
+        count = max(report.iterations for report in reports)
+        return f"{count} iteration" + ("" if count == 1 else "s")
+    noise = "/".join(f"{report.amount.ratio:.2f}" for report in amounts)
+    words = f"automatic amount: noise {noise}x edge length, {iterations} iterations, alpha 0"
+    words += ", beta " + "/".join(sorted({f"{report.beta:.3g}" for report in amounts}))
+    if any(report.volume_offset for report in reports):
+        words += ", volume kept"
+    limits = [report.max_deviation for report in reports if report.max_deviation]
+    if limits:
+        words += f", moves at most {max(limits):.3g}"
+    return words

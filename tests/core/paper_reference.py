@@ -19,7 +19,9 @@ def _mean(points):
     return [sum(p[k] for p in points) / len(points) for k in range(3)]
 
 
-def smooth_loop(positions, edges, *, method, alpha=0.0, beta=0.5, iterations, mode="simultaneous", fixed=()):
+def smooth_loop(
+    positions, edges, *, method, alpha=0.0, beta=0.5, iterations, mode="simultaneous", fixed=(), max_deviation=0.0
+):
     n = len(positions)
     adj = adjacency(n, edges)
     fixed = set(int(i) for i in fixed) | {i for i in range(n) if not adj[i]}  # section 2
@@ -56,5 +58,11 @@ def smooth_loop(positions, edges, *, method, alpha=0.0, beta=0.5, iterations, mo
                 sum_b = [sum(b.get(j, zero)[k] for j in adj[i]) for k in range(3)]
                 corrected[i] = [new[i][k] - (beta * b[i][k] + (1 - beta) / m * sum_b[k]) for k in range(3)]
             new = corrected
+        if max_deviation > 0.0:  # the deviation limit: back onto the ball around the input position
+            for i in range(n):
+                away = [new[i][k] - o[i][k] for k in range(3)]
+                length = sum(c * c for c in away) ** 0.5
+                if length > max_deviation:
+                    new[i] = [o[i][k] + away[k] * (max_deviation / length) for k in range(3)]
         p = new
     return p

@@ -40,7 +40,20 @@ def test_open_mesh_reports_no_volume():
     assert not change.closed and change.volume_change is None
     assert change.moved == 1 and change.max_displacement == pytest.approx(2.0)
     assert change.mean_displacement == pytest.approx(2.0 / len(positions))
-    assert "bounding box" in change.summary()
+    assert change.rms_displacement == pytest.approx(2.0 / np.sqrt(len(positions)))
+    assert abs(change.normal_displacement) == pytest.approx(2.0 / len(positions))  # the grid is flat: all along
+    text = change.summary()
+    assert text.startswith(f"1 of {len(positions)} vertices moved, largest move ")
+    assert f"({2.0:.3g})" in text and "along the normals" in text and "volume" not in text
+
+
+def test_a_uniform_shrink_shows_as_a_negative_move_along_the_normals():
+    positions, faces = sm.uv_sphere(24, 48)
+    change = core.measure_change(positions, positions * 0.99, faces=np.array(faces))
+    assert change.normal_displacement == pytest.approx(-0.01, rel=1e-3)
+    assert change.rms_displacement == pytest.approx(0.01, rel=1e-3)
+    assert "along the normals -0.2" in change.summary() and "volume -2.97%" in change.summary()
+    assert core.measure_change(positions, positions * 0.99).normal_displacement is None  # no faces, no normals
 
 
 def test_sphere_volume_and_orientation():
