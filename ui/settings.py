@@ -12,7 +12,8 @@ from ..operators.properties import annotations
 # The settings a button passes on (all of them) and those a preset stores: the strength of the smoothing,
 # not the choices that belong to one mesh (vertex group, boundary, output).
 OPERATOR_SETTINGS = tuple(setting.name for setting in settings_spec.MESH)
-PRESET_SETTINGS = ("method", "auto_amount", "alpha", "beta", "iterations", "mode", "tolerance")
+PRESET_SETTINGS = tuple(setting.name for setting in settings_spec.MESH_SMOOTHING)
+MODIFIER_SETTINGS = tuple(setting.name for setting in settings_spec.MODIFIER)  # what an Add Modifier button takes
 
 
 class HCSmoothSettings(bpy.types.PropertyGroup):
@@ -22,6 +23,9 @@ class HCSmoothSettings(bpy.types.PropertyGroup):
         """Set these settings on an operator's properties (a button's OperatorProperties)."""
         for name in names:
             setattr(properties, name, getattr(self, name))
+
+
+classes = (HCSmoothSettings,)
 
 
 def register():
