@@ -7,16 +7,29 @@ mathematics in ``core/`` (which never imports bpy). Two plain modules import wit
 ``settings_spec.py`` (every setting, declared once) and ``console_capture.py``.
 """
 
-from . import cli, operators, ui
+import bpy
+
+from . import cli, operators
+from .ui import fixed, panel, preset, settings
+
+# The modules of ui/ that register, in order. ui/__init__ imports none of them: the operators import ui/draw.py
+# (how every panel draws the settings) for their redo panels, and these modules import operators/.
+UI = (settings, preset, fixed, panel)
 
 
 def register():
     operators.register()
-    ui.register()
+    for module in UI:
+        for cls in module.classes:
+            bpy.utils.register_class(cls)
+        module.register()
     cli.register()
 
 
 def unregister():
     cli.unregister()
-    ui.unregister()
+    for module in reversed(UI):
+        module.unregister()
+        for cls in reversed(module.classes):
+            bpy.utils.unregister_class(cls)
     operators.unregister()

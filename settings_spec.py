@@ -1,14 +1,17 @@
 """Every setting of HC Smooth, declared once: identifier, kind, label, description, default, limits,
-enum items, and for the command line its option and help.
+enum items, how panels draw it, and for the command line its option and help.
 
-Built from it: the operators' properties and the scene settings (operators/properties.py), the
-command-line options and the plain settings objects the command line hands to the job code
-(cli/arguments.py, operators/point_cloud.py). A top-level module, not one inside operators/, ui/ or
-cli/: those packages import bpy in their ``__init__``, and this must import without Blender, so that
-the command line is parsed before Blender loads anything and tests/core can check it on its own.
-Plain Python only, and no imports from the rest of the package.
+Built from it: the operators' properties and the scene settings (operators/properties.py), the rows of
+every panel (ui/draw.py: the operators' redo panels and the N-panel), the presets' list (ui/settings.py),
+the command-line options (cli/arguments.py), the modifier's inputs (nodes/hc_group.py), and the plain
+settings objects (MeshSettings, PointSettings) that the operators snapshot and the command line fills. A
+top-level module, not one inside operators/, ui/ or cli/: those packages import bpy in their
+``__init__``, and this must import without Blender, so that the command line is parsed before Blender
+loads anything and tests/core can check it on its own. Plain Python only, and no imports from the rest
+of the package.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, fields, make_dataclass, replace
 
 KINDS = {"enum": str, "float": float, "int": int, "bool": bool, "string": str}
@@ -44,6 +47,11 @@ class Setting:
     metavar: str = None
     help: str = None  # the command-line help, lower case; the parser adds the default
     cli_default: str = None  # how --help states the default, when not just the value ({default}: the value)
+    points_keep: object = None  # a mesh-only option: the value --points accepts (what point clouds run anyway)
+    # How panels draw it (ui/draw.py). The rules read the values of the settings drawn with it: {name: value}.
+    active: Callable = None  # False: greyed out, still editable (it applies once the rule holds)
+    text: Callable = None  # the label drawn, where it depends on other settings
+    invert: str = None  # a vertex group's name: the bool setting that inverts it, drawn beside it as a toggle
 
     @property
     def identifiers(self):
@@ -66,6 +74,13 @@ def settings_class(name, settings, doc):
 
 
 # --- meshes: object.hc_smooth, mesh.hc_smooth and the scene settings (scene.hc_smooth) -----------------
+
+
+def automatic(values):
+    """HC with Automatic Amount: Alpha and Iterations are chosen for each mesh, not taken as set. ``values``:
+    {name: value} of mesh settings (the modifier's have no Automatic Amount)."""
+    return values["method"] == "HC" and values.get("auto_amount", False)
+
 
 METHOD = Setting(
     "method",
@@ -107,6 +122,7 @@ METHOD = Setting(
     ),
     flag="method",
     help="smoothing algorithm",
+    points_keep="HC",
 )
 MESH_AUTO_AMOUNT = Setting(
     "auto_amount",
@@ -115,6 +131,7 @@ MESH_AUTO_AMOUNT = Setting(
     "HC: choose Iterations (with Alpha 0) from the noise the mesh itself shows, by cross-validating what the "
     "iterations remove, and give closed parts back the volume they had. Off: use Alpha and Iterations as set",
     True,
+    active=lambda values: values["method"] == "HC",
 )
 ALPHA = Setting(
     "alpha",
@@ -131,6 +148,11 @@ ALPHA = Setting(
     flag="alpha",
     help="pull towards the original",
     cli_default="{default}; HC: chosen with the iterations unless --alpha or --iterations is given",
+    # Plain Laplacian has no alpha; with the Automatic Amount, alpha applies once it is off.
+    active=lambda values: values["method"] != "LAPLACIAN" and not automatic(values),
+    text=lambda values: (
+        "Alpha (keep current)" if values["method"] == "LAPLACIAN_CENTRAL" else "Alpha (pull to original)"
+    ),
 )
 BETA = Setting(
     "beta",
@@ -145,6 +167,7 @@ BETA = Setting(
     precision=3,
     flag="beta",
     help="HC correction weight",
+    active=lambda values: values["method"] == "HC",
 )
 ITERATIONS = Setting(
     "iterations",
@@ -157,6 +180,7 @@ ITERATIONS = Setting(
     flag="iterations",
     help="smoothing iterations",
     cli_default="{default}; HC: chosen from the noise unless --alpha or --iterations is given",
+    active=lambda values: not automatic(values),
 )
 MODE = Setting(
     "mode",
@@ -179,6 +203,7 @@ MODE = Setting(
     ),
     flag="mode",
     help="order of the updates within an iteration",
+    points_keep="SIMULTANEOUS",
 )
 TOLERANCE = Setting(
     "tolerance",
@@ -193,21 +218,23 @@ TOLERANCE = Setting(
     precision=6,
     flag="tolerance",
     help="stop early below this move, a fraction of the bounding-box diagonal",
+    points_keep=0.0,
 )
 VERTEX_GROUP = Setting(
     "vertex_group",
     "string",
-    "Vertex Group",
+    "Fixed Group",
     "Vertices in this group (weight above 0) stay fixed (empty: none)",
     "",
     flag="fixed-group",
     metavar="NAME",
     help="vertices (points) in this vertex group stay fixed (.blend, OBJ groups)",
+    invert="invert_vertex_group",
 )
 INVERT_VERTEX_GROUP = Setting(
     "invert_vertex_group",
     "bool",
-    "Invert",
+    "Invert Fixed Group",
     "Fix every vertex outside the group instead: smooth only the group",
     False,
     flag="invert-group",
@@ -225,13 +252,14 @@ PIN_BOUNDARY = Setting(
 INFLUENCE_GROUP = Setting(
     "influence_group",
     "string",
-    "Influence Group",
+    "Influence",
     "Vertex group whose weights scale how far each vertex moves in every iteration (0 = stays, 1 = the full "
     "step; empty: full everywhere), for smoothing painted where the scan is noisy",
     "",
     flag="influence-group",
     metavar="NAME",
     help="vertex group whose weights scale each vertex's move (0 stays, 1 full; .blend, OBJ groups)",
+    invert="invert_influence_group",
 )
 INVERT_INFLUENCE_GROUP = Setting(
     "invert_influence_group",
@@ -254,21 +282,13 @@ OUTPUT = Setting(
     ),
 )
 
-MESH = (
-    METHOD,
-    MESH_AUTO_AMOUNT,
-    ALPHA,
-    BETA,
-    ITERATIONS,
-    MODE,
-    TOLERANCE,
-    VERTEX_GROUP,
-    INVERT_VERTEX_GROUP,
-    PIN_BOUNDARY,
-    INFLUENCE_GROUP,
-    INVERT_INFLUENCE_GROUP,
-    OUTPUT,
-)
+# The mesh settings in three parts, each drawn together. How strongly to smooth: the N-panel's main
+# settings, and what a preset stores.
+MESH_SMOOTHING = (METHOD, MESH_AUTO_AMOUNT, ALPHA, BETA, ITERATIONS, MODE, TOLERANCE)
+# Which vertices move, and how far (the N-panel's Fixed Vertices): they belong to one mesh, so presets leave them.
+MESH_VERTICES = (VERTEX_GROUP, INVERT_VERTEX_GROUP, PIN_BOUNDARY, INFLUENCE_GROUP, INVERT_INFLUENCE_GROUP)
+MESH_RESULT = (OUTPUT,)
+MESH = MESH_SMOOTHING + MESH_VERTICES + MESH_RESULT
 
 # --- point clouds: object.hc_smooth_points --------------------------------------------------------------
 
@@ -287,12 +307,15 @@ POINT_ALPHA = replace(
     description="Pull towards the original positions (small: more smoothing; raise it for nearly clean, "
     "sparse points). Used when Automatic Amount is off",
     cli_default="chosen from the noise unless given, then --steps-per-round applies",
+    active=lambda values: not values["auto_amount"],
+    text=None,
 )
 POINT_BETA = replace(
     BETA,
     default=0.55,
     description="Weight of a point's own correction against its neighbours'. Convergence is proven for "
     "Beta > 0.5 (with Alpha > 0)",
+    active=None,  # points run HC only: Beta always applies
 )
 ROUNDS = Setting(
     "rounds",
@@ -318,6 +341,7 @@ ITERATIONS_PER_ROUND = Setting(
     metavar="N",
     help="HC steps per round",
     cli_default="chosen from the noise unless given, then {default} and --alpha apply",
+    active=lambda values: not values["auto_amount"],
 )
 NEIGHBOURS = Setting(
     "neighbours",
@@ -405,7 +429,8 @@ POINTS = (
 
 # --- the HC Smooth modifier: object.hc_smooth_modifier_add and the modifier's node group ------------------
 # The mesh settings a modifier can hold: it runs simultaneous mode and every iteration (no Mode, no
-# Tolerance), on the evaluated mesh (no Output).
+# Tolerance), on the evaluated mesh (no Output). Each is an input of the node group named by the setting's
+# label: saved files and users' scripts set the inputs by these names.
 
 MODIFIER = (
     METHOD,
@@ -417,4 +442,17 @@ MODIFIER = (
     PIN_BOUNDARY,
     INFLUENCE_GROUP,
     INVERT_INFLUENCE_GROUP,
+)
+
+# --- plain settings objects: an operator's snapshot, or what the command line fills ---------------------------
+
+MeshSettings = settings_class(
+    "MeshSettings",
+    MESH,
+    "The mesh settings as plain values: a mesh operator's snapshot (a modal run must not see later edits).",
+)
+PointSettings = settings_class(
+    "PointSettings",
+    POINTS,
+    "The point-cloud settings: the operator's properties (their defaults are these) or the command line's.",
 )

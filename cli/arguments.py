@@ -23,16 +23,18 @@ POINT_OPTIONS = {s.flag.replace("-", "_"): s for s in settings_spec.POINTS if s.
 # Command-line name -> PointSettings field.
 POINT_FIELDS = {name: setting.name for name, setting in POINT_OPTIONS.items()}
 POINT_ONLY = tuple(name for name in POINT_OPTIONS if name not in MESH_OPTIONS)
-# Mesh-only options, and the value each may keep with --points because it describes what runs anyway.
-MESH_ONLY = {
-    "iterations": None,
-    "mode": "SIMULTANEOUS",
-    "tolerance": 0.0,
-    "method": "HC",
-    "pin_boundary": False,
-    "influence_group": "",
-    "invert_influence": False,
-}
+
+
+def _kept_with_points(setting):
+    """The value a mesh-only option may keep with --points: what point clouds run anyway (its points_keep),
+    else only its value when not given (add_setting: a switch False, a name its default, others None)."""
+    if setting.points_keep is None and setting.kind in ("bool", "string"):
+        return setting.default
+    return setting.points_keep
+
+
+# Mesh-only options (mesh flags point clouds lack) -> the value each may keep with --points.
+MESH_ONLY = {name: _kept_with_points(s) for name, s in MESH_OPTIONS.items() if name not in POINT_OPTIONS}
 
 
 def _option(name):

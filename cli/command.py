@@ -15,8 +15,9 @@ from dataclasses import dataclass, field
 
 import bpy
 
-from .. import core
+from .. import core, settings_spec
 from ..console_capture import captured
+from ..core.pointcloud.sdg import reach_gap_problem
 from ..operators import jobs as jobs_module
 from ..operators import point_cloud
 from ..operators.objects import InputError, unique_data
@@ -110,11 +111,10 @@ def main(argv):
 def point_settings(plan):
     """The point operator's settings with what the command line gave; refuses an inconsistent set."""
     settings = point_cloud.PointSettings(**plan.point_options)
-    if settings.spacing_factor > settings.gap_factor:
-        raise arguments.UsageError(
-            f"--reach ({settings.spacing_factor:g}) must not exceed --gap "
-            f"({settings.gap_factor:g}): a neighbour within reach would be cut off as a gap"
-        )
+    options = tuple("--" + s.flag for s in (settings_spec.SPACING_FACTOR, settings_spec.GAP_FACTOR))
+    problem = reach_gap_problem(settings.spacing_factor, settings.gap_factor, options)
+    if problem:
+        raise arguments.UsageError(problem)
     return settings
 
 

@@ -1,4 +1,5 @@
-"""Convergence of the smoothers (paper section 5): the proven region and the messages about it."""
+"""Convergence of the smoothers (paper section 5): the proven region, and what users are told about it (a
+sentence for reports, short lines for panels)."""
 
 
 class ConvergenceWarning(UserWarning):
@@ -29,6 +30,30 @@ def convergence_message(alpha, beta):
         + " and ".join(reasons)
         + "; many iterations may drift or oscillate"
     )
+
+
+def convergence_lines(method, alpha, beta):
+    """(converges, lines): whether ``method`` (core's name: "hc", "plain", "central", "original") settles on
+    a shape that keeps its size, and why, in short lines for a narrow panel (convergence_message is the
+    sentence for reports).
+
+    HC: Theorem 5.2 (alpha > 0, beta > 0.5). The Laplacian variants (section 5): plain and central shrink
+    towards a point as iterations grow; with the original point and alpha > 0 they converge, but to a
+    shrunken compromise (section 3.3).
+    """
+    if method == "hc":
+        if in_convergence_region(alpha, beta):
+            return True, ["Converges: \u03b1 > 0 and \u03b2 > 0.5", "(paper, Theorem 5.2)"]
+        lines = ["Outside the convergence region:"]
+        if not alpha > 0.0:
+            lines.append("\u03b1 = 0: no pull to the original")
+        if not beta > 0.5:
+            lines.append(f"\u03b2 = {beta:.3g} is not above 0.5")
+        lines.append("many iterations may drift")
+        return False, lines
+    if method == "original" and alpha > 0.0:
+        return True, ["Converges (\u03b1 > 0), but shrinks", "part of the way (paper 3.3)"]
+    return False, ["Shrinks with every iteration", "(no limit but a point, paper 3.1)"]
 
 
 def divergence_message(method, alpha, beta, iterations, what):

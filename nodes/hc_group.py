@@ -50,39 +50,37 @@ HC, LAPLACIAN, CENTRAL, ORIGINAL = range(4)  # the menu's values, in settings_sp
 METHOD_NAMES = {choice.identifier: choice.label for choice in settings_spec.METHOD.items}
 
 
-# --- the group's interface ------------------------------------------------------------------------------
+# --- the group's interface: one input per setting of settings_spec.MODIFIER -----------------------------------
 
-INPUTS = (  # (name, socket type, a setting to take description / default / limits from, or overrides)
-    ("Method", "NodeSocketMenu", settings_spec.METHOD),
-    ("Alpha", "NodeSocketFloat", settings_spec.ALPHA),
-    ("Beta", "NodeSocketFloat", settings_spec.BETA),
-    ("Iterations", "NodeSocketInt", settings_spec.ITERATIONS),
-    (
-        "Fixed Group",
-        "NodeSocketFloat",
-        dict(
-            description="Vertices with a weight above 0 stay fixed: pick a vertex group with the button on the right",
-            default=0.0,
-            min=0.0,
-            max=1.0,
-        ),
+
+def input_name(setting):
+    """The input of a setting of settings_spec.MODIFIER: named by the setting's label ("Fixed Group")."""
+    return setting.label
+
+
+SOCKET_TYPES = {
+    "enum": "NodeSocketMenu",
+    "float": "NodeSocketFloat",
+    "int": "NodeSocketInt",
+    "bool": "NodeSocketBool",
+    "string": "NodeSocketFloat",  # a vertex group's name: the input reads that group's weights
+}
+# The vertex-group settings as per-vertex inputs (the rest are single values): what the input says and holds.
+FIELDS = {
+    settings_spec.VERTEX_GROUP.name: dict(
+        description="Vertices with a weight above 0 stay fixed: pick a vertex group with the button on the right",
+        default=0.0,
+        min=0.0,
+        max=1.0,
     ),
-    ("Invert Fixed Group", "NodeSocketBool", settings_spec.INVERT_VERTEX_GROUP),
-    ("Pin Boundary", "NodeSocketBool", settings_spec.PIN_BOUNDARY),
-    (
-        "Influence",
-        "NodeSocketFloat",
-        dict(
-            description="How far each vertex moves in every iteration (0 = stays, 1 = the full step): pick a "
-            "vertex group with the button on the right",
-            default=1.0,
-            min=0.0,
-            max=1.0,
-        ),
+    settings_spec.INFLUENCE_GROUP.name: dict(
+        description="How far each vertex moves in every iteration (0 = stays, 1 = the full step): pick a "
+        "vertex group with the button on the right",
+        default=1.0,
+        min=0.0,
+        max=1.0,
     ),
-    ("Invert Influence", "NodeSocketBool", settings_spec.INVERT_INFLUENCE_GROUP),
-)
-FIELD_INPUTS = ("Fixed Group", "Influence")  # per-vertex values (vertex groups); the rest are settings
+}
 
 
 def _interface(tree):
@@ -90,20 +88,19 @@ def _interface(tree):
     interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
     interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
     sockets = {}
-    for name, socket_type, source in INPUTS:
-        spec = (
-            source
-            if isinstance(source, dict)
-            else dict(description=source.description, default=source.default, min=source.min, max=source.max)
+    for setting in settings_spec.MODIFIER:
+        name, socket_type = input_name(setting), SOCKET_TYPES[setting.kind]
+        spec = FIELDS.get(setting.name) or dict(
+            description=setting.description, default=setting.default, min=setting.min, max=setting.max
         )
         socket = interface.new_socket(name, in_out="INPUT", socket_type=socket_type, description=spec["description"])
         if socket_type != "NodeSocketMenu":  # a menu's default is set once its items exist
             socket.default_value = spec["default"]
-        if spec.get("min") is not None:
+        if spec["min"] is not None:
             socket.min_value = spec["min"]
-        if spec.get("max") is not None:
+        if spec["max"] is not None:
             socket.max_value = spec["max"]
-        if name not in FIELD_INPUTS:
+        if setting.name not in FIELDS:
             _single_value(socket)
         sockets[name] = socket
     return sockets
@@ -234,7 +231,11 @@ def build(tree):
     t = _Tree(tree)
     inputs = t.node("NodeGroupInput").outputs
     group_output = t.node("NodeGroupOutput")
-    alpha, beta, iterations = inputs["Alpha"], inputs["Beta"], inputs["Iterations"]
+
+    def value(setting):
+        return inputs[input_name(setting)]
+
+    alpha, beta, iterations = value(settings_spec.ALPHA), value(settings_spec.BETA), value(settings_spec.ITERATIONS)
 
     # The method as its number. A new Menu Switch has two items (numbers 0, 1): renamed, not replaced,
     # so the items are numbered 0..3 in settings_spec's order and a 4.x script can set the number.
@@ -244,26 +245,28 @@ def build(tree):
     for number, (item, (name, description)) in enumerate(zip(menu.enum_items, METHOD_ITEMS)):
         item.name, item.description = name, description
         menu.inputs[name].default_value = number
-    t.feed(menu.inputs[0], inputs["Method"])
+    t.feed(menu.inputs[0], value(settings_spec.METHOD))
     method = menu.outputs[0]
 
     def is_method(number):  # 1.0 or 0.0; COMPARE's third input, the tolerance, is 0.5 by default
         return t.math("COMPARE", method, float(number))
 
     # Who moves: outside the fixed group (inside it, inverted), not on a pinned boundary, with neighbours.
-    in_group = t.math("GREATER_THAN", inputs["Fixed Group"], 0.0)
-    fixed = t.boolean("XOR", in_group, inputs["Invert Fixed Group"])
+    in_group = t.math("GREATER_THAN", value(settings_spec.VERTEX_GROUP), 0.0)
+    fixed = t.boolean("XOR", in_group, value(settings_spec.INVERT_VERTEX_GROUP))
     edge_faces = t.node("GeometryNodeInputMeshEdgeNeighbors").outputs["Face Count"]
     boundary_edge = t.math("COMPARE", edge_faces, 1.0)  # an edge of exactly one face (loose edges: none)
     on_boundary = t.math("GREATER_THAN", t.on_domain(boundary_edge, "EDGE", "FLOAT"), 0.0)
-    fixed = t.boolean("OR", fixed, t.boolean("AND", inputs["Pin Boundary"], on_boundary))
+    fixed = t.boolean("OR", fixed, t.boolean("AND", value(settings_spec.PIN_BOUNDARY), on_boundary))
     degree = t.node("GeometryNodeInputMeshVertexNeighbors").outputs["Vertex Count"]
     fixed = t.boolean("OR", fixed, t.math("LESS_THAN", degree, 0.5))
     movable = t.boolean("NOT", fixed)
 
     # The painted influence, as core takes it: the group's weights (inverted: 1 - weight) clipped to [0, 1].
-    painted = inputs["Influence"]
-    influence = t.clamp(t.switch("FLOAT", inputs["Invert Influence"], painted, t.math("SUBTRACT", 1.0, painted)))
+    painted = value(settings_spec.INFLUENCE_GROUP)
+    influence = t.clamp(
+        t.switch("FLOAT", value(settings_spec.INVERT_INFLUENCE_GROUP), painted, t.math("SUBTRACT", 1.0, painted))
+    )
 
     # Plain and central Laplacian: one Blur Attribute, all iterations (weights as in the module's docstring).
     # Influence λ makes the step the central one with a' = a + (1 - a)(1 - λ): a' q + (1 - a') T q is
@@ -329,7 +332,7 @@ def build(tree):
     uses_blur = t.boolean("OR", is_method(LAPLACIAN), is_method(CENTRAL))
     t.feed(group_output.inputs["Geometry"], t.switch("GEOMETRY", uses_blur, iterated, blurred))
 
-    sockets["Method"].default_value = METHOD_NAMES[settings_spec.METHOD.default]
+    sockets[input_name(settings_spec.METHOD)].default_value = METHOD_NAMES[settings_spec.METHOD.default]
     return sockets
 
 

@@ -8,25 +8,16 @@ a modal timer with progress in the status bar and Esc to cancel (nothing is writ
 import bpy
 
 from .. import core, settings_spec
+from ..ui.draw import draw_mesh_convergence, draw_settings
 from . import jobs as jobs_module
 from . import mesh_io
 from .modal_progress import ModalProgress
 from .modifier import draw_add_as_modifier
 from .objects import InputError, unique_data
-from .properties import (
-    alpha_label,
-    annotations,
-    draw_convergence,
-    draw_fixed_group,
-    draw_influence_group,
-    uses_alpha,
-    uses_beta,
-)
+from .properties import annotations
 
 # Above this many vertex-iterations, an interactive run becomes modal (progress, Esc cancels).
 MODAL_WORK = 5_000_000
-# What a run reads of its settings: a snapshot, so that a modal run does not see later edits.
-MeshSettings = settings_spec.settings_class("MeshSettings", settings_spec.MESH, "A snapshot of the mesh settings.")
 # The numbers the Automatic Amount chooses unless the caller sets them (core.MeshSmoother).
 AMOUNT_NUMBERS = ("alpha", "beta", "iterations")
 
@@ -40,32 +31,10 @@ class SmoothProperties:
     def draw(self, context):
         layout = self.layout
         layout.use_property_split = True
-        layout.prop(self, "method")
-        # getattr: draw() also runs on stand-ins that hold only some of the properties (tests/blender/test_ui.py).
-        automatic = self.method == "HC" and getattr(self, "auto_amount", False)
-        row = layout.row()
-        row.active = self.method == "HC"
-        row.prop(self, "auto_amount")
-        column = layout.column()
-        column.active = uses_alpha(self.method) and not automatic  # greyed, still editable: applies once off
-        column.prop(self, "alpha", text=alpha_label(self.method))
-        row = layout.row()
-        row.active = uses_beta(self.method)
-        row.prop(self, "beta")
-        row = layout.row()
-        row.active = not automatic
-        row.prop(self, "iterations")
-        layout.prop(self, "mode")
-        layout.prop(self, "tolerance")
-        draw_fixed_group(layout, self, context.active_object)
-        layout.prop(self, "pin_boundary")
-        draw_influence_group(layout, self, context.active_object)
-        layout.prop(self, "output")
-        if self.method == "HC":  # the Laplacian variants shrink by design: no standing warning for them
-            # The automatic amount runs alpha 0 for the few iterations it chooses (no drift): only beta can warn.
-            draw_convergence(layout, self.method, 1.0 if automatic else self.alpha, self.beta)
+        draw_settings(layout, self, settings_spec.MESH, context.active_object)
+        draw_mesh_convergence(layout, self)
         # Object mode only: Edit mode's selection (the vertices to smooth) has no equivalent in a modifier.
-        if getattr(type(self), "bl_idname", None) == OBJECT_OT_hc_smooth.bl_idname:
+        if self.bl_idname == OBJECT_OT_hc_smooth.bl_idname:
             draw_add_as_modifier(layout, self)
 
 
@@ -80,20 +49,21 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
     def finish(self, context, jobs):
         """Write every result (the subclasses wrap this with what their mode needs)."""
         for job in jobs:
-            jobs_module.write(job, self)
+            jobs_module.write(job, self._settings)
 
     def _report_done(self, jobs):
-        self.report({"INFO"}, jobs_module.summary(jobs, self))
+        self.report({"INFO"}, jobs_module.summary(jobs, self._settings))
         message = jobs_module.convergence_warning(jobs)
         if message:
             self.report({"WARNING"}, message)
 
     def _run(self, jobs, chunk=None):
-        """The run's generator, on a snapshot of the settings and with the numbers the caller set."""
+        """The run's generator, on the settings' snapshot and with the numbers the caller set."""
         given = frozenset(name for name in AMOUNT_NUMBERS if self.properties.is_property_set(name))
-        return jobs_module.run(jobs, MeshSettings.of(self), chunk=chunk, given=given)
+        return jobs_module.run(jobs, self._settings, chunk=chunk, given=given)
 
     def execute(self, context):
+        self._settings = settings_spec.MeshSettings.of(self)  # what prepare, run, write and report read
         return self._run_now(context)
 
     def _run_now(self, context, jobs=None):
@@ -120,6 +90,7 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
     def invoke(self, context, event):
         if bpy.app.background:
             return self.execute(context)
+        self._settings = settings_spec.MeshSettings.of(self)  # a modal run must not see later edits
         try:
             self._jobs = self.prepare(context)
         except (InputError, ValueError) as error:
@@ -156,7 +127,7 @@ class OBJECT_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
         if not objects:
             others = ", ".join(sorted({obj.type.lower() for obj in context.selected_objects}))
             raise InputError("Select at least one mesh object" + (f" (selected: {others})" if others else ""))
-        return [jobs_module.make_job(obj, self) for obj in unique_data(objects, first=context.active_object)]
+        return [jobs_module.make_job(obj, self._settings) for obj in unique_data(objects, first=context.active_object)]
 
 
 class MESH_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
@@ -182,7 +153,7 @@ class MESH_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
             hidden = mesh_io.read_bool_attribute(mesh, ".hide_vert")
             if not (selected & ~hidden).any():
                 continue
-            jobs.append(jobs_module.make_job(obj, self, extra_fixed=~selected | hidden))
+            jobs.append(jobs_module.make_job(obj, self._settings, extra_fixed=~selected | hidden))
         if not jobs:
             raise InputError("Select some visible vertices to smooth")
         return jobs

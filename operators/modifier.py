@@ -11,7 +11,8 @@ from bpy.props import BoolProperty
 
 from .. import settings_spec
 from ..nodes import hc_group, inputs
-from .properties import alpha_label, annotations, draw_fixed_group, draw_influence_group, uses_alpha, uses_beta
+from ..ui.draw import draw_settings, modifier_differences
+from .properties import annotations
 
 MODIFIER_NAME = "HC Smooth"
 SMOOTH_OPERATOR = "OBJECT_OT_hc_smooth"  # the smoothing whose redo panel offers Add as Modifier
@@ -29,30 +30,21 @@ def add_modifier(obj, settings):
 
 
 def configure(modifier, settings):
-    """Set an HC Smooth modifier's inputs from settings as the mesh operators take them."""
-    inputs.set_input(modifier, "Method", hc_group.METHOD_NAMES[settings.method])
-    inputs.set_input(modifier, "Alpha", settings.alpha)
-    inputs.set_input(modifier, "Beta", settings.beta)
-    inputs.set_input(modifier, "Iterations", settings.iterations)
-    inputs.set_input_attribute(modifier, "Fixed Group", settings.vertex_group)
-    # The operators ignore Invert without a group; the modifier would fix everything (weight 0 everywhere).
-    inputs.set_input(modifier, "Invert Fixed Group", bool(settings.vertex_group) and settings.invert_vertex_group)
-    inputs.set_input(modifier, "Pin Boundary", settings.pin_boundary)
-    inputs.set_input_attribute(modifier, "Influence", settings.influence_group)
-    # Likewise: without a group the operators smooth fully; the inverted value would keep every vertex still.
-    inputs.set_input(modifier, "Invert Influence", bool(settings.influence_group) and settings.invert_influence_group)
-
-
-def modifier_differences(settings):
-    """Why a smoothing with these mesh settings is not what the modifier gives: short lines, none if it is."""
-    lines = []
-    if settings.method == "HC" and getattr(settings, "auto_amount", False):
-        lines.append("The modifier takes Alpha and Iterations as set")
-    if getattr(settings, "mode", "SIMULTANEOUS") != "SIMULTANEOUS":
-        lines.append("The modifier runs Simultaneous mode")
-    if getattr(settings, "tolerance", 0.0) > 0.0:
-        lines.append("The modifier runs every iteration")
-    return lines
+    """Set an HC Smooth modifier's inputs from settings as the mesh operators take them: each SETTINGS' input
+    by its name (hc_group.input_name), a vertex group's name as the group its field input reads."""
+    # The operators ignore an Invert without its group. The modifier would not: an inverted empty group fixes
+    # every vertex, an inverted empty influence keeps every vertex still. So Invert is on only with a group.
+    group_of = {setting.invert: setting.name for setting in SETTINGS if setting.invert}  # Invert -> its group
+    for setting in SETTINGS:
+        name, value = hc_group.input_name(setting), getattr(settings, setting.name)
+        if setting.invert:
+            inputs.set_input_attribute(modifier, name, value)
+        elif setting.name in group_of:
+            inputs.set_input(modifier, name, bool(getattr(settings, group_of[setting.name])) and value)
+        elif setting.kind == "enum":  # the Method menu: by its item's name
+            inputs.set_input(modifier, name, hc_group.METHOD_NAMES[value])
+        else:
+            inputs.set_input(modifier, name, value)
 
 
 def copy_settings(source, properties):
@@ -118,17 +110,7 @@ class OBJECT_OT_hc_smooth_modifier_add(bpy.types.Operator):
     def draw(self, context):
         layout = self.layout
         layout.use_property_split = True
-        layout.prop(self, "method")
-        column = layout.column()
-        column.active = uses_alpha(self.method)
-        column.prop(self, "alpha", text=alpha_label(self.method))
-        row = layout.row()
-        row.active = uses_beta(self.method)
-        row.prop(self, "beta")
-        layout.prop(self, "iterations")
-        draw_fixed_group(layout, self, context.active_object)
-        layout.prop(self, "pin_boundary")
-        draw_influence_group(layout, self, context.active_object)
+        draw_settings(layout, self, SETTINGS, context.active_object)
         layout.label(text="Simultaneous mode", icon="INFO")
 
 

@@ -15,19 +15,17 @@ import numpy as np
 from .. import core, settings_spec
 from ..core.pointcloud import PointCloudSmoother
 from ..core.pointcloud.noise import MAX_STEPS, matched_alpha
+from ..core.pointcloud.sdg import reach_gap_problem
+from ..settings_spec import PointSettings
+from ..ui.draw import draw_convergence, draw_settings
 from . import mesh_io, objects
 from .modal_progress import ModalProgress
 from .objects import InputError, unique_data
-from .properties import annotations, draw_convergence, draw_fixed_group
+from .properties import annotations
 
 POINT_TYPES = ("MESH", "POINTCLOUD")
-
-# The point-cloud settings (settings_spec.POINTS) as plain values: an operator's snapshot or the command line's.
-PointSettings = settings_spec.settings_class(
-    "PointSettings",
-    settings_spec.POINTS,
-    "The point-cloud settings: the operator's properties (their defaults are these) or the command line's.",
-)
+# Reach and Gap as the panel names them, for the rule that ties them.
+REACH_GAP = (settings_spec.SPACING_FACTOR.label, settings_spec.GAP_FACTOR.label)
 
 
 def _attribute_mask(data, name, count):
@@ -130,11 +128,9 @@ class Cloud:
 
 def read_clouds(selected, settings):
     """Read and check every object (an object data shared by several objects once); raises InputError. Reads only."""
-    if settings.spacing_factor > settings.gap_factor:
-        raise InputError(
-            f"Reach ({settings.spacing_factor:g}) must not exceed Gap ({settings.gap_factor:g}): "
-            "a neighbour within reach would be cut off as a gap"
-        )
+    problem = reach_gap_problem(settings.spacing_factor, settings.gap_factor, REACH_GAP)
+    if problem:
+        raise InputError(problem)
     return [Cloud(obj, settings) for obj in unique_data(selected)]
 
 
@@ -176,10 +172,8 @@ def write(clouds, settings, context):
 
 def lowest_alpha(settings):
     """The smallest alpha a run with these settings can use, before it has estimated the noise."""
-    # getattr: the redo panel's draw() also runs on stand-ins that hold only some of the properties.
-    automatic = getattr(settings, "auto_amount", True)
     # With the automatic amount, alpha is 0.66 / steps >= matched_alpha(MAX_STEPS) > 0: only beta can leave the region.
-    return matched_alpha(MAX_STEPS) if automatic else settings.alpha
+    return matched_alpha(MAX_STEPS) if settings.auto_amount else settings.alpha
 
 
 def convergence_note(settings):
@@ -255,17 +249,7 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
     def draw(self, context):
         layout = self.layout
         layout.use_property_split = True
-        # getattr: draw() also runs on stand-ins that hold only some of the properties (tests/blender/test_ui.py).
-        automatic = getattr(self, "auto_amount", True)
-        layout.prop(self, "auto_amount")
-        manual = layout.column()
-        manual.active = not automatic  # greyed out, still editable: they apply once the toggle is off
-        manual.prop(self, "alpha")
-        manual.prop(self, "iterations_per_round")
-        for name in ("beta", "rounds", "neighbours", "spacing_factor", "gap_factor", "min_quality", "swap"):
-            layout.prop(self, name)
-        draw_fixed_group(layout, self, context.active_object)
-        layout.prop(self, "keep_rfs_mesh")
+        draw_settings(layout, self, settings_spec.POINTS, context.active_object)
         draw_convergence(layout, "HC", lowest_alpha(self), self.beta)
 
     def _clouds(self, context, settings):

@@ -6,9 +6,11 @@ F3 does what the panel shows, and F9 (redo) starts from those values.
 
 import bpy
 
-from ..operators import modifier, properties
+from .. import settings_spec
 from . import fixed, texts
+from .draw import draw_mesh_convergence, draw_settings, modifier_differences
 from .preset import HC_SMOOTH_MT_presets
+from .settings import MODIFIER_SETTINGS
 
 OBJECT_OPERATOR = "object.hc_smooth"
 EDIT_OPERATOR = "mesh.hc_smooth"
@@ -33,10 +35,10 @@ def modifier_button(layout, context, text="Add as Modifier", icon="MODIFIER", no
     """object.hc_smooth_modifier_add with the scene settings (and, with ``notes``, what the modifier does
     differently from the settings)."""
     settings = context.scene.hc_smooth
-    for line in modifier.modifier_differences(settings) if notes else ():
+    for line in modifier_differences(settings) if notes else ():
         layout.label(text=line, icon="INFO")
     properties = layout.operator(MODIFIER_OPERATOR, text=text, icon=icon)
-    modifier.copy_settings(settings, properties)
+    settings.copy_to(properties, MODIFIER_SETTINGS)
     return properties
 
 
@@ -61,29 +63,9 @@ class VIEW3D_PT_hc_smooth(bpy.types.Panel):
 
         layout.use_property_split = True
         layout.use_property_decorate = False
-        column = layout.column()
-        column.prop(settings, "method")
-        automatic = settings.method == "HC" and settings.auto_amount
-        sub = column.column()
-        sub.active = settings.method == "HC"
-        sub.prop(settings, "auto_amount")
-        sub = column.column()
-        sub.active = properties.uses_alpha(settings.method) and not automatic  # greyed, still editable
-        sub.prop(settings, "alpha", text=properties.alpha_label(settings.method))
-        sub = column.column()
-        sub.active = properties.uses_beta(settings.method)
-        sub.prop(settings, "beta")
-        sub = column.column()
-        sub.active = not automatic
-        sub.prop(settings, "iterations")
-        column.prop(settings, "mode")
-        column.prop(settings, "tolerance")
-
-        # The automatic amount runs alpha 0 for the iterations it chooses (no drift): only beta can warn.
-        alpha = 1.0 if automatic else settings.alpha
-        properties.draw_convergence(layout.box(), settings.method, alpha, settings.beta, always=True)
-
-        layout.prop(settings, "output")
+        draw_settings(layout.column(), settings, settings_spec.MESH, shown=settings_spec.MESH_SMOOTHING)
+        draw_mesh_convergence(layout.box(), settings, always=True)
+        draw_settings(layout.column(), settings, settings_spec.MESH, shown=settings_spec.MESH_RESULT)
         layout.use_property_split = False
         smooth_button(layout.column(), context)
         if context.mode == "OBJECT":
@@ -104,9 +86,7 @@ class VIEW3D_PT_hc_smooth_fixed(bpy.types.Panel):
         obj = context.active_object
         mesh_object = obj if obj is not None and obj.type == "MESH" else None
 
-        properties.draw_fixed_group(layout, settings, mesh_object, text="")
-        layout.prop(settings, "pin_boundary")
-        properties.draw_influence_group(layout, settings, mesh_object)
+        draw_settings(layout, settings, settings_spec.MESH, mesh_object, shown=settings_spec.MESH_VERTICES)
 
         column = layout.column(align=True)
         edit_mode = context.mode == "EDIT_MESH"

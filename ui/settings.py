@@ -12,7 +12,8 @@ from ..operators.properties import annotations
 # The settings a button passes on (all of them) and those a preset stores: the strength of the smoothing,
 # not the choices that belong to one mesh (vertex group, boundary, output).
 OPERATOR_SETTINGS = tuple(setting.name for setting in settings_spec.MESH)
-PRESET_SETTINGS = ("method", "auto_amount", "alpha", "beta", "iterations", "mode", "tolerance")
+PRESET_SETTINGS = tuple(setting.name for setting in settings_spec.MESH_SMOOTHING)
+MODIFIER_SETTINGS = tuple(setting.name for setting in settings_spec.MODIFIER)  # what an Add Modifier button takes
 
 
 class HCSmoothSettings(bpy.types.PropertyGroup):
@@ -27,6 +28,9 @@ class HCSmoothSettings(bpy.types.PropertyGroup):
             if automatic and (name in ("alpha", "iterations") or name == "beta" and not self.is_property_set(name)):
                 continue
             setattr(properties, name, getattr(self, name))
+
+
+classes = (HCSmoothSettings,)
 
 
 def register():

@@ -84,12 +84,26 @@ def unique_sorted(keys):
     return keys[np.concatenate(([True], keys[1:] != keys[:-1]))] if keys.size else keys
 
 
+def reach_gap_problem(spacing_factor, gap_factor, names=("spacing_factor", "gap_factor")):
+    """Why the SDG cannot join points with these factors, or None: an edge within reach (``spacing_factor``
+    local spacings) must not count as a gap (longer than ``gap_factor`` spacings). ``names``: the two as the
+    caller's user knows them (a panel's labels, the command line's options)."""
+    if spacing_factor <= gap_factor:
+        return None
+    reach, gap = names
+    return (
+        f"{reach} ({spacing_factor:g}) must not exceed {gap} ({gap_factor:g}): "
+        "a neighbour within reach would be cut off as a gap"
+    )
+
+
 def surface_description_graph(index, emst_edges, *, spacing_factor=3.0, gap_factor=3.0):
     """The SDG of the distinct points of ``index`` given their EMST (rows of ``index``)."""
-    if not 0 < spacing_factor <= gap_factor:
-        raise ValueError(
-            f"need 0 < spacing_factor <= gap_factor, got spacing_factor={spacing_factor}, gap_factor={gap_factor}"
-        )
+    if not spacing_factor > 0:
+        raise ValueError(f"spacing_factor must be above 0, got {spacing_factor}")
+    problem = reach_gap_problem(spacing_factor, gap_factor)
+    if problem:
+        raise ValueError(problem)
     m = index.n_points
     spacing = local_spacing(index)
     u, v = emst_edges[:, 0], emst_edges[:, 1]

@@ -22,7 +22,7 @@ from ..validation import check_fixed, check_positions, check_unit_interval, powe
 from .local_amount import local_influence, sampled_curvature, thinning
 from .noise import NoiseEstimate, estimate_noise, matched_alpha, steps_per_round
 from .rfs import RFSMesh, rfs_mesh
-from .sdg import surface_description_graph
+from .sdg import reach_gap_problem, surface_description_graph
 from .spanning_tree import NeighbourIndex, boruvka_emst
 from .swap import EdgeSwapper
 
@@ -183,8 +183,9 @@ class PointCloudSmoother:
         self.neighbours = _whole(neighbours, "neighbours", 2)
         self.spacing_factor = _positive(spacing_factor, "spacing_factor")
         self.gap_factor = _positive(gap_factor, "gap_factor")
-        if self.spacing_factor > self.gap_factor:
-            raise ValueError(f"spacing_factor ({self.spacing_factor}) must not exceed gap_factor ({self.gap_factor})")
+        problem = reach_gap_problem(self.spacing_factor, self.gap_factor)
+        if problem:
+            raise ValueError(problem)
         self.min_quality = check_unit_interval(min_quality, "min_quality")
         self.fixed = check_fixed(fixed, self.points.shape[0])
         self.swap = bool(swap)

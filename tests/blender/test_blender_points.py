@@ -93,15 +93,9 @@ def test_redo_panel_greys_out_the_manual_amount(scene):
     cloud_object()
     for automatic in (True, False):
         record = []
-        props = type("Props", (), {})()
-        props.layout, props.auto_amount, props.alpha, props.beta, props.vertex_group = (
-            Layout(record),
-            automatic,
-            0.01,
-            0.55,
-            "",
-        )
-        props.invert_vertex_group = False
+        # The operator's settings as it snapshots them, with a layout to draw into.
+        props = sys.modules[f"{ADDON}.settings_spec"].PointSettings(auto_amount=automatic)
+        props.layout = Layout(record)
         bpy.types.OBJECT_OT_hc_smooth_points.draw(props, bpy.context)
         shown = {entry[1]: entry[2] for entry in record if entry[0] == "prop"}
         assert shown["auto_amount"] and shown["beta"] and shown["rounds"]

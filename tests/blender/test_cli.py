@@ -169,7 +169,7 @@ def test_options_are_built_from_the_declarations(addon, tmp_path, monkeypatch):
                 "laplacian",
                 "--pin-boundary",
             ],
-            "--mode, --tolerance, --method, --pin-boundary do not apply to point clouds (--points): "
+            "--method, --mode, --tolerance, --pin-boundary do not apply to point clouds (--points): "
             "they take --alpha, --beta, --rounds",
         ),
         (

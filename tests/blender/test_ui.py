@@ -15,6 +15,7 @@ import pytest
 from blender_scene import ADDON, noisy_grid, noisy_sphere, positions_of
 
 import core
+from core.convergence import convergence_lines
 
 OPERATORS = ("object.hc_smooth", "mesh.hc_smooth")
 
@@ -207,15 +208,17 @@ def test_panel_shows_the_convergence_region(settings, alpha, beta):
     assert ("CHECKMARK" in icons) == (settings.beta > 0.5)
 
 
-def test_convergence_status_follows_the_paper():
-    properties = importlib.import_module(f"{ADDON}.operators.properties")  # the one source of the panels' lines
-    for alpha in np.linspace(0, 1, 11):
-        for beta in np.linspace(0, 1, 11):
-            converges, lines = properties.convergence_status("HC", alpha, beta)
-            assert converges == (alpha > 0 and beta > 0.5) and lines
-            assert properties.convergence_status("LAPLACIAN_ORIGINAL", alpha, beta)[0] == (alpha > 0)
-            assert not properties.convergence_status("LAPLACIAN", alpha, beta)[0]
-            assert not properties.convergence_status("LAPLACIAN_CENTRAL", alpha, beta)[0]
+def test_panel_draws_every_mesh_setting_once(settings):
+    # The main panel draws how strongly to smooth and the output, the Fixed Vertices subpanel the rest.
+    spec = importlib.import_module(f"{ADDON}.settings_spec")
+    noisy_sphere()
+    drawn = []
+    for panel in (bpy.types.VIEW3D_PT_hc_smooth, bpy.types.VIEW3D_PT_hc_smooth_fixed):
+        layout = draw(panel, bpy.context)
+        drawn += [
+            args[1] for kind in ("prop", "prop_search") for _, args, _ in layout.calls(kind) if args[0] == settings
+        ]
+    assert sorted(drawn) == sorted(s.name for s in spec.MESH)
 
 
 # --- fixed vertices -------------------------------------------------------------------------------------
@@ -414,14 +417,21 @@ def test_fixed_count_is_recounted_after_a_geometry_update(settings):
     assert fixed_count_label(bpy.context)[0] == [texts.count_line(2, n)]
 
 
+def redo_stand_in(idname, **values):
+    """What an operator's draw() reads, without a running operator (whose layout is read-only): its settings as
+    the operator snapshots them, its idname, and a RecordingLayout."""
+    spec = importlib.import_module(f"{ADDON}.settings_spec")
+    props = (spec.PointSettings if "points" in idname else spec.MeshSettings)(**values)
+    props.bl_idname, props.layout = getattr(bpy.types, idname).bl_idname, RecordingLayout()
+    return props
+
+
 @pytest.mark.parametrize("idname", ["OBJECT_OT_hc_smooth", "OBJECT_OT_hc_smooth_points"])
 def test_redo_panels_draw_the_fixed_group_and_the_convergence_warning(scene, idname):
     # The operators' draw() (the F9 panel) shares its fixed-group row and convergence label.
     obj = noisy_sphere()
     operator_class = getattr(bpy.types, idname)
-    props = types.SimpleNamespace(
-        layout=RecordingLayout(), method="HC", alpha=0.1, beta=0.6, vertex_group="", influence_group=""
-    )
+    props = redo_stand_in(idname, alpha=0.1, beta=0.6, auto_amount=False)
     operator_class.draw(props, bpy.context)
     searched = [args for args, _ in ((e[1], e[2]) for e in props.layout.calls("prop_search"))]
     assert searched and searched[0][1:3] == ("vertex_group", obj)
@@ -431,11 +441,11 @@ def test_redo_panels_draw_the_fixed_group_and_the_convergence_warning(scene, idn
     assert not props.layout.labels()  # inside the region: no warning
     props.layout, props.beta = RecordingLayout(), 0.4
     operator_class.draw(props, bpy.context)
-    # The N-panel's lines (one helper), for the smallest alpha the run can use.
+    # The N-panel's lines (core's, one helper), for the smallest alpha the run can use.
     alpha = (
         importlib.import_module(f"{ADDON}.operators.point_cloud").lowest_alpha(props)
         if "points" in idname
         else props.alpha
     )
-    _, lines = importlib.import_module(f"{ADDON}.operators.properties").convergence_status("HC", alpha, 0.4)
+    _, lines = convergence_lines("hc", alpha, 0.4)
     assert props.layout.labels() == lines and "Outside the convergence region:" in lines

@@ -8,6 +8,7 @@ import small_meshes as sm
 from oracles import hc_iteration_matrix, spectral_radius, umbrella_matrix
 
 import core
+from core.convergence import convergence_lines
 
 
 def random_connected_graph(n, extra, seed):
@@ -132,3 +133,15 @@ def test_hc_outside_the_region_warns_but_runs():
     assert np.isfinite(result).all()
     assert core.convergence_message(0.2, 0.6) is None
     assert "alpha" in core.convergence_message(0.0, 0.6)
+
+
+def test_panel_lines_follow_the_paper():
+    # The short lines panels show (ui/draw.py): the same region as convergence_message, section 5's verdicts.
+    for alpha in np.linspace(0, 1, 11):
+        for beta in np.linspace(0, 1, 11):
+            converges, lines = convergence_lines("hc", alpha, beta)
+            assert converges == (alpha > 0 and beta > 0.5) == (core.convergence_message(alpha, beta) is None)
+            assert lines and ("Outside the convergence region:" in lines) == (not converges)
+            assert convergence_lines("original", alpha, beta)[0] == (alpha > 0)  # to a shrunken shape
+            assert not convergence_lines("plain", alpha, beta)[0] and not convergence_lines("central", alpha, beta)[0]
+    assert "\u03b2 = 0.4 is not above 0.5" in convergence_lines("hc", 0.1, 0.4)[1]

@@ -130,8 +130,9 @@ def test_point_alpha_and_beta_differ_from_the_mesh_ones_only_where_declared():
     # Points smooth with a weaker pull and a beta nearer 0.5 (core.smooth_point_cloud); label, limits and
     # command-line option are the mesh settings' own.
     for mesh, point, changed in (
-        (spec.ALPHA, spec.POINT_ALPHA, {"default", "step", "description", "cli_default"}),
-        (spec.BETA, spec.POINT_BETA, {"default", "description"}),
+        # The panel rules: points have one method and no label that depends on it.
+        (spec.ALPHA, spec.POINT_ALPHA, {"default", "step", "description", "cli_default", "active", "text"}),
+        (spec.BETA, spec.POINT_BETA, {"default", "description", "active"}),
     ):
         differ = {f.name for f in dataclasses.fields(spec.Setting) if getattr(mesh, f.name) != getattr(point, f.name)}
         assert differ == changed
@@ -149,3 +150,48 @@ def test_settings_class_holds_the_declared_defaults(settings):
     source.__dict__[settings[0].name] = "changed"
     copied = made.of(source)
     assert getattr(copied, settings[0].name) == "changed" and not hasattr(copied, "extra")
+
+
+def test_mesh_parts_make_up_the_mesh_settings():
+    # Every mesh setting is drawn with one part (N-panel: main, Fixed Vertices, after the convergence box).
+    assert spec.MESH == spec.MESH_SMOOTHING + spec.MESH_VERTICES + spec.MESH_RESULT
+    assert set(spec.MODIFIER) <= set(spec.MESH)
+
+
+@pytest.mark.parametrize("settings", [spec.MESH, spec.POINTS, spec.MODIFIER], ids=["mesh", "points", "modifier"])
+def test_drawing_rules_read_only_the_settings_drawn_with_them(settings):
+    # A panel hands the rules the values of the settings it draws ({name: value}); try every choice.
+    names = {s.name for s in settings}
+    choices = [(s.name, [c.identifier for c in s.items] if s.items else [s.default, not s.default]) for s in settings]
+    for setting in settings:
+        if setting.invert:  # a vertex group's Invert toggle is a bool of the same settings
+            assert setting.kind == "string" and setting.invert in names
+            assert next(s for s in settings if s.name == setting.invert).kind == "bool"
+        for rule, kind in ((setting.active, bool), (setting.text, str)):
+            if rule is None:
+                continue
+            for name, values in choices:
+                for value in values:
+                    state = {s.name: s.default for s in settings} | {name: value}
+                    assert type(rule(state)) is kind, setting.name
+
+
+def test_greyed_out_where_a_setting_does_not_apply():
+    def active(setting, **values):
+        return setting.active({s.name: s.default for s in spec.MESH} | values)
+
+    assert not active(spec.ALPHA, method="LAPLACIAN", auto_amount=False)  # plain Laplacian has no alpha
+    assert not active(spec.ALPHA, method="HC", auto_amount=True)  # chosen by the Automatic Amount
+    assert active(spec.ALPHA, method="HC", auto_amount=False) and active(spec.ALPHA, method="LAPLACIAN_CENTRAL")
+    assert active(spec.ITERATIONS, method="LAPLACIAN", auto_amount=True)  # the Automatic Amount is HC's only
+    assert not active(spec.ITERATIONS, method="HC", auto_amount=True)
+    assert not active(spec.BETA, method="LAPLACIAN_ORIGINAL") and not active(spec.MESH_AUTO_AMOUNT, method="LAPLACIAN")
+    # The modifier has no Automatic Amount: Alpha and Iterations apply.
+    modifier = {s.name: s.default for s in spec.MODIFIER}
+    assert spec.ALPHA.active(modifier) and spec.ITERATIONS.active(modifier)
+    assert spec.ALPHA.text(modifier | {"method": "LAPLACIAN_CENTRAL"}) == "Alpha (keep current)"
+
+
+def test_plain_settings_objects_hold_the_declarations():
+    for made, settings in ((spec.MeshSettings, spec.MESH), (spec.PointSettings, spec.POINTS)):
+        assert [f.name for f in dataclasses.fields(made)] == [s.name for s in settings]
