@@ -43,11 +43,14 @@ class Setting:
     soft_max: float = None
     step: float = None  # UI drag step in hundredths, as bpy.props takes it
     precision: int = None
+    subtype: str = None  # Blender's property subtype, e.g. "DISTANCE" (shown in scene units)
     flag: str = None  # the command-line option without "--"; None: not on the command line
     metavar: str = None
     help: str = None  # the command-line help, lower case; the parser adds the default
     cli_default: str = None  # how --help states the default, when not just the value ({default}: the value)
     points_keep: object = None  # a mesh-only option: the value --points accepts (what point clouds run anyway)
+    argument: str = None  # the core.MeshSmoother argument it sets (enums: each Choice's ``core`` name)
+    chosen: bool = False  # with the Automatic Amount on, chosen by core unless the caller sets it
     # How panels draw it (ui/draw.py). The rules read the values of the settings drawn with it: {name: value}.
     active: Callable = None  # False: greyed out, still editable (it applies once the rule holds)
     text: Callable = None  # the label drawn, where it depends on other settings
@@ -122,6 +125,7 @@ METHOD = Setting(
     ),
     flag="method",
     help="smoothing algorithm",
+    argument="method",
     points_keep="HC",
 )
 MESH_AUTO_AMOUNT = Setting(
@@ -138,8 +142,8 @@ ALPHA = Setting(
     "float",
     "Alpha",
     "HC and Laplacian with original point: weight of the original position (0 = none, higher keeps more "
-    "of the input, noise included). Laplacian with central point: weight of the current position. HC: used "
-    "when Automatic Amount is off",
+    "of the input, noise included). Laplacian with central point: weight of the current position. HC with "
+    "Automatic Amount: chosen (0) unless set; setting Alpha or Iterations runs both as set",
     0.1,
     min=0.0,
     max=1.0,
@@ -153,6 +157,8 @@ ALPHA = Setting(
     text=lambda values: (
         "Alpha (keep current)" if values["method"] == "LAPLACIAN_CENTRAL" else "Alpha (pull to original)"
     ),
+    argument="alpha",
+    chosen=True,
 )
 BETA = Setting(
     "beta",
@@ -168,12 +174,15 @@ BETA = Setting(
     flag="beta",
     help="HC correction weight",
     active=lambda values: values["method"] == "HC",
+    argument="beta",
+    chosen=True,
 )
 ITERATIONS = Setting(
     "iterations",
     "int",
     "Iterations",
-    "Number of smoothing iterations (heavier noise needs more). HC: used when Automatic Amount is off",
+    "Number of smoothing iterations (heavier noise needs more). HC with Automatic Amount: chosen from the "
+    "noise unless set; setting Alpha or Iterations runs both as set",
     10,
     min=0,
     soft_max=200,
@@ -181,6 +190,8 @@ ITERATIONS = Setting(
     help="smoothing iterations",
     cli_default="{default}; HC: chosen from the noise unless --alpha or --iterations is given",
     active=lambda values: not automatic(values),
+    argument="iterations",
+    chosen=True,
 )
 MODE = Setting(
     "mode",
@@ -193,16 +204,19 @@ MODE = Setting(
             "SIMULTANEOUS",
             "Simultaneous",
             "Every vertex reads the positions of the previous iteration (paper, Algorithm 1)",
+            core="simultaneous",
         ),
         Choice(
             "SEQUENTIAL",
             "Sequential",
             "Vertices in index order, each reading the already updated "
             "positions of lower-index neighbours (Gauss\u2013Seidel)",
+            core="sequential",
         ),
     ),
     flag="mode",
     help="order of the updates within an iteration",
+    argument="mode",
     points_keep="SIMULTANEOUS",
 )
 TOLERANCE = Setting(
@@ -218,6 +232,7 @@ TOLERANCE = Setting(
     precision=6,
     flag="tolerance",
     help="stop early below this move, a fraction of the bounding-box diagonal",
+    argument="tolerance",
     points_keep=0.0,
 )
 VERTEX_GROUP = Setting(
@@ -284,11 +299,35 @@ OUTPUT = Setting(
 
 # The mesh settings in three parts, each drawn together. How strongly to smooth: the N-panel's main
 # settings, and what a preset stores.
-MESH_SMOOTHING = (METHOD, MESH_AUTO_AMOUNT, ALPHA, BETA, ITERATIONS, MODE, TOLERANCE)
+MAX_DEVIATION = Setting(
+    "max_deviation",
+    "float",
+    "Deviation Limit",
+    "The farthest any vertex may end from where it started, kept inside every iteration (0 = no limit). "
+    "HC with Automatic Amount: a multiple of the noise it finds, unless set",
+    0.0,
+    min=0.0,
+    soft_max=1.0,
+    step=0.1,
+    precision=4,
+    subtype="DISTANCE",
+    flag="max-deviation",
+    metavar="D",
+    help="the farthest any vertex may move, in scene units (0: no limit)",
+    cli_default="{default}; HC: a multiple of the noise unless --alpha or --iterations is given",
+    argument="max_deviation",
+    chosen=True,
+)
+
+MESH_SMOOTHING = (METHOD, MESH_AUTO_AMOUNT, ALPHA, BETA, ITERATIONS, MODE, TOLERANCE, MAX_DEVIATION)
 # Which vertices move, and how far (the N-panel's Fixed Vertices): they belong to one mesh, so presets leave them.
 MESH_VERTICES = (VERTEX_GROUP, INVERT_VERTEX_GROUP, PIN_BOUNDARY, INFLUENCE_GROUP, INVERT_INFLUENCE_GROUP)
 MESH_RESULT = (OUTPUT,)
 MESH = MESH_SMOOTHING + MESH_VERTICES + MESH_RESULT
+# What the Automatic Amount chooses unless the caller sets it; either of the second set given switches it off
+# (then every number runs as set).
+CHOSEN = tuple(setting.name for setting in MESH if setting.chosen)
+SWITCHES_OFF_THE_AMOUNT = (ALPHA.name, ITERATIONS.name)
 
 # --- point clouds: object.hc_smooth_points --------------------------------------------------------------
 

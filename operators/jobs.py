@@ -12,8 +12,7 @@ from .. import core, settings_spec
 from ..core import parallel
 from . import mesh_io, objects
 
-# The method's enum identifier -> core's name for it, and the short name reports and shape keys use.
-CORE_METHOD = {choice.identifier: choice.core for choice in settings_spec.METHOD.items}
+# The method's enum identifier -> the short name reports and shape keys use.
 METHOD_LABEL = {choice.identifier: choice.short for choice in settings_spec.METHOD.items}
 
 
@@ -36,22 +35,28 @@ class Job:
 
 
 def core_options(props, given=frozenset()):
-    """The core.MeshSmoother arguments from operator, scene or command-line settings.
+    """The core.MeshSmoother arguments of operator, scene or command-line settings: each setting that
+    declares its ``argument`` (settings_spec). ``given``: the names the caller set (Blender's
+    ``is_property_set``, the options on a command line). With the Automatic Amount on and neither Alpha
+    nor Iterations given, the settings it chooses go to core as core.AUTO unless given.
 
     Numbers are taken in single precision, as Blender's float properties hold them, so every route runs
-    the same numbers. ``given``: the names the caller set explicitly (Blender's ``is_property_set``, the
-    options on a command line). The Automatic Amount (HC with Automatic Amount on) chooses only what was
-    not given: alpha or iterations given switch it off, and then every number runs as set.
-    """
-    automatic = props.method == "HC" and props.auto_amount and not {"alpha", "iterations"} & set(given)
-    return dict(
-        method=CORE_METHOD[props.method],
-        alpha=core.AUTO if automatic else as_property(props.alpha),
-        beta=core.AUTO if automatic and "beta" not in given else as_property(props.beta),
-        iterations=core.AUTO if automatic else props.iterations,
-        mode=props.mode.lower(),
-        tolerance=as_property(props.tolerance),
-    )
+    the same numbers."""
+    values = {setting.name: getattr(props, setting.name) for setting in settings_spec.MESH}
+    automatic = settings_spec.automatic(values) and not set(settings_spec.SWITCHES_OFF_THE_AMOUNT) & set(given)
+    options = {}
+    for setting in settings_spec.MESH:
+        if setting.argument is None:
+            continue
+        value = values[setting.name]
+        if automatic and setting.chosen and setting.name not in given:
+            value = core.AUTO
+        elif setting.kind == "enum":
+            value = next(choice.core for choice in setting.items if choice.identifier == value)
+        elif setting.kind == "float":
+            value = as_property(value)
+        options[setting.argument] = value
+    return options
 
 
 def convergence_warning(jobs):

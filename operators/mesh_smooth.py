@@ -18,8 +18,6 @@ from .properties import annotations
 
 # Above this many vertex-iterations, an interactive run becomes modal (progress, Esc cancels).
 MODAL_WORK = 5_000_000
-# The numbers the Automatic Amount chooses unless the caller sets them (core.MeshSmoother).
-AMOUNT_NUMBERS = ("alpha", "beta", "iterations")
 
 
 class SmoothProperties:
@@ -59,7 +57,7 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
 
     def _run(self, jobs, chunk=None):
         """The run's generator, on the settings' snapshot and with the numbers the caller set."""
-        given = frozenset(name for name in AMOUNT_NUMBERS if self.properties.is_property_set(name))
+        given = frozenset(name for name in settings_spec.CHOSEN if self.properties.is_property_set(name))
         return jobs_module.run(jobs, self._settings, chunk=chunk, given=given)
 
     def execute(self, context):

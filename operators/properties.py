@@ -14,7 +14,7 @@ PROPERTY = {
     "bool": BoolProperty,
     "string": StringProperty,
 }
-LIMITS = ("min", "max", "soft_max", "step", "precision")
+LIMITS = ("min", "max", "soft_max", "step", "precision", "subtype")
 
 
 def bpy_property(setting):

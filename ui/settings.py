@@ -21,11 +21,16 @@ class HCSmoothSettings(bpy.types.PropertyGroup):
 
     def copy_to(self, properties, names=OPERATOR_SETTINGS):
         """Set these settings on an operator's properties (a button's OperatorProperties). What the
-        operator takes as set it uses as given, so with the Automatic Amount on the numbers it chooses
-        are left unset: Alpha and Iterations (greyed out) always, Beta unless the user changed it."""
-        automatic = self.method == "HC" and self.auto_amount
+        operator takes as set it uses as given, so with the Automatic Amount on, the settings it chooses
+        are passed only where the user changed them, and Alpha and Iterations (greyed out) never."""
+        automatic = settings_spec.automatic({"method": self.method, "auto_amount": self.auto_amount})
         for name in names:
-            if automatic and (name in ("alpha", "iterations") or name == "beta" and not self.is_property_set(name)):
+            chosen = name in settings_spec.CHOSEN
+            if (
+                automatic
+                and chosen
+                and (name in settings_spec.SWITCHES_OFF_THE_AMOUNT or not self.is_property_set(name))
+            ):
                 continue
             setattr(properties, name, getattr(self, name))
 

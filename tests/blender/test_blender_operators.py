@@ -1,5 +1,7 @@
 """object.hc_smooth and mesh.hc_smooth on generated meshes, asserting on geometry."""
 
+import re
+
 import bpy
 import numpy as np
 import pytest
@@ -272,3 +274,32 @@ def test_outside_the_convergence_region_warns(scene, capfd):
     noisy_sphere()
     assert bpy.ops.object.hc_smooth(auto_amount=False, alpha=0.1, beta=0.3, iterations=2) == {"FINISHED"}
     assert "Theorem 5.2" in capfd.readouterr().out
+
+
+def test_the_deviation_limit_set_is_kept(scene, capfd):
+    """Deviation Limit set: no vertex ends farther than it from where it started; with numbers set too,
+    the core's HC with that limit, bit for bit."""
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    limit = float(np.float32(0.004))
+    assert bpy.ops.object.hc_smooth(iterations=10, max_deviation=0.004) == {"FINISHED"}
+    after = positions_of(obj.data)
+    expected = core.smooth(
+        before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=10, max_deviation=limit
+    ).positions
+    assert np.array_equal(after, expected)
+    assert np.linalg.norm(after.astype(float) - before, axis=1).max() <= limit + 1e-7
+    free = core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=10)
+    assert np.linalg.norm(free.astype(float) - before, axis=1).max() > 2 * limit  # the limit binds
+
+
+@pytest.mark.filterwarnings("ignore:HC is proven to converge only")
+def test_the_automatic_amount_keeps_to_a_multiple_of_its_noise(scene, capfd):
+    obj = noisy_sphere()
+    before = positions_of(obj.data)
+    assert bpy.ops.object.hc_smooth() == {"FINISHED"}
+    report = capfd.readouterr().out
+    limit = float(re.search(r"moves at most ([0-9.e-]+)", report).group(1))
+    amount = core.choose_amount(before, edges_of(obj.data))
+    assert limit == pytest.approx(core.mesh_smoother.DEVIATION_IN_NOISE * amount.sigma, rel=1e-2)
+    assert np.linalg.norm(positions_of(obj.data).astype(float) - before, axis=1).max() <= limit * 1.001 + 1e-7

@@ -39,6 +39,7 @@ def test_identifiers_users_rely_on():
         "iterations",
         "mode",
         "tolerance",
+        "max_deviation",
         "vertex_group",
         "invert_vertex_group",
         "pin_boundary",
@@ -71,6 +72,7 @@ def test_identifiers_users_rely_on():
         "iterations": "iterations",
         "mode": "mode",
         "tolerance": "tolerance",
+        "max-deviation": "max_deviation",
         "fixed-group": "vertex_group",
         "invert-group": "invert_vertex_group",
         "pin-boundary": "pin_boundary",
@@ -195,3 +197,20 @@ def test_greyed_out_where_a_setting_does_not_apply():
 def test_plain_settings_objects_hold_the_declarations():
     for made, settings in ((spec.MeshSettings, spec.MESH), (spec.PointSettings, spec.POINTS)):
         assert [f.name for f in dataclasses.fields(made)] == [s.name for s in settings]
+
+
+def test_every_core_argument_is_an_argument_of_the_mesh_pipeline():
+    """A setting's ``argument`` is a parameter of core.MeshSmoother; the settings the Automatic Amount
+    chooses are those MeshSmoother takes as "auto"; every enum item names its core value."""
+    import inspect
+
+    import core
+
+    parameters = inspect.signature(core.MeshSmoother).parameters
+    arguments = [s for s in spec.MESH if s.argument]
+    assert {s.argument for s in arguments} >= {"method", "alpha", "beta", "iterations", "mode", "tolerance"}
+    for setting in arguments:
+        assert setting.argument in parameters, setting.name
+        assert (parameters[setting.argument].default == core.AUTO) == setting.chosen, setting.name
+        for choice in setting.items:
+            assert choice.core, (setting.name, choice.identifier)

@@ -9,3 +9,4 @@ settings.beta = 0.6
 settings.iterations = 50
 settings.mode = "SIMULTANEOUS"
 settings.tolerance = 0.0
+settings.max_deviation = 0.0
