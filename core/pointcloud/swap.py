@@ -21,8 +21,8 @@ geometry of the moved points; ``swap_pass`` is one pass on a fresh mesh.
 
 import numpy as np
 
+from ..parallel import run_chunks
 from .geometry import Incidence, dot_rows, face_normals
-from .threads import run_chunks
 
 _MIN_GAIN = 1e-9  # radians; ignores swaps that only win by rounding
 _CHUNK = 1 << 16  # elements per step within a thread: its temporaries stay in cache and get reused

@@ -305,23 +305,23 @@ def test_rfs_mesh_swapper_state_on_a_noisy_sphere():
 
 def test_results_do_not_depend_on_the_thread_count(monkeypatch):
     import core
-    from core.pointcloud import threads
+    from core import parallel
 
     points = noisy_sphere(30_000, 0.01, seed=5)  # large enough to be split into blocks
-    monkeypatch.setattr(threads, "MIN_BLOCK", 1000)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 1000)
     widest = []
-    original_run_all = threads.run_all
+    original_run_all = parallel.run_all
 
     def recording_run_all(tasks):
         widest.append(len(tasks))
         return original_run_all(tasks)
 
-    monkeypatch.setattr(threads, "run_all", recording_run_all)
-    monkeypatch.setattr(threads, "thread_count", lambda: 1)
+    monkeypatch.setattr(parallel, "run_all", recording_run_all)
+    monkeypatch.setattr(parallel, "thread_count", lambda: 1)
     one = core.smooth_point_cloud(points, rounds=2)
     assert max(widest) == 1
     widest.clear()
-    monkeypatch.setattr(threads, "thread_count", lambda: 3)  # on any machine: the pool has the threads
+    monkeypatch.setattr(parallel, "thread_count", lambda: 3)  # on any machine: the pool has the threads
     three = core.smooth_point_cloud(points, rounds=2)
     assert max(widest) == 3  # the stages really were split
     assert np.array_equal(one, three)
@@ -492,12 +492,12 @@ def test_pruning_is_the_same_with_int64_incidence_numbers(monkeypatch):
 
 
 def test_corona_keys_give_the_unique_faces_of_the_candidates(monkeypatch):
-    from core.pointcloud import threads
+    from core import parallel
     from core.pointcloud.geometry import faces_of_keys
     from core.pointcloud.rfs import corona_faces
 
     index, tree, graph = build_sdg(noisy_sphere(4000, 0.01, seed=10))
-    monkeypatch.setattr(threads, "MIN_BLOCK", 100)  # several blocks when threads are on
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 100)  # several blocks when threads are on
     for gap in (np.pi, 2.0):
         expected = unique_faces(corona_faces(index.points, graph.edges, gap))
         parts = corona_faces(index.points, graph.edges, gap, keys=True)
