@@ -126,8 +126,7 @@ def hc_default(case):
     (with the Automatic Amount on by default: the amount core.choose_amount picks, that HC run, and on
     closed meshes core.volume.restore_volume, as operators/jobs.py runs them)."""
     settings = hc_default_settings()
-    automatic = getattr(settings_spec, "MESH_AUTO_AMOUNT", None)
-    if automatic is None or not automatic.default:
+    if not settings_spec.MESH_AUTO_AMOUNT.default:
         return hc_fixed(case, settings), settings
     amount = core.choose_amount(case.noisy, case.edges, beta=settings["beta"])
     settings = {

@@ -9,9 +9,10 @@ import small_meshes as sm
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from pointcloud_sets import noisy_sphere
+from pointcloud_stages import emst, swap_pass
 
 import core
-from core.pointcloud import emst, rfs_mesh, surface_description_graph, swap_pass
+from core.pointcloud import rfs_mesh, surface_description_graph
 from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
 
 

@@ -7,13 +7,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from oracles import dihedral, dihedral_cos, face_quality, unique_faces
 from pointcloud_sets import noisy_sphere
+from pointcloud_stages import swap_pass
 from scipy.sparse.csgraph import connected_components
 
 from core.pointcloud.geometry import Incidence
 from core.pointcloud.rfs import keep_best_pairs, rfs_mesh
 from core.pointcloud.sdg import surface_description_graph
 from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
-from core.pointcloud.swap import EdgeSwapper, swap_pass
+from core.pointcloud.swap import EdgeSwapper
 
 
 def build_sdg(points, k=16, **options):
