@@ -224,6 +224,7 @@ def noisy_torus_grid(around=500, across=100, ratio=0.4, seed=0):
     return vertices + np.random.default_rng(seed).normal(0.0, noise_size, vertices.shape), edges
 
 
+@pytest.mark.slow
 def test_patches_estimate_the_trace_of_the_whole_mesh(monkeypatch):
     """On big meshes the probes run on patches; their inner vertices give the whole mesh's t(k), and
     the same amount. (Patches made to start small here, so that a test-sized mesh gets them.)"""

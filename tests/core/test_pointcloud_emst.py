@@ -35,7 +35,7 @@ HARD_SETS = {
 
 
 @pytest.mark.parametrize("name", sorted(HARD_SETS))
-@pytest.mark.parametrize("k", [1, 3, 12])
+@pytest.mark.parametrize("k", [pytest.param(1, marks=pytest.mark.slow), 3, 12])  # k = 1: most exact searches
 def test_emst_matches_delaunay_mst(name, k):
     points = HARD_SETS[name]
     assert_is_emst(points, emst(points, neighbours=k))

@@ -304,6 +304,7 @@ def test_rfs_mesh_swapper_state_on_a_noisy_sphere():
     assert np.array_equal(EdgeSwapper(mesh.faces, index.n_points, mesh.other, mesh.edges).other, fresh.other)
 
 
+@pytest.mark.slow
 def test_results_do_not_depend_on_the_thread_count(monkeypatch):
     import core
     from core import parallel
@@ -328,6 +329,7 @@ def test_results_do_not_depend_on_the_thread_count(monkeypatch):
     assert np.array_equal(one, three)
 
 
+@pytest.mark.slow
 def test_pruning_rounds_equal_the_edge_by_edge_rule_in_any_order_within_a_round():
     # Reference: the paper's rule one edge at a time, in the order of the rounds (shuffled within
     # each round), with the best pair found by brute force from dihedral_cos.

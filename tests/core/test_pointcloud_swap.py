@@ -1,6 +1,7 @@
 """The edge swapper's chunked, threaded pass and its edge lookup against plain whole-array forms."""
 
 import numpy as np
+import pytest
 from pointcloud_sets import noisy_sphere
 
 from core import parallel
@@ -27,6 +28,7 @@ def passes(index, mesh, count=3):
     return states
 
 
+@pytest.mark.slow
 def test_chunks_and_threads_give_the_one_block_result(monkeypatch):
     index, mesh = sphere_mesh(3000, seed=2)
     whole = passes(index, mesh)
