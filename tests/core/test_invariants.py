@@ -172,6 +172,7 @@ def test_every_input_layout_is_untouched_and_gives_the_contiguous_result(
             assert np.array_equal(bits(laid_out[name]), bits(value)), f"{name} was modified"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 @pytest.mark.parametrize("layout", LAYOUTS)
 def test_point_cloud_input_of_every_layout_is_untouched_and_gives_the_contiguous_result(layout, dtype):

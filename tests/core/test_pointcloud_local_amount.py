@@ -53,6 +53,7 @@ def test_flat_part_gets_the_full_amount_thin_part_less():
     assert np.median(report.influence[thin]) < 0.01
 
 
+@pytest.mark.slow
 def test_thin_part_shrinks_less_and_flat_part_is_smoothed_as_before():
     points, flat, thin = flat_and_thin()
     local = core.smooth_point_cloud(points)

@@ -39,6 +39,7 @@ def diagonal(points):
     return float(np.linalg.norm(np.ptp(points, axis=0)))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("amount", ["auto", "explicit"])
 @pytest.mark.parametrize("scale", SCALES)
 def test_result_is_scale_equivariant(sphere, reference, amount, scale):
