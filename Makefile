@@ -8,7 +8,7 @@ TEST_PATHS := $(if $(filter tests%,$(PYTEST_ARGS)),,tests)
 # A hung interpreter must fail the run, not stall CI: each environment's suite gets this many seconds.
 TEST_TIMEOUT ?= 1200
 
-.PHONY: envs env-bpy45 env-bpy52 env-lint test test-core lint format demo build dist clean
+.PHONY: envs env-bpy45 env-bpy52 env-lint test test-core test-quick lint format demo build dist clean
 
 # Both test environments; `make env-bpy45` / `make env-bpy52` makes one alone.
 envs: env-bpy45 env-bpy52
@@ -35,6 +35,10 @@ test: envs
 # Core only, with whatever python3 has NumPy, SciPy, pytest and hypothesis.
 test-core:
 	python3 -m pytest -q tests/core
+
+# Core without the tests marked slow (tests/pytest.ini), on Blender 4.5's Python: a check while editing.
+test-quick: env-bpy45
+	$(PY45) -m pytest -q -p no:cacheprovider -m "not slow" tests/core
 
 # The main job: a headless demo on a built-in default (noisy subdivided Suzanne), on Blender 4.5 only.
 demo: env-bpy45

@@ -1,9 +1,12 @@
-"""Work on row blocks of a sparse matrix, spread over CPU cores with threads.
+"""Spread NumPy and SciPy work over the CPU cores with threads: row blocks of a sparse matrix, and
+blocks of a range for element-wise work.
 
-SciPy's sparse kernels and NumPy's element-wise loops release the GIL, so plain threads run them in
-parallel. The rows are split into blocks of about equal non-zeros; every output row is computed by
-exactly the same loop as with one block, so results are bit-identical whatever the thread count.
-Small problems stay on one thread: below ~1M non-zeros the hand-off costs more than it saves.
+SciPy's sparse kernels and NumPy's element-wise loops, gathers and sorts release the GIL, so plain
+threads run them in parallel. Sparse rows are split into blocks of about equal non-zeros
+(``RowBlocks``), a range into contiguous blocks (``run_blocks``, ``run_chunks``); every block is
+computed by exactly the same code as the whole, so results are bit-identical whatever the thread
+count. Small problems stay on one thread: below ~1M non-zeros, or ~100k elements per thread, the
+hand-off costs more than it saves.
 
 ``HC_SMOOTH_THREADS`` (environment) caps the threads; 1 turns this off. (The sequential smoothers'
 passes run one task per coordinate, so they use three threads whenever threads are on.)
@@ -22,6 +25,7 @@ except ImportError:  # SciPy without the private kernel
     _csr_matvec = None
 
 MIN_WORK = 1_000_000  # non-zeros below which one thread is faster
+MIN_BLOCK = 100_000  # elements per thread below which the hand-off costs more than it saves
 _pool = None
 _pool_size = 0  # the pool's max_workers, kept here: ThreadPoolExecutor does not expose it
 _pool_lock = threading.Lock()
@@ -75,6 +79,32 @@ def in_background(task):
         if _background is None:
             _background = ThreadPoolExecutor(max_workers=1, thread_name_prefix="hc_smooth_background")
     return _background.submit(task)
+
+
+def _range_blocks(size, share=1.0):
+    """Contiguous (start, stop) blocks covering range(size), one per thread, each at least
+    ``share`` x MIN_BLOCK long (share < 1 for work that is heavy per element)."""
+    count = max(1, min(thread_count(), int(size // max(share * MIN_BLOCK, 1))))
+    bounds = [size * i // count for i in range(count + 1)]
+    return list(zip(bounds[:-1], bounds[1:]))
+
+
+def run_blocks(function, size, share=1.0):
+    """[function(start, stop) for each block of range(size)], the blocks run in parallel threads."""
+    return run_all([lambda part=part: function(*part) for part in _range_blocks(size, share)])
+
+
+def run_chunks(function, size, chunk, share=1.0):
+    """[function(start, stop) for consecutive chunks of at most ``chunk`` elements], in order (one
+    empty chunk for size 0): the chunks of each thread's block run one after another, so the
+    temporaries of element-wise work stay small and are reused instead of filling fresh memory."""
+
+    def block(first, last):
+        return [function(start, min(start + chunk, last)) for start in range(first, last, chunk)] or [
+            function(first, last)
+        ]
+
+    return [result for results in run_blocks(block, size, share) for result in results]
 
 
 def _row_blocks(indptr, count):

@@ -18,11 +18,6 @@ PRESET_SUBDIR = "hc_smooth"
 PRESET_ROOT = os.path.dirname(os.path.abspath(__file__))
 
 
-def shipped_preset_files():
-    folder = os.path.join(PRESET_ROOT, "presets", PRESET_SUBDIR)
-    return sorted(os.path.join(folder, name) for name in os.listdir(folder) if name.endswith(".py"))
-
-
 class HC_SMOOTH_MT_presets(bpy.types.Menu):
     bl_label = "HC Smooth Presets"
     bl_description = "Apply stored HC Smooth settings"

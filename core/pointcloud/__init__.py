@@ -9,18 +9,14 @@ from .noise import NoiseEstimate, estimate_noise
 from .rfs import RFSMesh, rfs_mesh
 from .sdg import surface_description_graph
 from .smooth import PointCloudReport, PointCloudSmoother, smooth_point_cloud
-from .spanning_tree import emst
-from .swap import swap_pass
 
 __all__ = [
     "NoiseEstimate",
     "PointCloudReport",
     "PointCloudSmoother",
     "RFSMesh",
-    "emst",
     "estimate_noise",
     "rfs_mesh",
     "smooth_point_cloud",
     "surface_description_graph",
-    "swap_pass",
 ]

@@ -3,8 +3,8 @@
 import numpy as np
 
 from ..adjacency import pairs_in_order
+from ..parallel import run_chunks
 from .sdg import unique_sorted
-from .threads import run_chunks
 
 SQRT3 = np.sqrt(3.0)
 _CHUNK = 1 << 16  # faces per piece of element-wise work: its temporaries stay small

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..adjacency import umbrella_operator
+from ..parallel import run_blocks, run_chunks
 from .geometry import (
     Incidence,
     face_normals,
@@ -26,7 +27,6 @@ from .geometry import (
     smallest_eigenvectors,
     triple_keys,
 )
-from .threads import run_blocks, run_chunks
 
 _CORONA_CHUNK = 1 << 15  # vertices per piece of the corona's work: its temporaries stay small
 _PAIR_BLOCK = 1 << 16  # incidences per block of _best_pairs

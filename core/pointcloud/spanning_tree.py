@@ -7,8 +7,8 @@ among nobody's k nearest). And csgraph drops zero-length edges between duplicate
 
 What we do instead is Borůvka's algorithm on the complete graph, with the kNN lists as a cache:
 
-* Duplicates are merged first; each extra copy is tied to its representative by a zero-length edge
-  (such edges are in every EMST).
+* Duplicates are merged first: the tree spans the distinct points (an extra copy joins it by a
+  zero-length edge to its representative; such edges are in every EMST).
 * Each round, every component C needs its shortest edge to another component (cut property: that
   edge is in an EMST). The kNN edges crossing components give a candidate of length best(C). The
   candidate is provably the shortest outgoing edge unless some point p of C has all k of its nearest
@@ -101,12 +101,6 @@ class NeighbourIndex:
     @property
     def n_points(self):
         return self.points.shape[0]
-
-    def duplicate_edges(self):
-        """Zero-length edges tying each extra copy (input index) to its representative's input index."""
-        representative = self.original[self.representative]
-        copies = np.flatnonzero(representative != np.arange(representative.size))
-        return np.stack([copies, representative[copies]], axis=1)
 
 
 def _spanning_forest(u, v, n_components):
@@ -395,21 +389,3 @@ def boruvka_emst(index):
         label = relabel[label].astype(np.int64)
     edges = np.stack([np.concatenate(tree_u), np.concatenate(tree_v)], axis=1)
     return edges, np.concatenate(tree_w)
-
-
-def emst(points, neighbours=12):
-    """Edges (n - 1, 2) of an exact Euclidean minimum spanning tree of ``points`` (n, 3).
-
-    Duplicate points are joined to their first copy by zero-length edges. ``neighbours`` is the size
-    of the kNN cache; the result is exact for any value >= 1, larger values can be faster on
-    irregular sampling.
-    """
-    from ..validation import check_positions, power_of_two_scale
-
-    points = check_positions(points, "points")
-    if isinstance(neighbours, bool) or not isinstance(neighbours, (int, np.integer)) or neighbours < 1:
-        raise ValueError(f"neighbours must be a whole number >= 1, got {neighbours!r}")
-    # Divided by a power of two (exact): the KD-tree's squared distances stay finite at any scale.
-    index = NeighbourIndex(points, int(neighbours), scale=power_of_two_scale(points, "points"))
-    edges, _ = boruvka_emst(index)
-    return np.concatenate([index.original[edges], index.duplicate_edges()]).astype(np.int64)

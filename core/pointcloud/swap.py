@@ -16,13 +16,13 @@ mesh the swap is applied to. The set is picked greedily by gain (a Luby-style in
 
 ``EdgeSwapper`` keeps the mesh's connectivity between passes (which incidence lies across each
 edge, the sorted edge keys) and updates it where swaps happened, so a pass only recomputes the
-geometry of the moved points; ``swap_pass`` is one pass on a fresh mesh.
+geometry of the moved points.
 """
 
 import numpy as np
 
+from ..parallel import run_chunks
 from .geometry import Incidence, dot_rows, face_normals
-from .threads import run_chunks
 
 _MIN_GAIN = 1e-9  # radians; ignores swaps that only win by rounding
 _CHUNK = 1 << 16  # elements per step within a thread: its temporaries stay in cache and get reused
@@ -268,11 +268,3 @@ def _replaced(keys, gone, new):
     keep[np.searchsorted(keys, gone)] = False
     kept = keys[keep]
     return np.insert(kept, np.searchsorted(kept, new), new)
-
-
-def swap_pass(points, faces, *, rounds=3):
-    """One pass of edge swapping. Returns (new faces, their edges, number of swaps); ``faces`` is
-    not modified."""
-    swapper = EdgeSwapper(faces, points.shape[0])
-    count = swapper.swap_pass(points, rounds=rounds)
-    return swapper.faces, swapper.edges, count

@@ -22,6 +22,7 @@ def test_every_make_target_a_reader_runs_is_in_the_readme():
         "demo",
         "test",
         "test-core",
+        "test-quick",
         "lint",
         "format",
         "build",

@@ -24,6 +24,13 @@ def ui_module(name=""):
     return importlib.import_module(f"{ADDON}.ui{name}")
 
 
+def shipped_preset_files():
+    """The preset files inside the installed extension."""
+    preset = ui_module(".preset")
+    folder = os.path.join(preset.PRESET_ROOT, "presets", preset.PRESET_SUBDIR)
+    return sorted(os.path.join(folder, name) for name in os.listdir(folder) if name.endswith(".py"))
+
+
 class RecordingLayout:
     """Stands in for bpy.types.UILayout: records every call; sub-layouts share the record."""
 
@@ -352,7 +359,7 @@ def apply_preset(path):
 
 
 def test_shipped_presets_apply_their_values(settings):
-    files = ui_module(".preset").shipped_preset_files()
+    files = shipped_preset_files()
     names = {os.path.basename(path) for path in files}
     assert {"Light_scan_noise.py", "Heavy_scan_noise.py"} <= names
     preset_settings = set(ui_module(".settings").PRESET_SETTINGS)
@@ -373,7 +380,7 @@ def test_shipped_presets_apply_their_values(settings):
 
 def test_presets_are_ordered_by_noise_strength():
     """Heavier noise: more iterations and a weaker pull to the (noisy) original points."""
-    by_name = {os.path.basename(p): preset_assignments(p) for p in ui_module(".preset").shipped_preset_files()}
+    by_name = {os.path.basename(p): preset_assignments(p) for p in shipped_preset_files()}
     light, heavy = by_name["Light_scan_noise.py"], by_name["Heavy_scan_noise.py"]
     assert heavy["iterations"] > light["iterations"] and heavy["alpha"] < light["alpha"]
 
@@ -397,7 +404,7 @@ def test_add_apply_and_remove_a_user_preset(settings):
 
 
 def test_shipped_presets_cannot_be_removed(settings):
-    path = ui_module(".preset").shipped_preset_files()[0]
+    path = shipped_preset_files()[0]
     name = os.path.splitext(os.path.basename(path))[0]
     assert bpy.ops.hc_smooth.preset_add(name=name, remove_name=True) == {"CANCELLED"}
     assert os.path.exists(path)

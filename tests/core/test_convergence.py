@@ -87,6 +87,7 @@ def test_two_vertex_mesh_converges_with_the_original_point():
     assert not np.allclose(limit[0], limit[1])  # a non-trivial limit, not a single point
 
 
+@pytest.mark.slow
 def test_simultaneous_and_sequential_laplacian_have_the_same_limit():
     """Section 3.1/5: both are iterative solvers of one linear system (here: boundary fixed, a harmonic patch)."""
     positions, faces = sm.grid(7, 6)

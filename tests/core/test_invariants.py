@@ -9,9 +9,10 @@ import small_meshes as sm
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from pointcloud_sets import noisy_sphere
+from pointcloud_stages import emst, swap_pass
 
 import core
-from core.pointcloud import emst, rfs_mesh, surface_description_graph, swap_pass
+from core.pointcloud import rfs_mesh, surface_description_graph
 from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
 
 
@@ -171,6 +172,7 @@ def test_every_input_layout_is_untouched_and_gives_the_contiguous_result(
             assert np.array_equal(bits(laid_out[name]), bits(value)), f"{name} was modified"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 @pytest.mark.parametrize("layout", LAYOUTS)
 def test_point_cloud_input_of_every_layout_is_untouched_and_gives_the_contiguous_result(layout, dtype):

@@ -52,6 +52,7 @@ def test_noise_estimate_recovers_the_true_noise(ratio):
     assert 1 <= amount.iterations <= noise.MAX_ITERATIONS
 
 
+@pytest.mark.slow
 def test_more_noise_more_iterations():
     vertices, faces = bumpy_sphere()
     edges = edges_of(faces)
@@ -61,6 +62,7 @@ def test_more_noise_more_iterations():
     assert chosen[0] < chosen[1] < chosen[2]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ratio", [0.05, 0.2, 0.8])
 def test_chosen_amount_is_near_the_best_number_of_iterations(ratio):
     """Within 10 % of the least error any number of iterations (alpha 0, beta 0.6) reaches, and better
@@ -224,6 +226,7 @@ def noisy_torus_grid(around=500, across=100, ratio=0.4, seed=0):
     return vertices + np.random.default_rng(seed).normal(0.0, noise_size, vertices.shape), edges
 
 
+@pytest.mark.slow
 def test_patches_estimate_the_trace_of_the_whole_mesh(monkeypatch):
     """On big meshes the probes run on patches; their inner vertices give the whole mesh's t(k), and
     the same amount. (Patches made to start small here, so that a test-sized mesh gets them.)"""

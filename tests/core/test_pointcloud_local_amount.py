@@ -53,6 +53,7 @@ def test_flat_part_gets_the_full_amount_thin_part_less():
     assert np.median(report.influence[thin]) < 0.01
 
 
+@pytest.mark.slow
 def test_thin_part_shrinks_less_and_flat_part_is_smoothed_as_before():
     points, flat, thin = flat_and_thin()
     local = core.smooth_point_cloud(points)
@@ -145,6 +146,7 @@ def test_sampled_fit_reads_the_curvature_through_noise():
     assert np.isfinite(sampled).all() and sampled.shape == plain.shape
 
 
+@pytest.mark.slow
 def test_large_noise_keeps_the_full_amount_on_a_gentle_surface(monkeypatch):
     """Noise of ~1.3 spacings on a sphere of ~90 spacings' radius: the first round leaves enough noise
     that the 16-neighbour fit gives many points a small share; the wider sampled fit does not, and the

@@ -7,13 +7,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from oracles import dihedral, dihedral_cos, face_quality, unique_faces
 from pointcloud_sets import noisy_sphere
+from pointcloud_stages import swap_pass
 from scipy.sparse.csgraph import connected_components
 
 from core.pointcloud.geometry import Incidence
 from core.pointcloud.rfs import keep_best_pairs, rfs_mesh
 from core.pointcloud.sdg import surface_description_graph
 from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
-from core.pointcloud.swap import EdgeSwapper, swap_pass
+from core.pointcloud.swap import EdgeSwapper
 
 
 def build_sdg(points, k=16, **options):
@@ -303,30 +304,32 @@ def test_rfs_mesh_swapper_state_on_a_noisy_sphere():
     assert np.array_equal(EdgeSwapper(mesh.faces, index.n_points, mesh.other, mesh.edges).other, fresh.other)
 
 
+@pytest.mark.slow
 def test_results_do_not_depend_on_the_thread_count(monkeypatch):
     import core
-    from core.pointcloud import threads
+    from core import parallel
 
     points = noisy_sphere(30_000, 0.01, seed=5)  # large enough to be split into blocks
-    monkeypatch.setattr(threads, "MIN_BLOCK", 1000)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 1000)
     widest = []
-    original_run_all = threads.run_all
+    original_run_all = parallel.run_all
 
     def recording_run_all(tasks):
         widest.append(len(tasks))
         return original_run_all(tasks)
 
-    monkeypatch.setattr(threads, "run_all", recording_run_all)
-    monkeypatch.setattr(threads, "thread_count", lambda: 1)
+    monkeypatch.setattr(parallel, "run_all", recording_run_all)
+    monkeypatch.setattr(parallel, "thread_count", lambda: 1)
     one = core.smooth_point_cloud(points, rounds=2)
     assert max(widest) == 1
     widest.clear()
-    monkeypatch.setattr(threads, "thread_count", lambda: 3)  # on any machine: the pool has the threads
+    monkeypatch.setattr(parallel, "thread_count", lambda: 3)  # on any machine: the pool has the threads
     three = core.smooth_point_cloud(points, rounds=2)
     assert max(widest) == 3  # the stages really were split
     assert np.array_equal(one, three)
 
 
+@pytest.mark.slow
 def test_pruning_rounds_equal_the_edge_by_edge_rule_in_any_order_within_a_round():
     # Reference: the paper's rule one edge at a time, in the order of the rounds (shuffled within
     # each round), with the best pair found by brute force from dihedral_cos.
@@ -492,12 +495,12 @@ def test_pruning_is_the_same_with_int64_incidence_numbers(monkeypatch):
 
 
 def test_corona_keys_give_the_unique_faces_of_the_candidates(monkeypatch):
-    from core.pointcloud import threads
+    from core import parallel
     from core.pointcloud.geometry import faces_of_keys
     from core.pointcloud.rfs import corona_faces
 
     index, tree, graph = build_sdg(noisy_sphere(4000, 0.01, seed=10))
-    monkeypatch.setattr(threads, "MIN_BLOCK", 100)  # several blocks when threads are on
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 100)  # several blocks when threads are on
     for gap in (np.pi, 2.0):
         expected = unique_faces(corona_faces(index.points, graph.edges, gap))
         parts = corona_faces(index.points, graph.edges, gap, keys=True)

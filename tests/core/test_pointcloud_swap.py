@@ -1,9 +1,11 @@
 """The edge swapper's chunked, threaded pass and its edge lookup against plain whole-array forms."""
 
 import numpy as np
+import pytest
 from pointcloud_sets import noisy_sphere
 
-from core.pointcloud import swap, threads
+from core import parallel
+from core.pointcloud import swap
 from core.pointcloud.rfs import rfs_mesh
 from core.pointcloud.sdg import surface_description_graph
 from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
@@ -26,13 +28,14 @@ def passes(index, mesh, count=3):
     return states
 
 
+@pytest.mark.slow
 def test_chunks_and_threads_give_the_one_block_result(monkeypatch):
     index, mesh = sphere_mesh(3000, seed=2)
     whole = passes(index, mesh)
     assert whole[0][0] > 0
     monkeypatch.setattr(swap, "_CHUNK", 7)  # chunk edges everywhere, and odd
-    monkeypatch.setattr(threads, "MIN_BLOCK", 100)
-    monkeypatch.setattr(threads, "thread_count", lambda: 3)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 100)
+    monkeypatch.setattr(parallel, "thread_count", lambda: 3)
     for (count, *state), (count_whole, *state_whole) in zip(passes(index, mesh), whole):
         assert count == count_whole
         assert all(np.array_equal(x, y) for x, y in zip(state, state_whole))

@@ -45,7 +45,7 @@ def test_row_blocks_cover_every_row_once():
 @pytest.mark.parametrize("threads", ["1", "3"])
 @pytest.mark.parametrize("size, chunk", [(0, 4), (1, 4), (10, 3), (10, 10), (250_000, 70_000)])
 def test_chunks_cover_the_range_in_order_each_at_most_chunk_long(monkeypatch, threads, size, chunk):
-    from core.pointcloud.threads import run_chunks
+    from core.parallel import run_chunks
 
     monkeypatch.setenv("HC_SMOOTH_THREADS", threads)
     parts = run_chunks(lambda start, stop: (start, stop), size, chunk)
