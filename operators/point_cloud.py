@@ -178,7 +178,8 @@ def lowest_alpha(settings):
     """The smallest alpha a run with these settings can use, before it has estimated the noise."""
     # getattr: the redo panel's draw() also runs on stand-ins that hold only some of the properties.
     automatic = getattr(settings, "auto_amount", True)
-    # With the automatic amount, alpha is 0.66 / steps >= matched_alpha(MAX_STEPS) > 0: only beta can leave the region.
+    # With the automatic amount, alpha is matched_alpha(steps) >= matched_alpha(MAX_STEPS) > 0: only beta can leave
+    # the region.
     return matched_alpha(MAX_STEPS) if automatic else settings.alpha
 
 
