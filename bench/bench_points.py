@@ -13,7 +13,7 @@ and wall time of the smoothing call (conversions to the peers' data structures e
     python bench/bench_points.py --emst 200x5000       # exact EMST of scan rings (rings x points per ring)
     python bench/bench_points.py --hc-steps 1M --repeat 3   # 66 HC steps alone, float32/64, with/without influence
     python bench/bench_points.py --sparse 1500         # sparse, nearly clean sphere (noise 0.1 x spacing)
-    python bench/bench_points.py --alpha 0.01 --iterations-per-round 22   # the previous fixed amount
+    python bench/bench_points.py --alpha 0.01 --iterations-per-round 22   # a fixed amount: 3 x 22 steps
 
 Our rows show the noise / spacing estimate r and the amount the run chose (rounds × steps, alpha).
 

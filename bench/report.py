@@ -1,4 +1,5 @@
-"""A benchmark's report: every line to stdout and to bench/results/<name>-<time>.md (git ignores the folder)."""
+"""A benchmark's report: every line to stdout and to bench/results/<name>-<time>.md (tracked by git, which
+ignores the JSON and NPZ files beside it)."""
 
 import pathlib
 import time

@@ -3,7 +3,8 @@
 Every iteration multiplies by the umbrella operator, which gathers the neighbours' positions. When
 neighbours sit close in memory (meshes from grids, subdivision, most exporters) those gathers hit
 the cache; when the numbering is scattered (some scanners, decimators and file converters) almost
-every gather misses, and a product gets many times slower (bench/README.md, "Random vertex order").
+every gather misses, and a product gets many times slower (bench/bench_core.py prints both orders;
+bench/results/2026-11-23-core-speed.md, "Random vertex order").
 For those meshes the simultaneous smoothers work in reverse Cuthill-McKee order (SciPy's csgraph),
 which puts neighbours close together, and hand the result back in the caller's order. The
 simultaneous update gives the same positions in any order (up to the rounding of each neighbour

@@ -120,7 +120,7 @@ class RowBlocks:
 
     Vectors are planar: one contiguous row per coordinate, shape (k, n) (or (n,) for one). SciPy's
     one-vector kernel on each coordinate row is faster than its multi-vector kernel on (n, k)
-    arrays (bench/README.md, "What makes the simultaneous mode fast").
+    arrays (bench/results/2026-11-23-core-speed.md, "What makes the simultaneous mode fast").
 
     ``run(task)`` calls ``task(block)`` for every block at once; ``block.rows`` is its slice of rows
     and ``block.neighbour_sums(x, combine)`` multiplies its rows of the 0/1 pattern by ``x``, leaving
@@ -171,7 +171,7 @@ class _Block:
 
         Row weights belong in ``combine``: the product then reads no values array, only the chunk's
         pattern and a short array of ones that stays in cache (a weighted matrix's values would be a
-        third of the memory traffic; bench/README.md, "no weighted matrix")."""
+        third of the memory traffic; bench/results/2026-11-23-core-speed.md, "no weighted matrix")."""
         x_rows = x.reshape(-1, x.shape[-1])
         ones = _ones(x.dtype, self._longest_chunk)
         buffer = np.empty((x_rows.shape[0], self._widest_chunk), dtype=x.dtype)

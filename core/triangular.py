@@ -8,8 +8,8 @@ back to the public function, which gives the same result more slowly.
 
 All coordinates go to SuperLU in one call, as the columns of one right-hand side. Threads would gain
 nothing, since SciPy lets one SuperLU call run at a time, and one call with three columns beats
-three calls because most of a call's cost is per row, not per non-zero (figures: bench/README.md,
-"The sequential mode and its 1.5× target").
+three calls because most of a call's cost is per row, not per non-zero (figures:
+bench/results/2026-11-23-core-speed.md, "The sequential mode and its 1.5× target").
 """
 
 import numpy as np

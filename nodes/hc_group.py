@@ -16,10 +16,10 @@ x_i + T x_i. HC per movable vertex, in the form of core/smoothing.py:
 T w is taken by writing w into the positions for a moment (q waits in a captured attribute, and s is
 taken again from it), so that both umbrellas read the edges' end positions (Edge Vertices) instead of
 gathering an attribute per edge end (Evaluate at Index), which costs two to three times as much
-(bench/README.md, "HC Smooth modifier"). The Laplacian with the original point (p = α o + (1-α) T q)
-runs in the same Repeat zone. Plain Laplacian (p = T q) and the central point (p = α q + (1-α) T q)
-need no o, so one Blur Attribute node runs all their iterations: with weight W_i on vertex i's
-neighbours, Blur gives (q_i + W_i Σ_j q_j) / (1 + W_i |adj(i)|), which is the central step for
+(bench/results/2026-11-25-modifier.md, "Where the time goes"). The Laplacian with the original point
+(p = α o + (1-α) T q) runs in the same Repeat zone. Plain Laplacian (p = T q) and the central point
+(p = α q + (1-α) T q) need no o, so one Blur Attribute node runs all their iterations: with weight W_i
+on vertex i's neighbours, Blur gives (q_i + W_i Σ_j q_j) / (1 + W_i |adj(i)|), which is the central step for
 W_i = (1-α) / (α |adj(i)|), the plain one as α -> 0, and q_i for W_i = 0.
 
 Fixed vertices (Fixed Group, Pin Boundary, and vertices without edges, as in core) keep q exactly:
@@ -27,8 +27,8 @@ they get Blur weight 0 and are left out of Set Position, and in HC take back the
 
 Painted influence λ (the Influence input, a vertex group's weights) is core's influence=: after each
 iteration a vertex takes q + λ (p - q) instead of p, q itself where λ = 0. For the Blur methods that
-is the central step with a per-vertex weight (see build()); the Repeat zone mixes p and q, and only
-when some vertex has λ < 1, so without a painted group the nodes compute what they did before.
+is the central step with a per-vertex weight (see build()); the Repeat zone mixes p and q only when
+some vertex has λ < 1, so without a painted group it evaluates the unweighted step alone.
 """
 
 import bpy
@@ -375,7 +375,7 @@ def _fill(group):
 
 def rebuild(group):
     """Replace the nodes and interface of ``group`` by this version's, keeping every modifier's input values
-    (by input name; inputs that no longer exist are dropped)."""
+    (by input name; inputs this version's interface lacks are dropped)."""
     from . import inputs
 
     users = [
@@ -407,5 +407,5 @@ def rebuild(group):
                 inputs.set_input(modifier, name, value)
                 if attribute:
                     inputs.set_input_attribute(modifier, name, attribute)
-            except (KeyError, AttributeError, TypeError, ValueError):  # gone, or of another type now
+            except (KeyError, AttributeError, TypeError, ValueError):  # absent here, or of another type
                 continue

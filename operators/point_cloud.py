@@ -172,7 +172,8 @@ def write(clouds, settings, context):
 
 def lowest_alpha(settings):
     """The smallest alpha a run with these settings can use, before it has estimated the noise."""
-    # With the automatic amount, alpha is 0.66 / steps >= matched_alpha(MAX_STEPS) > 0: only beta can leave the region.
+    # With the automatic amount, alpha is matched_alpha(steps) >= matched_alpha(MAX_STEPS) > 0: only beta can leave
+    # the region.
     return matched_alpha(MAX_STEPS) if settings.auto_amount else settings.alpha
 
 

@@ -13,7 +13,7 @@ curved parts keep the full amount, thin parts get a fraction of it. kappa is the
 principal curvature of a quadric height field fitted to the point and its nearest neighbours, on
 positions that one round of smoothing has already freed of most of the noise (on the noisy input
 the fit's curvature is mostly noise). Z0 and the form of w were chosen with
-bench/bench_quality_points.py (bench/README.md, "Quality on real scans (point clouds)").
+bench/bench_quality_points.py (bench/results/2026-11-25-point-cloud-quality.md).
 """
 
 import numpy as np

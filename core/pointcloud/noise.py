@@ -124,9 +124,10 @@ def estimate_noise(index):
 # reach has to grow with the noise over the spacing, r, so T grows as r^2, and alpha = PULL / T
 # keeps the pull from cancelling the extra steps. Too much reach on a nearly clean, sparse sample
 # flattens the surface between the samples and rounds sharp edges; too little leaves noise. Sweeps
-# of T with bench/bench_points.py (bench/README.md, "How the amount of smoothing is chosen") put the
-# best T between 300 r^2 and 1200 r^2 on smooth shapes and lower on sharp edges; we take the low end:
-# too few steps leave some noise, too many distort the shape.
+# of T with bench/bench_points.py (bench/results/2026-11-23-point-clouds.md, "How the amount of
+# smoothing is chosen") put the best T between 300 r^2 and 1200 r^2 on smooth shapes and lower on
+# sharp edges; the rule takes the low end: too few steps leave some noise, too many distort the shape.
+# The rule: T = STEPS_PER_RATIO_SQUARED r^2 within [MIN_STEPS, MAX_STEPS], alpha = PULL / T.
 STEPS_PER_RATIO_SQUARED = 300.0
 MIN_STEPS = 3  # one step per round at the default 3 rounds
 MAX_STEPS = 198  # bounds the cost: 3 rounds of 66 steps (reached at r = 0.81)

@@ -104,18 +104,17 @@ def smooth_point_cloud(
     return_mesh: also return a ``PointCloudReport`` holding the final RFS mesh, the noise estimate
     and the amount of smoothing that ran.
 
-    The amount of smoothing follows the data (core.pointcloud.noise): with the defaults
-    ``iterations_per_round="auto"`` and ``alpha="auto"`` the noise is estimated relative to the
-    sample spacing, r = sigma / h, and the run takes about 300 r^2 HC steps in all (3 to 198,
-    spread over the rounds) with alpha = 0.66 / steps, so that HC's pull to the originals stops it
-    about where the steps reach. Nearly clean, sparse samples get a few steps (1500 points on a
-    unit sphere with r = 0.1: 3 steps, alpha 0.22), noise of 0.8 spacings or more the full 198 steps
-    (alpha 0.0033). A number for either option is used as given (``iterations_per_round`` alone:
-    alpha matched to the total steps; ``alpha`` alone: the steps still follow the noise), e.g.
-    ``iterations_per_round=22, alpha=0.01`` for 66 steps over the default 3 rounds. beta 0.55 and
-    neighbours up to 2.5 local spacings were chosen with bench/bench_points.py (bench/README.md), as
-    was swapping between rounds rather than after every step as in the paper (nearly the same
-    result for a fraction of the swapping).
+    The amount of smoothing follows the data: with the defaults ``iterations_per_round="auto"`` and
+    ``alpha="auto"`` the noise is estimated relative to the sample spacing, r = sigma / h, and the
+    total HC steps (spread over the rounds) and alpha follow from r by the rule of
+    core.pointcloud.noise (``total_steps``, ``matched_alpha``): more steps and a weaker pull for
+    heavier noise, a few steps with a strong pull for nearly clean, sparse samples. A number for
+    either option is used as given (``iterations_per_round`` alone: alpha matched to the total steps;
+    ``alpha`` alone: the steps still follow the noise), e.g. ``iterations_per_round=22, alpha=0.01``
+    for 66 steps over the default 3 rounds. beta 0.55 and neighbours up to 2.5 local spacings were
+    chosen with bench/bench_points.py (bench/results/2026-11-23-point-clouds.md), as was swapping
+    between rounds rather than after every step as in the paper (nearly the same result for a
+    fraction of the swapping).
     The input is never modified. Exact duplicates move together; points the RFS mesh leaves without
     a face (isolated or unusable neighbourhoods) stay where they are.
     The unit does not matter: smoothing s * points gives s times the result (to rounding; bit for bit
