@@ -403,6 +403,13 @@ def emst(points, neighbours=12):
     Duplicate points are joined to their first copy by zero-length edges. ``neighbours`` is the size
     of the kNN cache; the result is exact for any value >= 1, larger values can be faster on
     irregular sampling.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> points = np.array([[0, 0, 0], [3, 0, 0], [1, 0, 0], [0, 0, 0]], dtype=float)
+    >>> sorted(sorted(edge) for edge in core.pointcloud.emst(points).tolist())  # point 3 copies point 0
+    [[0, 2], [0, 3], [1, 2]]
     """
     from ..validation import check_positions, power_of_two_scale
 
