@@ -28,9 +28,32 @@ def _exclusive_cumsum(counts, dtype):
 
 @dataclass(eq=False)
 class Umbrella:
-    """The pattern of adj(): row i lists all neighbours of i, increasing. The upper triangle (row i:
-    neighbours j > i, i.e. each edge once), which only the sequential smoothers need, is derived on
-    first use."""
+    """The pattern of adj(): row i lists all neighbours of i, increasing. Made by ``umbrella_operator``.
+
+    The upper triangle (row i: neighbours j > i, i.e. each edge once), which only the sequential
+    smoothers need, is derived on first use.
+
+    Attributes
+    ----------
+    n_vertices : int
+    degree : (n,) int ndarray
+        |adj(i)|.
+    indptr, indices : int ndarrays
+        The CSR pattern: the neighbours of i are ``indices[indptr[i]:indptr[i + 1]]``, increasing.
+    isolated : (n,) bool ndarray
+        Vertices without neighbours (fixed, paper section 2).
+    n_edges : int
+        Distinct edges.
+
+    Examples
+    --------
+    >>> import core
+    >>> umbrella = core.umbrella_operator([[0, 1], [1, 2], [2, 0], [1, 0], [3, 3]], 5)
+    >>> umbrella.n_edges, umbrella.degree.tolist(), umbrella.isolated.tolist()
+    (3, [2, 2, 2, 0, 0], [False, False, False, True, True])
+    >>> umbrella.indices[umbrella.indptr[1] : umbrella.indptr[2]].tolist()
+    [0, 2]
+    """
 
     n_vertices: int
     degree: np.ndarray  # |adj(i)|
@@ -75,7 +98,34 @@ class Umbrella:
 def umbrella_operator(edges: ArrayLike, n_vertices: int) -> Umbrella:
     """Build the umbrella structure of a mesh with ``n_vertices`` vertices from its undirected edges.
 
-    Order, direction and duplicates of ``edges`` do not matter; self-loops are ignored.
+    Build it once and pass it as ``operator=`` to every smoother that runs on the same mesh.
+
+    Parameters
+    ----------
+    edges : (m, 2) array_like of int
+        Vertex pairs. Order, direction and duplicates do not matter; self-loops are ignored.
+    n_vertices : int
+        Vertex count (vertices on no edge are isolated).
+
+    Returns
+    -------
+    Umbrella
+
+    Raises
+    ------
+    ValueError
+        ``edges`` not integer pairs of shape (m, 2), an index outside [0, n_vertices), or
+        ``n_vertices`` not a whole number >= 0.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> operator = core.umbrella_operator([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]], 4)
+    >>> operator.degree.tolist()
+    [3, 3, 3, 3]
+    >>> core.hc_smooth(positions, None, operator=operator, alpha=0.1, beta=0.6, iterations=1).shape
+    (4, 3)
     """
     if isinstance(n_vertices, bool) or not isinstance(n_vertices, (int, np.integer)) or n_vertices < 0:
         raise ValueError(f"n_vertices must be a whole number >= 0, got {n_vertices!r}")

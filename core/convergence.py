@@ -3,21 +3,88 @@ sentence for reports, short lines for panels)."""
 
 
 class ConvergenceWarning(UserWarning):
-    """HC was asked to run with (alpha, beta) outside the region where Theorem 5.2 proves convergence."""
+    """HC was asked to run with (alpha, beta) outside the region where Theorem 5.2 proves convergence.
+
+    The run goes on: few iterations outside the region are often harmless, and alpha = 0 is what the
+    Automatic Amount runs on purpose.
+
+    Examples
+    --------
+    >>> import warnings, numpy as np, core
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> edges = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     _ = core.hc_smooth(positions, edges, alpha=0.0, beta=0.6, iterations=3)
+    >>> [warning.category.__name__ for warning in caught]
+    ['ConvergenceWarning']
+    """
 
 
 class DivergenceError(ValueError):
-    """A run blew up (non-finite coordinates, or a bounding box many times the input's): nothing is
-    returned, so no caller can write the garbage. Only possible outside the convergence region."""
+    """A run blew up (non-finite coordinates, or a bounding box many times the input's).
+
+    Nothing is returned, so no caller can write the garbage; the input is untouched. Only possible
+    outside the convergence region. A ValueError: the arguments were unusable.
+
+    Examples
+    --------
+    A square is bipartite: HC with alpha = beta = 0 makes its corners swing further every step.
+
+    >>> import warnings, numpy as np, core
+    >>> square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.1]])
+    >>> edges = [[0, 1], [1, 2], [2, 3], [3, 0]]
+    >>> with warnings.catch_warnings(action="ignore"):
+    ...     core.hc_smooth(square, edges, alpha=0.0, beta=0.0, iterations=20)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+        ...
+    core.convergence.DivergenceError: HC with alpha 0 and beta 0 blew up after 20 iterations ...
+    """
 
 
 def in_convergence_region(alpha, beta):
-    """Theorem 5.2: the HC algorithm converges for alpha > 0 and beta > 0.5."""
+    """Whether HC is proven to converge with these weights: alpha > 0 and beta > 0.5 (Theorem 5.2).
+
+    Parameters
+    ----------
+    alpha, beta : float
+        HC's weights (see ``core.hc_smooth``).
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import core
+    >>> core.in_convergence_region(0.1, 0.6), core.in_convergence_region(0.0, 0.6)
+    (True, False)
+    """
     return alpha > 0.0 and beta > 0.5
 
 
 def convergence_message(alpha, beta):
-    """A sentence for users about where (alpha, beta) lies; None inside the proven region."""
+    """A sentence for users about where (alpha, beta) lies outside the proven region.
+
+    Parameters
+    ----------
+    alpha, beta : float
+        HC's weights (see ``core.hc_smooth``).
+
+    Returns
+    -------
+    str or None
+        What is outside the region and why it matters; None inside it.
+
+    Examples
+    --------
+    >>> import core
+    >>> print(core.convergence_message(0.1, 0.6))
+    None
+    >>> print(core.convergence_message(0.1, 0.4))  # doctest: +NORMALIZE_WHITESPACE
+    HC is proven to converge only for alpha > 0 and beta > 0.5 (paper, Theorem 5.2): beta 0.4 is not
+    above 0.5; many iterations may drift or oscillate
+    """
     if in_convergence_region(alpha, beta):
         return None
     reasons = []

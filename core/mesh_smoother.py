@@ -59,6 +59,15 @@ class MeshReport:
         The deviation limit the run kept to (0: none).
     seconds : float
         Wall time of the whole run.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> edges = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]
+    >>> _, report = core.smooth_mesh(positions, edges, iterations=5, return_report=True)
+    >>> report.method, report.alpha, report.beta, report.iterations, report.amount
+    ('hc', 0.1, 0.6, 5, None)
     """
 
     method: str

@@ -1,5 +1,14 @@
 """What a smoothing run changed: how far vertices moved (largest, RMS, and on average along the normals:
-the shrinkage the paper is about), the bounding box and, for closed meshes, the enclosed volume."""
+the shrinkage the paper is about), the bounding box and, for closed meshes, the enclosed volume.
+
+Examples
+--------
+>>> import numpy as np, core
+>>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+>>> faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+>>> round(core.measure_change(positions, positions * 1.1, faces=faces).volume_change, 4)
+0.331
+"""
 
 import math
 from dataclasses import dataclass
@@ -15,6 +24,22 @@ from .volume import vertex_normals
 
 @dataclass(frozen=True)
 class Change:
+    """What a smoothing run changed, as ``measure_change`` finds it; ``summary()`` says it in a line.
+
+    Lengths are in the positions' units, relative changes are fractions (0.01: one per cent).
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    >>> change = core.measure_change(positions, positions * 1.1, faces=faces)
+    >>> change.summary()
+    '3 of 4 vertices moved, largest move 5.77% (0.1), RMS 5.00% (0.0866), along the normals +4.33% (+0.075), volume +33.10%'
+    >>> change.closed, round(change.volume_change, 4), round(change.bbox_change, 4)
+    (True, 0.331, 0.1)
+    """
+
     n_vertices: int
     moved: int  # vertices whose position differs at all
     mean_displacement: float
@@ -71,9 +96,29 @@ def _rms(lengths):
 def fan_triangles(faces):
     """Triangles (t, 3) of a fan from each face's first corner (triangles come back as they are, no copy).
 
-    ``faces``: an (f, k) integer array, a list of faces (vertex index sequences, of any sizes), or a pair
-    (offsets, corner_verts) as Blender stores polygons
-    (offsets of length f + 1: face i has corners corner_verts[offsets[i]:offsets[i + 1]]).
+    Parameters
+    ----------
+    faces : (f, k) array_like of int, list of sequences, or (offsets, corner_verts)
+        An (f, k) integer array, a list of faces (vertex index sequences, of any sizes), or a pair
+        (offsets, corner_verts) as Blender stores polygons (offsets of length f + 1: face i has
+        corners corner_verts[offsets[i]:offsets[i + 1]]).
+
+    Returns
+    -------
+    (t, 3) int ndarray
+
+    Raises
+    ------
+    ValueError
+        Faces of fewer than three corners, or offsets that do not fit ``corner_verts``.
+
+    Examples
+    --------
+    >>> from core import metrics
+    >>> metrics.fan_triangles([[0, 1, 2, 3]]).tolist()
+    [[0, 1, 2], [0, 2, 3]]
+    >>> metrics.fan_triangles(([0, 3, 7], [0, 1, 2, 0, 2, 3, 4])).tolist()
+    [[0, 1, 2], [0, 2, 3], [0, 3, 4]]
     """
     if isinstance(faces, list) and len({len(face) for face in faces}) > 1:  # a list of faces of mixed sizes
         faces = (np.cumsum([0] + [len(face) for face in faces]), np.concatenate(faces))
@@ -119,13 +164,43 @@ def _indices(array):
 
 
 def enclosed_volume(positions, triangles):
-    """Signed volume by the divergence theorem (positive for outward-facing normals)."""
+    """Signed volume by the divergence theorem (positive for outward-facing normals).
+
+    Parameters
+    ----------
+    positions : (n, 3) float ndarray
+    triangles : (t, 3) int ndarray
+        A closed surface (see ``fan_triangles`` for other faces).
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core import metrics
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> round(float(metrics.enclosed_volume(positions, triangles)), 4)
+    0.1667
+    """
     return enclosed_volumes(triangles, positions)[0]
 
 
 def enclosed_volumes(triangles, *position_sets):
     """The signed volume of each set of (n, 3) positions on the same triangles: one pass over the
-    triangles each, in the positions' own precision."""
+    triangles each, in the positions' own precision.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core import metrics
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> [round(float(v), 4) for v in metrics.enclosed_volumes(triangles, positions, 2 * positions)]
+    [0.1667, 1.3333]
+    """
     corners = _corner_columns(triangles)
     frame = _Frame.of(position_sets[0] if position_sets else np.zeros((0, 3)))
     return [frame.volume(points, corners) for points in position_sets]
@@ -226,8 +301,9 @@ def _cubes_are_safe(length, dtype):
 
 @dataclass(frozen=True)
 class InputMeasure:
-    """What a report needs of a run's input, measured once: ``measure_change`` takes it so that a caller
-    can measure the input while the run starts (on another thread) and only the result afterwards."""
+    """What a report needs of a run's input, measured once (``measure_input``): ``measure_change`` takes
+    it so that a caller can measure the input while the run starts (on another thread) and only the
+    result afterwards."""
 
     n_vertices: int
     diagonal: float
@@ -239,7 +315,20 @@ class InputMeasure:
 
 
 def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> InputMeasure:
-    """The input's side of ``measure_change`` (same arguments, without ``after``)."""
+    """The input's side of ``measure_change`` (same arguments, without ``after``).
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> from core import metrics
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    >>> measured = metrics.measure_input(positions, faces)
+    >>> measured.closed, measured.n_vertices
+    (True, 4)
+    >>> core.measure_change(positions, positions * 1.1, measured=measured).summary()
+    '3 of 4 vertices moved, largest move 5.77% (0.1), RMS 5.00% (0.0866), along the normals +4.33% (+0.075), volume +33.10%'
+    """
     before = check_positions(before, "before")
     closed = closed if faces is not None else False
     corners = normals = None
@@ -266,11 +355,40 @@ def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> 
 def measure_change(
     before: ArrayLike, after: ArrayLike, faces=None, closed: bool | None = None, measured: InputMeasure | None = None
 ) -> Change:
-    """Compare a smoothing result with its input (both (n, 3)); ``faces`` as for ``fan_triangles``.
+    """Compare a smoothing result with its input: displacements, bounding box and, closed, volume.
 
-    ``closed``: whether the faces form a closed, consistently oriented surface, when the caller already
-    knows (Blender's edge data tells it cheaply); None checks it here. ``measured``: ``measure_input``
-    of the same before, faces and closed, if the caller has it (then those are not looked at again).
+    Parameters
+    ----------
+    before, after : (n, 3) array_like of float32 or float64
+        The input and the result, vertex for vertex.
+    faces : optional
+        As for ``fan_triangles``; needed for the volume.
+    closed : bool, optional
+        Whether the faces form a closed, consistently oriented surface, when the caller already knows
+        (Blender's edge data tells it cheaply); None checks it here.
+    measured : InputMeasure, optional
+        ``measure_input`` of the same before, faces and closed, if the caller has it (then those are
+        not looked at again).
+
+    Returns
+    -------
+    Change
+
+    Raises
+    ------
+    ValueError
+        Shapes that differ or are not (n, 3), NaN or infinite coordinates, faces that refer to
+        vertices that do not exist.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    >>> core.measure_change(positions, positions * 1.1, faces=faces).summary()
+    '3 of 4 vertices moved, largest move 5.77% (0.1), RMS 5.00% (0.0866), along the normals +4.33% (+0.075), volume +33.10%'
+    >>> core.measure_change(positions, positions * 1.1).summary()  # no faces: no volume
+    '3 of 4 vertices moved, largest move 5.77% (0.1), RMS 5.00% (0.0866)'
     """
     before, after = check_positions(before, "before"), check_positions(after, "after")
     if before.shape != after.shape:

@@ -4,12 +4,18 @@ and the HC algorithm (section 4, Algorithm 1), each simultaneous (Jacobi) or seq
 Notation as in the paper: o original points, q current points (start of an iteration), p new points.
 Every iteration is a few sparse products over all vertices at once; fixed vertices (and vertices
 without neighbours, section 2) are copied through unchanged, so they stay bit-identical.
+
+``Smoothing`` declares and checks every argument; ``smooth`` runs it to the end, and ``hc_smooth`` and
+``laplacian_smooth`` are ``smooth`` with the method fixed. The arguments they share are described
+once, below, and put into each docstring.
 """
 
+import inspect
 import math
 import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import TypedDict, Unpack
 
 import numpy as np
 import scipy.sparse as sp
@@ -37,16 +43,146 @@ MODES = ("simultaneous", "sequential")
 
 
 class Cancelled(Exception):
-    """Raised when the progress callback returns False; the input positions are untouched."""
+    """Raised when a progress callback returns False; the input positions are untouched.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> edges = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]
+    >>> try:
+    ...     core.hc_smooth(positions, edges, alpha=0.1, beta=0.6, iterations=10, progress=lambda done, total: done < 3)
+    ... except core.Cancelled as stop:
+    ...     print(stop)
+    cancelled after 3 of 10 iterations
+    """
 
 
 @dataclass(frozen=True)
 class SmoothResult:
-    positions: np.ndarray  # same shape and dtype as the input
-    iterations: int  # iterations actually run
-    stopped_early: bool  # the tolerance was reached before ``iterations``
+    """What ``smooth`` and ``Smoothing.result`` return.
+
+    Attributes
+    ----------
+    positions : ndarray
+        The smoothed positions, same shape and dtype as the input.
+    iterations : int
+        Iterations actually run.
+    stopped_early : bool
+        The tolerance was reached before ``iterations``.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> edges = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]
+    >>> result = core.smooth(positions, edges, alpha=0.1, beta=0.6, iterations=1000, tolerance=1e-6)
+    >>> result.positions.shape, result.iterations, bool(result.stopped_early)
+    ((4, 3), 10, True)
+    """
+
+    positions: np.ndarray
+    iterations: int
+    stopped_early: bool
 
 
+class SmoothingOptions(TypedDict, total=False):
+    """The types of what ``Smoothing`` takes besides the arrays, the method and its numbers, for the
+    ``**options`` that ``smooth`` passes on to it (described in ``Smoothing``'s docstring)."""
+
+    mode: str
+    fixed: ArrayLike | None
+    tolerance: float
+    original: ArrayLike | None
+    operator: Umbrella | None
+    influence: ArrayLike | None
+    max_deviation: float
+
+
+class SmoothOptions(SmoothingOptions, total=False):
+    """``SmoothingOptions`` and ``smooth``'s progress callback: what ``hc_smooth`` and
+    ``laplacian_smooth`` pass on to ``smooth``."""
+
+    progress: Callable[[int, int], bool | None] | None
+
+
+# The shared arguments, described once: _documented puts each entry where a docstring says {name}.
+_DOCS = {
+    "arrays": """\
+positions : (n, 3) array_like of float32 or float64
+    Vertex positions; never modified. The result has the same shape and dtype.
+edges : (m, 2) array_like of int, or None
+    Vertex pairs, undirected: order, direction and duplicates do not matter, self-loops are
+    ignored. adj(i) is the set of vertices sharing an edge with i. Not read when ``operator`` is
+    given (pass None).""",
+    "numbers": """\
+method : {"hc", "plain", "central", "original"}, default "hc"
+    HC (paper section 4, Algorithm 1) or a Laplacian variant: plain (3.1), with the central
+    point (3.2), with the original point (3.3). See `METHODS`.
+alpha : float in [0, 1], default 0.0
+    Weight of the original point o_i (``"hc"``, ``"original"``) or of the current point q_i
+    (``"central"``); ``"plain"`` does not use it.
+beta : float in [0, 1], default 0.5
+    HC's weight of a vertex's own difference b_i against its neighbours' mean difference
+    (``"hc"`` only).
+iterations : int >= 0
+    How many iterations to run (fewer when ``tolerance`` stops the run).""",
+    "options": """\
+mode : {"simultaneous", "sequential"}, default "simultaneous"
+    ``"simultaneous"`` is the paper's Algorithm 1 (Jacobi). ``"sequential"`` is Gauss–Seidel:
+    vertices in increasing index order, each average using the already-updated positions of its
+    lower-index neighbours (for HC the Laplacian pass; the correction uses the b of the whole pass).
+fixed : (n,) bool mask or array_like of vertex indices, optional
+    Vertices that never move (bit-identical). Vertices without neighbours are fixed too (paper
+    section 2).
+tolerance : float >= 0, default 0.0
+    Stop once the largest move of an iteration is below ``tolerance`` times the bounding-box
+    diagonal of ``positions`` (0: always run ``iterations``).
+original : (n, 3) array_like, optional
+    The paper's original points o when they differ from ``positions`` (a run that goes on from
+    another one's result); default ``positions``.
+operator : Umbrella, optional
+    A prebuilt ``umbrella_operator(edges, n)``, reused across runs; ``edges`` is then not read.
+influence : (n,) array_like of float in [0, 1], optional
+    Per-vertex share of each iteration's move (a painted vertex group): vertex i ends an
+    iteration at q_i + w_i (p_i - q_i). 0 stays bit-identical; 1 (or None) is the paper's step.
+max_deviation : float >= 0, default 0.0
+    The deviation limit: the farthest any vertex may end an iteration from its input position, in
+    the positions' units (every iteration ends with a projection onto that ball); 0: no limit, the
+    paper's algorithm.""",
+    "progress": """\
+progress : callable, optional
+    ``progress(done, total)`` is called after each iteration; returning False stops the run and
+    raises `Cancelled`.""",
+    "raises": """\
+ValueError
+    Bad input, with a message saying what to fix: wrong shapes, NaN or infinite coordinates,
+    indices out of range, alpha or beta outside [0, 1], negative iterations, an unknown method or
+    mode.
+DivergenceError
+    The run blew up (only possible outside the convergence region); nothing is returned.""",
+}
+
+
+def _documented(thing):
+    """``thing`` with each {name} of its docstring replaced by the entries _DOCS[name]."""
+    if thing.__doc__:  # None under python -OO
+        text = inspect.cleandoc(thing.__doc__)  # Python 3.13 dedents docstrings itself, 3.11 does not
+        for name, entries in _DOCS.items():
+            text = text.replace("{" + name + "}", entries)
+        thing.__doc__ = text
+    return thing
+
+
+def _check_names(options, accepted, function):
+    """Raise the TypeError Python raises for a keyword argument that ``function`` does not take: its
+    ``**options`` accept the names of the TypedDict ``accepted``."""
+    for name in options:
+        if name not in accepted.__optional_keys__:
+            raise TypeError(f"{function}() got an unexpected keyword argument {name!r}")
+
+
+@_documented
 def smooth(
     positions: ArrayLike,
     edges: ArrayLike | None,
@@ -55,23 +191,51 @@ def smooth(
     alpha: float = 0.0,
     beta: float = 0.5,
     iterations: int,
-    mode: str = "simultaneous",
-    fixed: ArrayLike | None = None,
-    tolerance: float = 0.0,
-    original: ArrayLike | None = None,
-    operator: Umbrella | None = None,
     progress: Callable[[int, int], bool | None] | None = None,
-    influence: ArrayLike | None = None,
-    max_deviation: float = 0.0,
+    **options: Unpack[SmoothingOptions],
 ) -> SmoothResult:
-    """Run one of the smoothers and report how many iterations ran. See ``hc_smooth`` for the arguments.
+    """Run one of the smoothers to the end and say how many iterations ran.
 
-    ``method`` is ``"hc"`` or a Laplacian variant (``"plain"``, ``"central"``, ``"original"``);
-    ``alpha`` weights q (central) or o (original, hc); ``beta`` is HC's weight of b_i in d_i.
-    ``max_deviation``: the farthest any vertex may end an iteration from its input position, in the
-    positions' units (each iteration ends with a projection onto that ball); 0 = no limit.
-    Raises ``DivergenceError`` instead of returning a result that is not finite or has blown up.
+    The common entry point of ``hc_smooth`` and ``laplacian_smooth``: ``Smoothing`` run at once.
+
+    Parameters
+    ----------
+    {arrays}
+    {numbers}
+    {progress}
+
+    Other Parameters
+    ----------------
+    {options}
+
+    Returns
+    -------
+    SmoothResult
+        The new positions, the iterations that ran and whether the tolerance stopped the run.
+
+    Raises
+    ------
+    {raises}
+    Cancelled
+        ``progress`` returned False.
+
+    Warns
+    -----
+    ConvergenceWarning
+        HC outside the region where it is proven to converge (alpha > 0 and beta > 0.5).
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> edges = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]
+    >>> result = core.smooth(positions, edges, method="central", alpha=0.5, iterations=1)
+    >>> result.positions.round(3).tolist()
+    [[0.167, 0.167, 0.167], [0.5, 0.167, 0.167], [0.167, 0.5, 0.167], [0.167, 0.167, 0.5]]
+    >>> result.iterations, bool(result.stopped_early)
+    (1, False)
     """
+    _check_names(options, SmoothingOptions, "smooth")
     run = Smoothing(
         positions,
         edges,
@@ -79,14 +243,8 @@ def smooth(
         alpha=alpha,
         beta=beta,
         iterations=iterations,
-        mode=mode,
-        fixed=fixed,
-        tolerance=tolerance,
-        original=original,
-        operator=operator,
-        influence=influence,
-        max_deviation=max_deviation,
         stacklevel=4,
+        **options,
     )
     if progress is None:
         run.advance()
@@ -103,11 +261,58 @@ def smooth(
 BLOW_UP_FACTOR = 10.0
 
 
+@_documented
 class Smoothing:
-    """One smoothing run, advanced in slices: ``advance(k)`` runs up to k more iterations, ``result()``
-    hands the positions back. ``smooth`` is ``advance()`` once; a caller that shows progress advances
-    in chunks and gets the same result bit for bit (the tolerance is measured against the input's
-    bounding box whatever the chunk). Arguments as for ``smooth``; everything is checked here."""
+    """One smoothing run, advanced in slices.
+
+    Every argument is checked on construction. ``advance(k)`` runs up to k more iterations and
+    ``result()`` hands the positions back; ``smooth`` is ``advance()`` once. A caller that shows
+    progress advances in chunks and gets the same result bit for bit (the tolerance is measured
+    against the input's bounding box whatever the chunk).
+
+    Parameters
+    ----------
+    {arrays}
+    {numbers}
+    {options}
+    stacklevel : int, default 2
+        Where a `ConvergenceWarning` points, as in `warnings.warn` (2: the caller).
+
+    Attributes
+    ----------
+    iterations : int
+        The most iterations the run does (0 when no vertex can move).
+    done : int
+        Iterations run so far.
+    stopped_early : bool
+        The tolerance stopped the run.
+    finished : bool
+        Nothing is left to run.
+
+    Raises
+    ------
+    {raises}
+
+    Warns
+    -----
+    ConvergenceWarning
+        HC outside the region where it is proven to converge (alpha > 0 and beta > 0.5).
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> edges = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]
+    >>> run = core.Smoothing(positions, edges, alpha=0.1, beta=0.6, iterations=10)
+    >>> run.advance(4), run.done, run.finished
+    (4, 4, False)
+    >>> [round(fraction, 1) for fraction in run.steps(chunk=3)]
+    [0.7, 1.0]
+    >>> result = run.result()
+    >>> at_once = core.hc_smooth(positions, edges, alpha=0.1, beta=0.6, iterations=10)
+    >>> result.iterations, bool(np.array_equal(result.positions, at_once))
+    (10, True)
+    """
 
     def __init__(
         self,
@@ -326,6 +531,7 @@ def _planar(points, order=None):
     return np.take(points.T, order, axis=1)
 
 
+@_documented
 def hc_smooth(
     positions: ArrayLike,
     edges: ArrayLike | None,
@@ -333,44 +539,76 @@ def hc_smooth(
     alpha: float,
     beta: float,
     iterations: int,
-    mode: str = "simultaneous",
-    fixed: ArrayLike | None = None,
-    tolerance: float = 0.0,
-    original: ArrayLike | None = None,
-    operator: Umbrella | None = None,
-    progress: Callable[[int, int], bool | None] | None = None,
-    influence: ArrayLike | None = None,
+    **options: Unpack[SmoothOptions],
 ) -> np.ndarray:
-    """The HC algorithm (paper, Algorithm 1); returns the new positions, same shape and dtype.
+    """Smooth a mesh with the HC algorithm (paper section 4, Algorithm 1).
 
-    positions: (n, 3) float32/float64, never modified. edges: (m, 2) vertex pairs, undirected.
-    fixed: boolean mask or vertex indices that never move. mode: "simultaneous" (Algorithm 1) or
-    "sequential" (Gauss–Seidel in increasing index order for the Laplacian pass). tolerance: stop once
-    the largest move of an iteration is below tolerance × bounding-box diagonal. original: the o of
-    the paper when it differs from ``positions``. operator: a prebuilt ``umbrella_operator`` (then
-    ``edges`` is not read). progress(done, total) is called after each iteration; False cancels.
-    influence: per-vertex weights in [0, 1] (a painted vertex group): after each iteration a vertex
-    moves by its weight times the paper's move, q_i + w_i (p_i - q_i); 0 stays bit-identical, 1 (or
-    None) is the paper's step.
-    Converges for alpha > 0 and beta > 0.5 (Theorem 5.2); elsewhere it runs and warns.
+    Each iteration moves every vertex to the mean of its neighbours (p), then pushes it back by
+    its own and its neighbours' differences b = p - (alpha o + (1 - alpha) q). ``smooth`` with
+    ``method="hc"``.
+
+    Parameters
+    ----------
+    {arrays}
+    alpha : float in [0, 1]
+        Pull towards the original points o.
+    beta : float in [0, 1]
+        Weight of a vertex's own difference b_i against its neighbours' mean difference.
+    iterations : int >= 0
+        How many iterations to run.
+
+    Other Parameters
+    ----------------
+    {options}
+    {progress}
+
+    Returns
+    -------
+    ndarray
+        The new positions, same shape and dtype as ``positions``.
+
+    Raises
+    ------
+    {raises}
+    Cancelled
+        ``progress`` returned False.
+
+    Warns
+    -----
+    ConvergenceWarning
+        alpha = 0 or beta <= 0.5: HC is proven to converge only for alpha > 0 and beta > 0.5
+        (Theorem 5.2); it runs, but many iterations may drift.
+
+    See Also
+    --------
+    laplacian_smooth : the Laplacian variants, which shrink.
+    smooth_mesh : the pipeline the operators run (chooses the amount, keeps the volume).
+
+    Examples
+    --------
+    A noisy 5 x 5 plate: HC takes the noise out and keeps the plate's width, plain Laplacian
+    smoothing shrinks it.
+
+    >>> import numpy as np, core
+    >>> u, v = np.meshgrid(range(5), range(5))
+    >>> edges = [(i, i + 1) for i in range(25) if i % 5 < 4] + [(i, i + 5) for i in range(20)]
+    >>> noisy = np.c_[u.ravel(), v.ravel(), np.random.default_rng(0).normal(scale=0.1, size=25)]
+    >>> smoothed = core.hc_smooth(noisy, edges, alpha=0.1, beta=0.6, iterations=10)
+    >>> plain = core.laplacian_smooth(noisy, edges, iterations=10)
+    >>> [round(float(np.ptp(p[:, 0])), 2) for p in (noisy, smoothed, plain)]  # width
+    [4.0, 3.67, 0.94]
+    >>> bool(np.abs(smoothed[:, 2]).max() < np.abs(noisy[:, 2]).max())
+    True
+    >>> border = [0, 1, 2, 3, 4]
+    >>> pinned = core.hc_smooth(noisy, edges, alpha=0.1, beta=0.6, iterations=10, fixed=border)
+    >>> bool(np.array_equal(pinned[border], noisy[border]))
+    True
     """
-    return smooth(
-        positions,
-        edges,
-        method="hc",
-        alpha=alpha,
-        beta=beta,
-        iterations=iterations,
-        mode=mode,
-        fixed=fixed,
-        tolerance=tolerance,
-        original=original,
-        operator=operator,
-        progress=progress,
-        influence=influence,
-    ).positions
+    _check_names(options, SmoothOptions, "hc_smooth")
+    return smooth(positions, edges, method="hc", alpha=alpha, beta=beta, iterations=iterations, **options).positions
 
 
+@_documented
 def laplacian_smooth(
     positions: ArrayLike,
     edges: ArrayLike | None,
@@ -378,31 +616,60 @@ def laplacian_smooth(
     variant: str = "plain",
     alpha: float = 0.0,
     iterations: int,
-    mode: str = "simultaneous",
-    fixed: ArrayLike | None = None,
-    tolerance: float = 0.0,
-    original: ArrayLike | None = None,
-    operator: Umbrella | None = None,
-    progress: Callable[[int, int], bool | None] | None = None,
-    influence: ArrayLike | None = None,
+    **options: Unpack[SmoothOptions],
 ) -> np.ndarray:
-    """Laplacian smoothing: variant "plain" (3.1), "central" (3.2, alpha weights q_i) or "original"
-    (3.3, alpha weights o_i). Other arguments as for ``hc_smooth``."""
+    """Smooth a mesh with a Laplacian variant of the paper's section 3.
+
+    Each iteration moves every vertex towards the mean m_i of its neighbours: to m_i (``"plain"``,
+    3.1), to alpha q_i + (1 - alpha) m_i (``"central"``, 3.2) or to alpha o_i + (1 - alpha) m_i
+    (``"original"``, 3.3). ``smooth`` with ``method=variant``.
+
+    Parameters
+    ----------
+    {arrays}
+    variant : {"plain", "central", "original"}, default "plain"
+        Which Laplacian.
+    alpha : float in [0, 1], default 0.0
+        Weight of the current point q_i (``"central"``) or of the original point o_i
+        (``"original"``); ``"plain"`` does not use it.
+    iterations : int >= 0
+        How many iterations to run.
+
+    Other Parameters
+    ----------------
+    {options}
+    {progress}
+
+    Returns
+    -------
+    ndarray
+        The new positions, same shape and dtype as ``positions``.
+
+    Raises
+    ------
+    {raises}
+    Cancelled
+        ``progress`` returned False.
+
+    See Also
+    --------
+    hc_smooth : HC, which takes noise out without the shrinking.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> edges = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]
+    >>> core.laplacian_smooth(positions, edges, iterations=1).round(3).tolist()
+    [[0.333, 0.333, 0.333], [0.0, 0.333, 0.333], [0.333, 0.0, 0.333], [0.333, 0.333, 0.0]]
+    >>> core.laplacian_smooth(positions, edges, iterations=1, fixed=[0]).round(3).tolist()[0]
+    [0.0, 0.0, 0.0]
+    >>> core.laplacian_smooth(positions, edges, variant="central", alpha=0.5, iterations=1).round(3).tolist()[1]
+    [0.5, 0.167, 0.167]
+    """
+    _check_names(options, SmoothOptions, "laplacian_smooth")
     variant = check_choice(variant, "variant", METHODS[1:])
-    return smooth(
-        positions,
-        edges,
-        method=variant,
-        alpha=alpha,
-        iterations=iterations,
-        mode=mode,
-        fixed=fixed,
-        tolerance=tolerance,
-        original=original,
-        operator=operator,
-        progress=progress,
-        influence=influence,
-    ).positions
+    return smooth(positions, edges, method=variant, alpha=alpha, iterations=iterations, **options).positions
 
 
 class _Step:

@@ -9,13 +9,43 @@ import scipy.sparse as sp
 
 
 def faces_per_edge(n_edges, corner_edges):
-    """How many face corners start on each edge (two for an edge inside a surface, one on a border)."""
+    """How many face corners start on each edge (two for an edge inside a surface, one on a border).
+
+    Examples
+    --------
+    >>> from core import topology
+    >>> topology.faces_per_edge(4, [0, 1, 2, 0, 2, 3]).tolist()
+    [2, 1, 2, 1]
+    """
     return np.bincount(corner_edges, minlength=n_edges)
 
 
 def closed_from_corners(edges, corner_verts, corner_edges):
     """Whether the faces form a closed, consistently oriented surface: every edge of a face is in exactly
-    two faces, which run along it in opposite directions (loose edges do not matter)."""
+    two faces, which run along it in opposite directions (loose edges do not matter).
+
+    Parameters
+    ----------
+    edges : (m, 2) int ndarray
+    corner_verts, corner_edges : (c,) int ndarrays
+        Per face corner, its vertex and the edge to the next corner of its face (Blender's layout).
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core import topology
+    >>> edges = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]])
+    >>> corner_verts = np.array([0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3])  # a tetrahedron, 4 triangles
+    >>> corner_edges = np.array([1, 3, 0, 0, 4, 2, 2, 5, 1, 3, 5, 4])  # each corner's edge to the next
+    >>> topology.closed_from_corners(edges, corner_verts, corner_edges)
+    True
+    >>> topology.closed_from_corners(edges, corner_verts[:9], corner_edges[:9])  # one face less
+    False
+    """
     if corner_verts.size == 0 or len(edges) == 0:
         return False
     # Key 2e + 1 marks a corner running along edge e from its first vertex, 2e one running against it:
@@ -30,14 +60,36 @@ def closed_from_corners(edges, corner_verts, corner_edges):
 
 
 def boundary_vertices(n_vertices, edges, corner_edges):
-    """Vertices on an open boundary: on an edge used by exactly one face (edges without faces don't count)."""
+    """Vertices on an open boundary: on an edge used by exactly one face (edges without faces don't count).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core import topology
+    >>> edges = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]])
+    >>> corner_verts = np.array([0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3])  # a tetrahedron, 4 triangles
+    >>> corner_edges = np.array([1, 3, 0, 0, 4, 2, 2, 5, 1, 3, 5, 4])  # each corner's edge to the next
+    >>> topology.boundary_vertices(4, edges, corner_edges[:9]).tolist()  # without the face (1, 2, 3)
+    [False, True, True, True]
+    """
     mask = np.zeros(n_vertices, dtype=bool)
     mask[edges[faces_per_edge(len(edges), corner_edges) == 1].ravel()] = True
     return mask
 
 
 def closed_from_triangles(triangles):
-    """Every directed edge of the (t, 3) triangles is matched by exactly one in the opposite direction."""
+    """Every directed edge of the (t, 3) triangles is matched by exactly one in the opposite direction.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core import topology
+    >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> topology.closed_from_triangles(triangles), topology.closed_from_triangles(triangles[:3])
+    (True, False)
+    >>> topology.closed_from_triangles(triangles[[0, 1, 2, 3, 3]])  # a face twice
+    False
+    """
     if triangles.size == 0:
         return False
     heads = triangles.ravel()

@@ -22,7 +22,17 @@ _BLOCK = 1 << 18  # triangles per block: bounds the temporaries
 
 
 def vertex_normals(positions, triangles):
-    """Area-weighted unit vertex normals of a triangle mesh (zero where no face touches a vertex)."""
+    """Area-weighted unit vertex normals of a triangle mesh (zero where no face touches a vertex).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core import volume
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> volume.vertex_normals(positions, triangles).round(3).tolist()
+    [[-0.577, -0.577, -0.577], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    """
     n = positions.shape[0]
     a, b, c = (positions[triangles[:, k]] for k in range(3))
     face = _cross(b - a, c - a)
@@ -78,6 +88,19 @@ def restore_volume(before, after, triangles, movable=None):
 
     ``triangles`` (t, 3) of a closed, consistently oriented mesh; ``movable`` a boolean mask (default:
     every vertex). A part without movable vertices, or with no volume, is left as it is.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core import metrics, volume
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> shrunk = 0.9 * positions + 0.025
+    >>> restored, offsets = volume.restore_volume(positions, shrunk, triangles)
+    >>> [round(float(metrics.enclosed_volume(p, triangles)), 4) for p in (positions, shrunk, restored)]
+    [0.1667, 0.1215, 0.1667]
+    >>> offsets.round(4).tolist()  # one part, moved this far along its normals
+    [0.0642]
     """
     before = np.asarray(before, dtype=np.float64)
     result = np.array(after, dtype=np.float64)

@@ -35,6 +35,16 @@ _INT32_LIMIT = 2**31  # incidence and edge numbers below this are handled as int
 
 @dataclass(frozen=True)
 class RFSMesh:
+    """A triangle mesh over points, made by ``rfs_mesh``: a carrier of neighbourhoods (faces may cross).
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> mesh = core.pointcloud.RFSMesh(faces=np.array([[0, 1, 2]]), edges=np.array([[0, 1], [0, 2], [1, 2]]))
+    >>> mesh.faces.shape, mesh.other is None
+    ((1, 3), True)
+    """
+
     faces: np.ndarray  # (f, 3) vertex indices
     edges: np.ndarray  # (e, 2) the edges of the faces, each once
     # Incidence 3*f + j (the edge of face f opposite its vertex j): the incidence across that edge, -1
@@ -294,7 +304,39 @@ def _prune(points, faces, normals=None, settled=None):
 
 
 def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
-    """Build the RFS mesh of ``points`` (n, 3) float64 from graph ``edges`` (m, 2)."""
+    """Build the RFS mesh of ``points`` (n, 3) float64 from graph ``edges`` (m, 2).
+
+    Parameters
+    ----------
+    points : (n, 3) float64 ndarray
+    edges : (m, 2) int ndarray
+        The surface description graph (``surface_description_graph``).
+    min_quality : float in [0, 1], default 0.3
+        Faces below this Bank & Smith quality are deleted.
+    max_gap : float, default pi
+        Consecutive neighbours further apart than this angle around a point make no face.
+
+    Returns
+    -------
+    RFSMesh
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
+    >>> rng = np.random.default_rng(0)
+    >>> sphere = rng.normal(size=(500, 3))
+    >>> sphere /= np.linalg.norm(sphere, axis=1, keepdims=True)
+    >>> index = NeighbourIndex(sphere, 16)  # distinct points, KD-tree, 16 nearest neighbours
+    >>> tree, _ = boruvka_emst(index)  # the EMST's edges, as rows of index
+    >>> graph = core.pointcloud.surface_description_graph(index, tree, spacing_factor=2.5)
+    >>> mesh = core.pointcloud.rfs_mesh(index.points, graph.edges)
+    >>> mesh.faces.shape[1], np.unique(mesh.faces).size  # triangles over all but one of the 500 points
+    (3, 499)
+    >>> sides = np.sort(mesh.faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    >>> int(np.unique(sides, axis=0, return_counts=True)[1].max())  # no edge in more than two faces
+    2
+    """
     n = points.shape[0]
     # int32 while the mesh is built when the vertex numbers fit (half the memory), int64 as the mesh's.
     index = np.int32 if n < _INT32_LIMIT else np.int64

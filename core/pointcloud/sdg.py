@@ -98,7 +98,42 @@ def reach_gap_problem(spacing_factor, gap_factor, names=("spacing_factor", "gap_
 
 
 def surface_description_graph(index, emst_edges, *, spacing_factor=3.0, gap_factor=3.0):
-    """The SDG of the distinct points of ``index`` given their EMST (rows of ``index``)."""
+    """The SDG of the distinct points of ``index`` given their EMST (rows of ``index``).
+
+    Parameters
+    ----------
+    index : core.pointcloud.spanning_tree.NeighbourIndex
+        The distinct points and their nearest neighbours.
+    emst_edges : (n - 1, 2) int ndarray
+        Their Euclidean minimum spanning tree, as rows of ``index``.
+    spacing_factor, gap_factor : float, default 3.0
+        The rule of the module docstring; 0 < spacing_factor <= gap_factor.
+
+    Returns
+    -------
+    SurfaceGraph
+        ``edges`` (each once, low < high), the local spacing h per point, EMST edges kept and cut.
+
+    Raises
+    ------
+    ValueError
+        ``spacing_factor`` not in (0, gap_factor].
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> from core.pointcloud.spanning_tree import NeighbourIndex, boruvka_emst
+    >>> rng = np.random.default_rng(0)
+    >>> sphere = rng.normal(size=(500, 3))
+    >>> sphere /= np.linalg.norm(sphere, axis=1, keepdims=True)
+    >>> index = NeighbourIndex(sphere, 16)  # distinct points, KD-tree, 16 nearest neighbours
+    >>> tree, _ = boruvka_emst(index)  # the EMST's edges, as rows of index
+    >>> graph = core.pointcloud.surface_description_graph(index, tree, spacing_factor=2.5)
+    >>> graph.emst_kept, graph.emst_cut  # one closed surface: no gap to cut
+    (499, 0)
+    >>> bool(graph.edges.shape[0] > 4 * 500)  # about a dozen neighbours per point
+    True
+    """
     if not spacing_factor > 0:
         raise ValueError(f"spacing_factor must be above 0, got {spacing_factor}")
     problem = reach_gap_problem(spacing_factor, gap_factor)

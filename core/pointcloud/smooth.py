@@ -29,7 +29,21 @@ from .swap import EdgeSwapper
 
 @dataclass
 class PointCloudReport:
-    """What the run built and did (returned with ``return_mesh=True``)."""
+    """What a point-cloud run built and did (``smooth_point_cloud(..., return_mesh=True)``).
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> rng = np.random.default_rng(0)
+    >>> sphere = rng.normal(size=(500, 3))
+    >>> sphere /= np.linalg.norm(sphere, axis=1, keepdims=True)
+    >>> noisy = sphere * rng.normal(1.0, 0.03, size=(500, 1))
+    >>> _, report = core.smooth_point_cloud(noisy, return_mesh=True)
+    >>> report.n_distinct, report.mesh.faces.shape[1], len(report.swaps)  # a swap pass between rounds
+    (500, 3, 2)
+    >>> bool(report.noise.sigma > 0), report.rounds * report.iterations_per_round > 0
+    (True, True)
+    """
 
     mesh: RFSMesh  # final RFS mesh, vertex indices of the input points (first copy of duplicates)
     n_distinct: int
@@ -89,21 +103,59 @@ def smooth_point_cloud(
     progress: Callable[[int, int], bool | None] | None = None,
     return_mesh: bool = False,
 ) -> np.ndarray | tuple[np.ndarray, PointCloudReport]:
-    """Smooth ``points`` (n, 3) float32/float64 and return the moved points (same shape and dtype).
+    """Smooth a bare point cloud with HC through its RFS mesh (paper section 7).
 
-    alpha, beta: HC weights (converges for alpha > 0, beta > 0.5). rounds: how many times to run
-    ``iterations_per_round`` HC steps, with a pass of edge swapping in between (``swap=False``
-    keeps the first RFS mesh). fixed: boolean mask or point indices that never move. neighbours: size of the
-    nearest-neighbour lists the SDG chooses from; spacing_factor, gap_factor: the SDG rule (see
-    core.pointcloud.sdg). min_quality: Bank & Smith threshold for RFS faces, in [0, 1].
-    local_amount: with the automatic amount (``iterations_per_round="auto"``), from the second round on
-    each point takes a share of every step's move that follows its curvature against the noise
-    (core.pointcloud.local_amount): thin parts and sharp rims get fewer effective steps than flat
-    parts. False, or explicit steps: every point takes every step in full.
-    progress(done, total) is called after each round; returning False raises ``Cancelled``.
-    return_mesh: also return a ``PointCloudReport`` holding the final RFS mesh, the noise estimate
-    and the amount of smoothing that ran.
+    Parameters
+    ----------
+    points : (n, 3) array_like of float32 or float64
+        The points; never modified. The result has the same shape and dtype.
+    alpha : float in [0, 1] or "auto", default "auto"
+        HC's pull towards the original points (see Notes for ``"auto"``).
+    beta : float in [0, 1], default 0.55
+        HC's weight of a point's own difference. HC converges for alpha > 0 and beta > 0.5.
+    rounds : int >= 0, default 3
+        How many times to run ``iterations_per_round`` HC steps, with a pass of edge swapping in
+        between.
+    iterations_per_round : int >= 1 or "auto", default "auto"
+        HC steps per round (see Notes for ``"auto"``).
+    fixed : (n,) bool mask or array_like of point indices, optional
+        Points that never move.
+    neighbours : int >= 2, default 16
+        Size of the nearest-neighbour lists the SDG chooses from.
+    spacing_factor, gap_factor : float > 0, default 2.5 and 3.0
+        The SDG rule (see core.pointcloud.sdg); ``spacing_factor`` must not exceed ``gap_factor``.
+    min_quality : float in [0, 1], default 0.3
+        Bank & Smith threshold for RFS faces.
+    swap : bool, default True
+        Swap edges between rounds; False keeps the first RFS mesh.
+    local_amount : bool, default True
+        With the automatic amount (``iterations_per_round="auto"``), from the second round on each
+        point takes a share of every step's move that follows its curvature against the noise
+        (core.pointcloud.local_amount): thin parts and sharp rims get fewer effective steps than
+        flat parts. False, or explicit steps: every point takes every step in full.
+    progress : callable, optional
+        ``progress(done, total)`` is called after each round; returning False raises `Cancelled`.
+    return_mesh : bool, default False
+        Also return a `PointCloudReport` holding the final RFS mesh, the noise estimate and the
+        amount of smoothing that ran.
 
+    Returns
+    -------
+    ndarray, or (ndarray, PointCloudReport) with ``return_mesh``
+        The moved points, same shape and dtype as ``points``.
+
+    Raises
+    ------
+    ValueError
+        Bad arguments, or coordinates whose largest magnitude lies outside what the dtype holds at
+        full precision (float64: about 2.2e-308 to 1.1e307), before any work.
+    DivergenceError
+        The run blew up (only possible outside HC's convergence region).
+    Cancelled
+        ``progress`` returned False.
+
+    Notes
+    -----
     The amount of smoothing follows the data: with the defaults ``iterations_per_round="auto"`` and
     ``alpha="auto"`` the noise is estimated relative to the sample spacing, r = sigma / h, and the
     total HC steps (spread over the rounds) and alpha follow from r by the rule of
@@ -115,11 +167,33 @@ def smooth_point_cloud(
     chosen with bench/bench_points.py (bench/results/2026-11-23-point-clouds.md), as was swapping
     between rounds rather than after every step as in the paper (nearly the same result for a
     fraction of the swapping).
+
     The input is never modified. Exact duplicates move together; points the RFS mesh leaves without
     a face (isolated or unusable neighbourhoods) stay where they are.
     The unit does not matter: smoothing s * points gives s times the result (to rounding; bit for bit
     when s is a power of two). Coordinates whose largest magnitude lies outside what the dtype holds
     at full precision (float64: about 2.2e-308 to 1.1e307) raise ValueError before any work.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> rng = np.random.default_rng(0)
+    >>> sphere = rng.normal(size=(500, 3))
+    >>> sphere /= np.linalg.norm(sphere, axis=1, keepdims=True)
+    >>> noisy = sphere * rng.normal(1.0, 0.03, size=(500, 1))  # radial noise
+    >>> smoothed, report = core.smooth_point_cloud(noisy, return_mesh=True)
+    >>> def spread(points):
+    ...     return float(np.linalg.norm(points, axis=1).std())
+    >>> bool(spread(smoothed) < spread(noisy) / 1.5), smoothed.shape == noisy.shape
+    (True, True)
+    >>> report.rounds, report.automatic
+    (3, ('alpha', 'iterations_per_round'))
+
+    The automatic amount for a noise of 0.1 and of 0.82 sample spacings:
+
+    >>> from core.pointcloud import noise
+    >>> [(noise.total_steps(r), round(noise.matched_alpha(noise.total_steps(r)), 4)) for r in (0.1, 0.82)]
+    [(3, 0.22), (198, 0.0033)]
     """
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable progress(done, total) or None")
@@ -148,9 +222,28 @@ class PointCloudSmoother:
     that shows progress and lets Esc cancel): checks everything on construction, then ``steps()``
     yields the fraction of the run done after each stage and round, as core.Smoothing.steps does
     (``stage`` names the stage just finished, ``rounds_done`` counts the rounds); once the generator
-    is exhausted ``result`` and ``report`` are set. ``alpha`` and ``iterations_per_round`` hold "auto" until the
-    first stage has estimated
-    the noise, then the values in use. Abandoning the generator leaves the input untouched."""
+    is exhausted ``result`` and ``report`` are set. ``alpha`` and ``iterations_per_round`` hold
+    "auto" until the first stage has estimated the noise, then the values in use. Abandoning the
+    generator leaves the input untouched.
+
+    Parameters are those of ``smooth_point_cloud`` without ``progress`` and ``return_mesh``.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> rng = np.random.default_rng(0)
+    >>> sphere = rng.normal(size=(500, 3))
+    >>> sphere /= np.linalg.norm(sphere, axis=1, keepdims=True)
+    >>> noisy = sphere * rng.normal(1.0, 0.03, size=(500, 1))
+    >>> run = core.pointcloud.PointCloudSmoother(noisy)
+    >>> stages = [(run.stage, round(fraction, 2)) for fraction in run.steps()]
+    >>> stages[:4]
+    [('neighbours', 0.14), ('emst', 0.29), ('sdg', 0.43), ('rfs', 0.57)]
+    >>> stages[-1], run.rounds_done
+    (('round', 1.0), 3)
+    >>> bool(np.array_equal(run.result, core.smooth_point_cloud(noisy)))
+    True
+    """
 
     def __init__(
         self,
