@@ -34,8 +34,12 @@ class Change:
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
     >>> change = core.measure_change(positions, positions * 1.1, faces=faces)
-    >>> change.summary()
-    '3 of 4 vertices moved, largest move 5.77% (0.1), RMS 5.00% (0.0866), along the normals +4.33% (+0.075), volume +33.10%'
+    >>> print(*change.summary().split(", "), sep="\n")
+    3 of 4 vertices moved
+    largest move 5.77% (0.1)
+    RMS 5.00% (0.0866)
+    along the normals +4.33% (+0.075)
+    volume +33.10%
     >>> change.closed, round(change.volume_change, 4), round(change.bbox_change, 4)
     (True, 0.331, 0.1)
     """
@@ -326,8 +330,12 @@ def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> 
     >>> measured = metrics.measure_input(positions, faces)
     >>> measured.closed, measured.n_vertices
     (True, 4)
-    >>> core.measure_change(positions, positions * 1.1, measured=measured).summary()
-    '3 of 4 vertices moved, largest move 5.77% (0.1), RMS 5.00% (0.0866), along the normals +4.33% (+0.075), volume +33.10%'
+    >>> print(*core.measure_change(positions, positions * 1.1, measured=measured).summary().split(", "), sep="\n")
+    3 of 4 vertices moved
+    largest move 5.77% (0.1)
+    RMS 5.00% (0.0866)
+    along the normals +4.33% (+0.075)
+    volume +33.10%
     """
     before = check_positions(before, "before")
     closed = closed if faces is not None else False
@@ -385,8 +393,12 @@ def measure_change(
     >>> import numpy as np, core
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
-    >>> core.measure_change(positions, positions * 1.1, faces=faces).summary()
-    '3 of 4 vertices moved, largest move 5.77% (0.1), RMS 5.00% (0.0866), along the normals +4.33% (+0.075), volume +33.10%'
+    >>> print(*core.measure_change(positions, positions * 1.1, faces=faces).summary().split(", "), sep="\n")
+    3 of 4 vertices moved
+    largest move 5.77% (0.1)
+    RMS 5.00% (0.0866)
+    along the normals +4.33% (+0.075)
+    volume +33.10%
     >>> core.measure_change(positions, positions * 1.1).summary()  # no faces: no volume
     '3 of 4 vertices moved, largest move 5.77% (0.1), RMS 5.00% (0.0866)'
     """
