@@ -34,7 +34,7 @@ class Change:
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
     >>> change = core.measure_change(positions, positions * 1.1, faces=faces)
-    >>> print(*change.summary().split(", "), sep="\n")
+    >>> print(*change.summary().split(", "), sep="\\n")
     3 of 4 vertices moved
     largest move 5.77% (0.1)
     RMS 5.00% (0.0866)
@@ -330,7 +330,7 @@ def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> 
     >>> measured = metrics.measure_input(positions, faces)
     >>> measured.closed, measured.n_vertices
     (True, 4)
-    >>> print(*core.measure_change(positions, positions * 1.1, measured=measured).summary().split(", "), sep="\n")
+    >>> print(*core.measure_change(positions, positions * 1.1, measured=measured).summary().split(", "), sep="\\n")
     3 of 4 vertices moved
     largest move 5.77% (0.1)
     RMS 5.00% (0.0866)
@@ -393,7 +393,7 @@ def measure_change(
     >>> import numpy as np, core
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
-    >>> print(*core.measure_change(positions, positions * 1.1, faces=faces).summary().split(", "), sep="\n")
+    >>> print(*core.measure_change(positions, positions * 1.1, faces=faces).summary().split(", "), sep="\\n")
     3 of 4 vertices moved
     largest move 5.77% (0.1)
     RMS 5.00% (0.0866)
