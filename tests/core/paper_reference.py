@@ -19,9 +19,11 @@ def _mean(points):
     return [sum(p[k] for p in points) / len(points) for k in range(3)]
 
 
-def smooth_loop(positions, edges, *, method, alpha=0.0, beta=0.5, iterations, mode="simultaneous", fixed=()):
+def smooth_loop(positions, edges, *, method, alpha=0.0, beta=0.5, iterations, mode="simultaneous", fixed=(), adj=None):
+    """``adj``: a list of neighbour sets, one per vertex, used instead of the one ``edges`` give (a
+    directed adjacency: j in adj[i] without i in adj[j])."""
     n = len(positions)
-    adj = adjacency(n, edges)
+    adj = adjacency(n, edges) if adj is None else [set(int(j) for j in a) for a in adj]
     fixed = set(int(i) for i in fixed) | {i for i in range(n) if not adj[i]}  # section 2
     o = [[float(c) for c in p] for p in positions]
     p = [list(v) for v in o]
