@@ -21,8 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import volume
+from . import volume, welding
 from .adjacency import Umbrella, umbrella_operator
+from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
 from .mesh_amount import AmountChooser, MeshAmount
 from .metrics import fan_triangles
@@ -111,6 +112,8 @@ class MeshSmoother:
         fixed: ArrayLike | None = None,
         influence: ArrayLike | None = None,
         operator: Umbrella | None = None,
+        weld: bool = False,
+        border: str = "free",
     ) -> None:
         self.positions = start = check_positions(positions)
         n = start.shape[0]
@@ -127,11 +130,19 @@ class MeshSmoother:
             operator = umbrella_operator(edges, n)
         elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
             raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
-        self.operator = operator
         self.fixed = check_fixed(fixed, n)
         self.influence = check_influence(influence, n)
         self.faces = None if faces is None else fan_triangles(faces)
         self._closed = closed
+        # Coincident vertices run as one welded vertex (core.welding); the result is scattered back.
+        self.welding = welding.weld(start, operator) if weld else None
+        if self.welding is not None:
+            self.positions, operator = self.welding.positions(), self.welding.operator(operator)
+            self.fixed, self.influence = self.welding.fixed(self.fixed), self.welding.influence(self.influence)
+            if self.faces is not None:
+                self.faces, self._closed = self.welding.triangles(self.faces), None  # closed as welded
+        self.border = check_choice(border, "border", BORDERS)
+        self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed)
         # Checks every number now (a Smoothing is cheap to make: the heavy parts are built on first use).
         self._smoothing(self.alpha, self.beta, self.iterations)
         self.result = None
@@ -190,7 +201,7 @@ class MeshSmoother:
         offset = 0.0
         if self.automatic and self.closed():
             result, offset = self._keep_volume(result)
-        self.result = result
+        self.result = result if self.welding is None else self.welding.scatter(result)
         self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, time.perf_counter() - start)
         yield 1.0
 
@@ -245,6 +256,14 @@ def smooth_mesh(
         Vertices that never move.
     influence : (n,) floats in [0, 1], optional
         Each vertex moves by this share of each iteration's move (0 stays bit-identical).
+    weld : bool
+        Smooth coincident vertices (equal, or within 1e-6 of the median edge length apart: UV seams,
+        triangle soups, STL) as one vertex (core.welding): they move alike, a soup like its welded mesh.
+        The result still has every vertex. A welded vertex is fixed if any of its copies is, and takes
+        the least influence of its copies; the faces (and whether they are closed) are taken as welded.
+    border : {"free", "curve", "fixed"}
+        Open-border vertices (on an edge of one face) average all their neighbours (the paper's
+        algorithm), follow their border as a curve, or stay (core.borders). "curve" and "fixed" need faces.
     return_report : bool
         Also return a MeshReport (what ran, what was chosen).
     progress : callable, optional
