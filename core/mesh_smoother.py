@@ -134,6 +134,7 @@ class MeshSmoother:
         self.influence = check_influence(influence, n)
         self.faces = None if faces is None else fan_triangles(faces)
         self._closed = closed
+        self.border = check_choice(border, "border", BORDERS)
         # Coincident vertices run as one welded vertex (core.welding); the result is scattered back.
         self.welding = welding.weld(start, operator) if weld else None
         if self.welding is not None:
@@ -141,7 +142,6 @@ class MeshSmoother:
             self.fixed, self.influence = self.welding.fixed(self.fixed), self.welding.influence(self.influence)
             if self.faces is not None:
                 self.faces, self._closed = self.welding.triangles(self.faces), None  # closed as welded
-        self.border = check_choice(border, "border", BORDERS)
         self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed)
         # Checks every number now (a Smoothing is cheap to make: the heavy parts are built on first use).
         self._smoothing(self.alpha, self.beta, self.iterations)
