@@ -22,6 +22,11 @@ of one vertex (% of the diagonal); the RMS distance to the clean scan, border an
 
     .envs/bench/bin/python bench/bench_borders.py                      # 3 scans x 3 noises x 4 rules, ~3 min
     .envs/bench/bin/python bench/bench_borders.py --scans face --noises 0 --rules free,curve
+    .envs/bench/bin/python bench/bench_borders.py --timing 1M   # the cost of welding and borders instead
+
+``--timing N``: on a noisy torus of N vertices, its triangle soup (about N vertices, one sixth of them
+welded) and the torus cut open (two border loops), the time of core.welding.weld alone and of
+core.smooth_mesh (alpha 0.1, beta 0.6, 10 iterations) under each rule, best of ``--repeats``.
 """
 
 import argparse
@@ -35,6 +40,7 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
 import bench_quality_inputs as inputs  # noqa: E402
+import meshes  # noqa: E402
 from report import Report  # noqa: E402
 
 import core  # noqa: E402
@@ -157,12 +163,58 @@ def measure(scan, noisy, result):
     )
 
 
+def best_time(repeats, function, *args, **kwargs):
+    """The least wall time of ``repeats`` calls of function(*args, **kwargs)."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function(*args, **kwargs)
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def timing(out, size, repeats):
+    """The cost of welding and of the border rules at ``size`` vertices."""
+    vertices, faces = meshes.torus(size)
+    vertices = meshes.add_noise(vertices, 0.002)
+    small_vertices, small_faces = meshes.torus(size // 6)
+    soup, soup_faces = small_vertices[small_faces].reshape(-1, 3), np.arange(small_faces.size).reshape(-1, 3)
+    centroid = vertices[faces].mean(axis=1)
+    cut = faces[~((centroid[:, 0] > 0.0) & (np.abs(centroid[:, 1]) < 0.02))]  # a slice out of the ring
+    cases = [
+        ("torus (closed)", vertices, faces),
+        ("triangle soup", soup, soup_faces),
+        ("torus cut open", vertices, cut),
+    ]
+    out(f"Timing, best of {repeats}: core.smooth_mesh(alpha=0.1, beta=0.6, iterations=10), seconds\n")
+    out("| mesh | vertices | border vertices | weld() alone | free | weld | curve | fixed |")
+    out("|---|---|---|---|---|---|---|---|")
+    for name, points, triangles in cases:
+        edges = meshes.edges_from_faces(triangles)
+        operator = core.umbrella_operator(edges, len(points))
+        weld_seconds = best_time(repeats, core.welding.weld, points, operator)
+        border = len(np.unique(core.borders.border_edges(triangles, len(points))))
+        cells = [name, f"{len(points):,}", f"{border:,}", f"{weld_seconds:.2f}"]
+        for rule in RULES.values():
+            options = dict(faces=triangles, alpha=0.1, beta=0.6, iterations=10, **rule)
+            cells.append(f"{best_time(repeats, core.smooth_mesh, points, edges, **options):.2f}")
+        out("| " + " | ".join(cells) + " |")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--scans", default=None, help="comma-separated: face, bunny10k, stanford_bunny (default all)")
     parser.add_argument("--noises", default="0,0.001,0.0025", help="noise along the normals, fractions of the diagonal")
     parser.add_argument("--rules", default=",".join(RULES))
+    parser.add_argument("--timing", default=None, help="vertex count (e.g. 1M): time welding and the rules instead")
+    parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
+    if args.timing:
+        size = int(float(args.timing.upper().replace("M", "e6").replace("K", "e3")))
+        with Report("bench_borders_timing") as out:
+            out(f"`{' '.join(['bench/bench_borders.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
+            timing(out, size, args.repeats)
+        return
     files = scan_files()
     names = inputs.parse_list(args.scans) if args.scans else list(files)
     with Report("bench_borders") as out:

@@ -18,23 +18,36 @@ other than ``"free"`` raises ValueError rather than silently smoothing as if the
 import numpy as np
 import scipy.sparse as sp
 
+from .adjacency import pairs_in_order
+
 BORDERS = ("free", "curve", "fixed")
 
 
 def border_edges(triangles, n_vertices):
-    """(m, 2) vertex pairs (low, high) of the edges in exactly one of the (t, 3) ``triangles``. The
-    diagonals of a fan-triangulated face lie in two of its triangles, so they never count."""
-    pairs = np.asarray(triangles)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    low, high = pairs.min(axis=1), pairs.max(axis=1)
+    """(m, 2) vertex pairs (low, high), sorted, of the edges in exactly one of the (t, 3) ``triangles``.
+    The diagonals of a fan-triangulated face lie in two of its triangles, so they never count."""
+    triangles = np.asarray(triangles)
+    index = np.int32 if n_vertices < np.iinfo(np.int32).max else np.int64
+    heads = np.concatenate([triangles[:, 0], triangles[:, 1], triangles[:, 2]]).astype(index, copy=False)
+    tails = np.concatenate([triangles[:, 1], triangles[:, 2], triangles[:, 0]]).astype(index, copy=False)
+    low, high = np.minimum(heads, tails), np.maximum(heads, tails)
+    del heads, tails
     proper = low != high  # a degenerate triangle's collapsed side is no edge
-    counts = sp.coo_matrix(
-        (np.ones(np.count_nonzero(proper), dtype=np.int32), (low[proper], high[proper])),
-        shape=(n_vertices, n_vertices),
-    ).tocsr()
-    counts.sum_duplicates()
-    once = counts.data == 1
-    rows = np.repeat(np.arange(n_vertices, dtype=counts.indices.dtype), np.diff(counts.indptr))
-    return np.stack([rows[once], counts.indices[once]], axis=1)
+    if not proper.all():
+        low, high = low[proper], high[proper]
+    # Sides sorted by (low, high) in O(sides) (core.adjacency.pairs_in_order), or by SciPy's coo -> csr.
+    placed = pairs_in_order(low, high, n_vertices, np.ones(low.size, dtype=np.int8))
+    if placed is None:
+        counts = sp.coo_matrix((np.ones(low.size, np.int32), (low, high)), shape=(n_vertices,) * 2).tocsr()
+        counts.sum_duplicates()
+        once = counts.data == 1
+        rows = np.repeat(np.arange(n_vertices, dtype=counts.indices.dtype), np.diff(counts.indptr))
+        return np.stack([rows[once], counts.indices[once]], axis=1)
+    indptr, columns = placed[0], placed[1]
+    rows = np.repeat(np.arange(n_vertices, dtype=columns.dtype), np.diff(indptr))
+    starts = np.flatnonzero(np.concatenate(([True], (columns[1:] != columns[:-1]) | (rows[1:] != rows[:-1]), [True])))
+    once = starts[:-1][np.diff(starts) == 1]
+    return np.stack([rows[once], columns[once]], axis=1)
 
 
 def apply_border(border, operator, triangles, fixed):

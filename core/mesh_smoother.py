@@ -11,6 +11,9 @@ own noise (core.mesh_amount) with alpha 0 and gives every closed part its volume
 (core.volume); with ``beta="auto"`` it may take gentler steps on light noise. Either number given
 switches it off: the other then takes its default (``DEFAULT_ALPHA``, ``DEFAULT_ITERATIONS``) and
 the run is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
+
+Two options change the mesh the run sees, both off by default: ``weld`` runs coincident vertices as
+one (core.welding), ``border`` chooses what open borders do (core.borders).
 """
 
 import time

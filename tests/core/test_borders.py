@@ -205,3 +205,15 @@ def test_the_automatic_amount_probes_patches_of_the_curve_adjacency(monkeypatch)
     result, report = core.smooth_mesh(noisy, sm.edges_of(faces), faces=faces, border="curve", return_report=True)
     assert report.amount is not None and report.iterations >= 1
     assert np.isfinite(result).all()
+
+
+def test_border_edges_without_scipys_private_kernels(monkeypatch):
+    from core import adjacency
+
+    positions, faces = wavy_disc(6, 20)
+    triangles = np.concatenate([fan_triangles(faces), [[3, 3, 4]]])  # and a degenerate triangle
+    fast = border_edges(triangles, len(positions))
+    monkeypatch.setattr(adjacency, "_coo_tocsr", None)
+    public = border_edges(triangles, len(positions))
+    np.testing.assert_array_equal(fast, public)
+    assert len(fast) == 20 and set(np.unique(fast).tolist()) == set(range(1 + 5 * 20, 1 + 6 * 20))
