@@ -20,7 +20,7 @@ of the bounding box and the change of its diagonal (% of the diagonal); the larg
 of one vertex (% of the diagonal); the RMS distance to the clean scan, border and interior (per vertex,
 % of the diagonal; at noise 0 it is the move itself).
 
-    .envs/bench/bin/python bench/bench_borders.py                      # 3 scans x 3 noises x 4 rules, ~3 min
+    .envs/bench/bin/python bench/bench_borders.py                      # 3 scans x 3 noises x 4 rules, ~1 min
     .envs/bench/bin/python bench/bench_borders.py --scans face --noises 0 --rules free,curve
     .envs/bench/bin/python bench/bench_borders.py --timing 1M   # the cost of welding and borders instead
 
