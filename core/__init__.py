@@ -4,8 +4,8 @@ The same package loads as ``core`` in tests and tools and as ``bl_ext.<repo>.hc_
 Blender, so everything inside uses relative imports.
 """
 
-from . import mesh_amount, metrics, topology, volume
-from .adjacency import Umbrella, umbrella_operator
+from . import borders, mesh_amount, metrics, topology, volume, welding
+from .adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, in_convergence_region
 from .mesh_amount import AmountChooser, MeshAmount, choose_amount
 from .mesh_smoother import AUTO, DEFAULT_ALPHA, DEFAULT_BETA, DEFAULT_ITERATIONS, MeshReport, MeshSmoother, smooth_mesh
@@ -32,6 +32,7 @@ __all__ = [
     "Smoothing",
     "Umbrella",
     "AmountChooser",
+    "borders",
     "choose_amount",
     "convergence_message",
     "hc_smooth",
@@ -43,6 +44,8 @@ __all__ = [
     "smooth",
     "smooth_point_cloud",
     "topology",
+    "umbrella_from_pairs",
     "umbrella_operator",
     "volume",
+    "welding",
 ]

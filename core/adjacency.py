@@ -3,6 +3,11 @@
 Built once per mesh (counting placement into CSR, duplicates merged within each short row)
 and reused across iterations, runs and dtypes. Only the sparsity pattern is stored; the smoothers
 apply the weights 1/|adj(i)| themselves.
+
+A mesh's edges give a symmetric adj() (j in adj(i) <=> i in adj(j)). Some rules give a vertex fewer
+neighbours than its edges do (a border vertex follows only its border, core.borders): the pattern is
+then directed, built from pairs i -> j (``umbrella_from_pairs``, ``Umbrella.with_rows``), and the
+smoothers read both triangles of it from the pattern itself.
 """
 
 from dataclasses import dataclass, field
@@ -28,10 +33,10 @@ def _exclusive_cumsum(counts, dtype):
 
 @dataclass(eq=False)
 class Umbrella:
-    """The pattern of adj(): row i lists all neighbours of i, increasing. Made by ``umbrella_operator``.
-
-    The upper triangle (row i: neighbours j > i, i.e. each edge once), which only the sequential
-    smoothers need, is derived on first use.
+    """The pattern of adj(): row i lists all neighbours of i, increasing. The strict upper triangle by
+    rows (row i: neighbours j > i) and the strict lower triangle by columns (column j: the vertices
+    i > j with j in adj(i)), which only the sequential smoothers need, are derived on first use; for a
+    symmetric pattern they are the same arrays.
 
     Attributes
     ----------
@@ -59,7 +64,9 @@ class Umbrella:
     degree: np.ndarray  # |adj(i)|
     indptr: np.ndarray
     indices: np.ndarray
+    symmetric: bool = True  # j in adj(i) <=> i in adj(j)
     _upper: tuple = field(default=None, repr=False)
+    _lower: tuple = field(default=None, repr=False)
     _renumbering: object = field(default=None, repr=False)  # core.locality's, once it has looked
 
     @property
@@ -72,11 +79,31 @@ class Umbrella:
 
     def _upper_pattern(self):
         if self._upper is None:
-            row = np.repeat(np.arange(self.n_vertices, dtype=self.indices.dtype), self.degree)
+            row = self.rows()
             upper = self.indices > row
             counts = np.bincount(row[upper], minlength=self.n_vertices).astype(self.indptr.dtype)
             self._upper = (_exclusive_cumsum(counts, self.indptr.dtype), self.indices[upper])
         return self._upper
+
+    @property
+    def lower_columns(self):
+        """(indptr, indices) of the strict lower triangle in CSC: column j lists, increasing, the vertices
+        i > j whose row holds j."""
+        if self.symmetric:
+            return self._upper_pattern()
+        if self._lower is None:
+            rows = self.rows()
+            lower = self.indices < rows
+            by_column = sp.csr_matrix(
+                (np.ones(np.count_nonzero(lower), dtype=np.int8), (self.indices[lower], rows[lower])),
+                shape=(self.n_vertices,) * 2,
+            )
+            self._lower = (by_column.indptr.astype(self.indptr.dtype), by_column.indices.astype(self.indices.dtype))
+        return self._lower
+
+    def rows(self):
+        """The row of every stored neighbour: (rows(), indices) are the pattern's pairs i -> j."""
+        return np.repeat(np.arange(self.n_vertices, dtype=self.indices.dtype), self.degree)
 
     @property
     def isolated(self):
@@ -85,14 +112,38 @@ class Umbrella:
 
     @property
     def n_edges(self):
-        return int(self.indices.size // 2)
+        """Undirected edges: pairs {i, j} with j in adj(i) or i in adj(j)."""
+        if self.symmetric:
+            return int(self.indices.size // 2)
+        pattern = self._matrix()
+        return int((pattern + pattern.T).nnz // 2)
+
+    def _matrix(self):
+        data = np.ones(self.indices.size, dtype=np.int8)
+        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n_vertices,) * 2)
 
     def renumbered(self, order):
         """The same graph with vertex k of the result being vertex ``order[k]`` of this one."""
         inverse = np.empty(self.n_vertices, dtype=self.indices.dtype)
         inverse[order] = np.arange(self.n_vertices, dtype=self.indices.dtype)
-        rows = inverse[np.repeat(np.arange(self.n_vertices, dtype=self.indices.dtype), self.degree)]
-        return _from_pairs(rows, inverse[self.indices], self.n_vertices)
+        return _from_pairs(inverse[self.rows()], inverse[self.indices], self.n_vertices, self.symmetric)
+
+    def with_rows(self, vertices: ArrayLike, edges: ArrayLike) -> "Umbrella":
+        """This umbrella with adj(i) of every vertex i in ``vertices`` (a boolean mask or indices) made
+        of its neighbours along ``edges`` (undirected pairs) alone; every other row stays as it is. A
+        listed vertex on none of the edges gets no neighbours (and so stays fixed)."""
+        n = self.n_vertices
+        listed = np.zeros(n, dtype=bool)
+        listed[np.asarray(vertices)] = True
+        edges = check_edges(edges, n).astype(self.indices.dtype, copy=False)
+        rows = self.rows()
+        kept = ~listed[rows]
+        heads = np.concatenate((edges[:, 0], edges[:, 1]))
+        tails = np.concatenate((edges[:, 1], edges[:, 0]))
+        new = listed[heads] & (heads != tails)
+        return _from_pairs(
+            np.concatenate((rows[kept], heads[new])), np.concatenate((self.indices[kept], tails[new])), n, None
+        )
 
 
 def umbrella_operator(edges: ArrayLike, n_vertices: int) -> Umbrella:
@@ -127,11 +178,9 @@ def umbrella_operator(edges: ArrayLike, n_vertices: int) -> Umbrella:
     >>> core.hc_smooth(positions, None, operator=operator, alpha=0.1, beta=0.6, iterations=1).shape
     (4, 3)
     """
-    if isinstance(n_vertices, bool) or not isinstance(n_vertices, (int, np.integer)) or n_vertices < 0:
-        raise ValueError(f"n_vertices must be a whole number >= 0, got {n_vertices!r}")
-    n = int(n_vertices)
+    n = _vertex_count(n_vertices)
     edges = check_edges(edges, n)
-    index = np.int32 if n < np.iinfo(np.int32).max // 2 else np.int64
+    index = _index_dtype(n)
 
     # Both directions of every edge, self-loops dropped.
     rows = np.concatenate((edges[:, 0], edges[:, 1])).astype(index, copy=False)
@@ -139,11 +188,45 @@ def umbrella_operator(edges: ArrayLike, n_vertices: int) -> Umbrella:
     loops = rows == columns
     if loops.any():
         rows, columns = rows[~loops], columns[~loops]
-    return _from_pairs(rows, columns, n)
+    return _from_pairs(rows, columns, n, True)
 
 
-def _from_pairs(rows, columns, n):
-    """Umbrella from directed pairs holding both directions of every edge: rows sorted and unique."""
+def umbrella_from_pairs(
+    rows: ArrayLike, columns: ArrayLike, n_vertices: int, *, symmetric: bool | None = None
+) -> Umbrella:
+    """The umbrella with adj(i) = {j : (i, j) among the directed pairs (rows, columns)}: duplicates
+    merged, self-loops dropped. Holding both directions of every pair, it equals ``umbrella_operator``.
+    ``symmetric``: True if the caller knows that it does (else it is found out).
+
+    Examples
+    --------
+    >>> import core
+    >>> umbrella = core.umbrella_from_pairs([0, 1, 1, 2], [1, 0, 2, 1], 3)  # 2 sees 1, 1 sees 0 and 2, 0 sees 1
+    >>> umbrella.degree.tolist(), bool(umbrella.symmetric)
+    ([1, 2, 1], True)
+    >>> core.umbrella_from_pairs([0, 1], [1, 2], 3).degree.tolist()  # directed: 2 has no neighbour
+    [1, 1, 0]
+    """
+    n = _vertex_count(n_vertices)
+    pairs = check_edges(np.stack([np.ravel(rows), np.ravel(columns)], axis=1), n)
+    index = _index_dtype(n)
+    keep = pairs[:, 0] != pairs[:, 1]
+    return _from_pairs(pairs[keep, 0].astype(index), pairs[keep, 1].astype(index), n, symmetric)
+
+
+def _vertex_count(n_vertices):
+    if isinstance(n_vertices, bool) or not isinstance(n_vertices, (int, np.integer)) or n_vertices < 0:
+        raise ValueError(f"n_vertices must be a whole number >= 0, got {n_vertices!r}")
+    return int(n_vertices)
+
+
+def _index_dtype(n):
+    return np.int32 if n < np.iinfo(np.int32).max // 2 else np.int64
+
+
+def _from_pairs(rows, columns, n, symmetric):
+    """Umbrella from directed pairs (rows sorted and unique). ``symmetric``: True or False if known
+    (both directions of every pair present, or not), None to find out."""
     index = rows.dtype
     placed = pairs_in_order(rows, columns, n, np.ones(rows.size, dtype=np.int8))
     if placed is not None:
@@ -154,7 +237,12 @@ def _from_pairs(rows, columns, n):
     pattern.sum_duplicates()  # one linear check when rows are sorted and unique already
     indptr = pattern.indptr.astype(index, copy=False)
     indices = pattern.indices.astype(index, copy=False)
-    return Umbrella(n_vertices=n, degree=np.diff(indptr), indptr=indptr, indices=indices)
+    umbrella = Umbrella(n_vertices=n, degree=np.diff(indptr), indptr=indptr, indices=indices)
+    if symmetric is None:  # the pattern against its transpose (the counts in ``pattern`` may differ)
+        ones = umbrella._matrix()
+        symmetric = (ones != ones.T).nnz == 0
+    umbrella.symmetric = bool(symmetric)
+    return umbrella
 
 
 def pairs_in_order(rows, columns, n, data):

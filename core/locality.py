@@ -52,6 +52,6 @@ def renumbering(operator):
                 (np.ones(operator.indices.size, dtype=np.int8), operator.indices, operator.indptr),
                 shape=(operator.n_vertices,) * 2,
             )
-            order = reverse_cuthill_mckee(pattern, symmetric_mode=True)
+            order = reverse_cuthill_mckee(pattern, symmetric_mode=operator.symmetric)
             operator._renumbering = Renumbering(order, operator.renumbered(order))
     return operator._renumbering or None

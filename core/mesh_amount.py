@@ -47,7 +47,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike
 from scipy.sparse import csgraph
 
-from .adjacency import Umbrella, umbrella_operator
+from .adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError
 from .smoothing import Smoothing
 from .validation import check_fixed, check_positions, check_unit_interval
@@ -392,9 +392,12 @@ def _patches(operator, fixed_mask, movable):
     number[chosen] = np.arange(chosen.size)
     owner, neighbour = _neighbours(chosen, operator)
     keep = number[neighbour] >= 0
-    edges = np.stack([owner[keep], number[neighbour[keep]]], axis=1)
     inner = number[chosen[rings[chosen] <= PATCH_RINGS - PATCH_MARGIN]]
-    return umbrella_operator(edges, chosen.size), fixed_mask[chosen], inner
+    # The operator's own pairs (a directed pattern stays directed: core.borders' curves).
+    patches = umbrella_from_pairs(
+        owner[keep], number[neighbour[keep]], chosen.size, symmetric=operator.symmetric or None
+    )
+    return patches, fixed_mask[chosen], inner
 
 
 def _neighbours(rows, operator):

@@ -11,6 +11,9 @@ own noise (core.mesh_amount) with alpha 0 and gives every closed part its volume
 (core.volume); with ``beta="auto"`` it may take gentler steps on light noise. Either number given
 switches it off: the other then takes its default (``DEFAULT_ALPHA``, ``DEFAULT_ITERATIONS``) and
 the run is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
+
+Two options change the mesh the run sees, both off by default: ``weld`` runs coincident vertices as
+one (core.welding), ``border`` chooses what open borders do (core.borders).
 """
 
 import time
@@ -21,8 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import volume
+from . import volume, welding
 from .adjacency import Umbrella, umbrella_operator
+from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
 from .mesh_amount import AmountChooser, MeshAmount
 from .metrics import fan_triangles
@@ -127,6 +131,8 @@ class MeshSmoother:
         influence: ArrayLike | None = None,
         max_deviation: float | str = AUTO,
         operator: Umbrella | None = None,
+        weld: bool = False,
+        border: str = "free",
     ) -> None:
         self.positions = start = check_positions(positions)
         n = start.shape[0]
@@ -144,11 +150,19 @@ class MeshSmoother:
             operator = umbrella_operator(edges, n)
         elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
             raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
-        self.operator = operator
         self.fixed = check_fixed(fixed, n)
         self.influence = check_influence(influence, n)
         self.faces = None if faces is None else fan_triangles(faces)
         self._closed = closed
+        self.border = check_choice(border, "border", BORDERS)
+        # Coincident vertices run as one welded vertex (core.welding); the result is scattered back.
+        self.welding = welding.weld(start, operator) if weld else None
+        if self.welding is not None:
+            self.positions, operator = self.welding.positions(), self.welding.operator(operator)
+            self.fixed, self.influence = self.welding.fixed(self.fixed), self.welding.influence(self.influence)
+            if self.faces is not None:
+                self.faces, self._closed = self.welding.triangles(self.faces), None  # closed as welded
+        self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed)
         # Checks every number now (a Smoothing is cheap to make: the heavy parts are built on first use).
         self._smoothing(self.alpha, self.beta, self.iterations, 0.0 if self.max_deviation == AUTO else max_deviation)
         self.result = None
@@ -213,7 +227,7 @@ class MeshSmoother:
             result, offset = self._keep_volume(result)
             if limit:  # the offset keeps to the limit too
                 result = _within(result, self.positions, limit)
-        self.result = result
+        self.result = result if self.welding is None else self.welding.scatter(result)
         self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, limit, time.perf_counter() - start)
         yield 1.0
 
@@ -283,6 +297,14 @@ def smooth_mesh(
         The farthest any vertex may end from its input position, in the positions' units (every
         iteration ends with a projection onto that ball); 0: no limit. ``"auto"``: with the Automatic
         Amount ``DEVIATION_IN_NOISE`` times the noise it estimated, else no limit.
+    weld : bool
+        Smooth coincident vertices (equal, or within 1e-6 of the median edge length apart: UV seams,
+        triangle soups, STL) as one vertex (core.welding): they move alike, a soup like its welded mesh.
+        The result still has every vertex. A welded vertex is fixed if any of its copies is, and takes
+        the least influence of its copies; the faces (and whether they are closed) are taken as welded.
+    border : {"free", "curve", "fixed"}
+        Open-border vertices (on an edge of one face) average all their neighbours (the paper's
+        algorithm), follow their border as a curve, or stay (core.borders). "curve" and "fixed" need faces.
     return_report : bool
         Also return a MeshReport (what ran, what was chosen).
     progress : callable, optional

@@ -864,30 +864,32 @@ class _GaussSeidel:
 
     For movable i: p_i - w Σ_{j<i} t_ij p_j = w Σ_{j>i} t_ij q_j + a s_i, i.e. (I - w L) p = w U q + a s,
     with L, U the strictly lower/upper parts of T restricted to movable rows; fixed rows read p_i = q_i.
-    (A fixed neighbour j < i has p_j = q_j, so it may sit on either side.)
+    (A fixed neighbour j < i has p_j = q_j, so it may sit on either side.) U is read from the rows of
+    the pattern, L from its columns: a directed pattern (core.adjacency) works as a symmetric one does.
     """
 
     def __init__(self, operator, movable, weight, dtype):
         n = operator.n_vertices
-        counts = np.diff(operator.upper_indptr)
-        # w t_ij on movable rows, 0 on fixed ones: row i of U and, by symmetry, column j of L.
+        lower_indptr, lower_indices = operator.lower_columns
+        counts = np.diff(lower_indptr)
+        # w t_ij on movable rows, 0 on fixed ones: row i of U and of L.
         row_weight = np.zeros(n, dtype=dtype)
         scale = movable & (operator.degree > 0)
         row_weight[scale] = weight / operator.degree[scale]
         self.row_weight = row_weight
         # U x as row_weight * (sums over the upper pattern); one block, as the tasks here are per coordinate.
         self.upper_rows = parallel.RowBlocks(operator.upper_indptr, operator.upper_indices, n, workers=1).blocks[0]
-        # I - w L in CSC: column j is the diagonal 1, then -w t_ij for the neighbours i > j (the upper
-        # pattern of row j, since adj is symmetric), already in increasing row order.
-        indptr = np.zeros(n + 1, dtype=operator.upper_indptr.dtype)
+        # I - w L in CSC: column j is the diagonal 1, then -w t_ij for the vertices i > j with j in adj(i)
+        # (the lower pattern's column j), already in increasing row order.
+        indptr = np.zeros(n + 1, dtype=lower_indptr.dtype)
         np.cumsum(counts + 1, out=indptr[1:])
         off_diagonal = np.ones(indptr[-1], dtype=bool)
         off_diagonal[indptr[:-1]] = False
-        indices = np.empty(indptr[-1], dtype=operator.upper_indices.dtype)
+        indices = np.empty(indptr[-1], dtype=lower_indices.dtype)
         indices[indptr[:-1]] = np.arange(n)
-        indices[off_diagonal] = operator.upper_indices
+        indices[off_diagonal] = lower_indices
         data = np.ones(indptr[-1], dtype=dtype)
-        data[off_diagonal] = -row_weight[operator.upper_indices]
+        data[off_diagonal] = -row_weight[lower_indices]
         self.system = sp.csc_matrix((data, indices, indptr), shape=(n, n))
         self.solve_lower = triangular_solver(self.system)
         self.fixed_index = np.flatnonzero(~movable)

@@ -20,10 +20,23 @@ def _mean(points):
 
 
 def smooth_loop(
-    positions, edges, *, method, alpha=0.0, beta=0.5, iterations, mode="simultaneous", fixed=(), max_deviation=0.0
+    positions,
+    edges,
+    *,
+    method,
+    alpha=0.0,
+    beta=0.5,
+    iterations,
+    mode="simultaneous",
+    fixed=(),
+    max_deviation=0.0,
+    adj=None,
 ):
+    """``adj``: a list of neighbour sets, one per vertex, used instead of the one ``edges`` give (a
+    directed adjacency: j in adj[i] without i in adj[j]). ``max_deviation``: the deviation limit, a
+    projection onto the ball around each input position after every iteration (0: none)."""
     n = len(positions)
-    adj = adjacency(n, edges)
+    adj = adjacency(n, edges) if adj is None else [set(int(j) for j in a) for a in adj]
     fixed = set(int(i) for i in fixed) | {i for i in range(n) if not adj[i]}  # section 2
     o = [[float(c) for c in p] for p in positions]
     p = [list(v) for v in o]
