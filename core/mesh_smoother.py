@@ -168,6 +168,12 @@ class MeshSmoother:
         self.result = None
         self.report = None
 
+    def still(self) -> np.ndarray:
+        """(n,) bool: the vertices this run never moves (fixed, held by the border rule, without
+        neighbours), in the caller's numbering."""
+        still = self.fixed | self.operator.isolated
+        return still if self.welding is None else still[self.welding.label]
+
     def closed(self) -> bool:
         """Whether the faces enclose a volume (asked only when the volume is to be given back)."""
         if callable(self._closed):

@@ -56,6 +56,9 @@ def core_options(props, given=frozenset()):
         elif setting.kind == "float":
             value = as_property(value)
         options[setting.argument] = value
+    # The add-on smooths split vertices (UV seams, soups) as one and open borders as curves (Pin
+    # Boundary: held), on the welded mesh, where a seam is no border.
+    options.update(weld=True, border="fixed" if props.pin_boundary else "curve")
     return options
 
 
@@ -117,8 +120,6 @@ def make_job(obj, props, extra_fixed=None):
         if props.invert_influence_group:
             influence = 1.0 - influence
         np.clip(influence, 0.0, 1.0, out=influence)  # Blender keeps weights in [0, 1]; rounding may not
-    if props.pin_boundary:
-        fixed |= core.topology.boundary_vertices(n, edges, corner_edges)
     return Job(
         obj=obj,
         mesh=mesh,
@@ -139,20 +140,25 @@ def run(jobs, props, chunk=None, given=frozenset()):
     options = core_options(props, given)
     for number, job in enumerate(jobs):
         input_measure(job)  # on the other core while this one builds the operator
-        smoother = core.MeshSmoother(
-            job.positions,
-            job.edges,
-            faces=job.faces,
-            closed=lambda job=job: input_measure(job).result().closed,
-            fixed=job.fixed,
-            influence=job.influence,
-            **options,
-        )
+        smoother = make_smoother(job, options)
         for fraction in smoother.steps(chunk):
             if fraction < 1.0:
                 yield (number + fraction) / len(jobs)
         job.result, job.report = smoother.result, smoother.report
         yield (number + 1) / len(jobs)
+
+
+def make_smoother(job, options):
+    """The core.MeshSmoother of a job with ``core_options``' options (checks them: ValueError)."""
+    return core.MeshSmoother(
+        job.positions,
+        job.edges,
+        faces=job.faces,
+        closed=lambda: input_measure(job).result().closed,
+        fixed=job.fixed,
+        influence=job.influence,
+        **options,
+    )
 
 
 def write(job, props):

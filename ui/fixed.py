@@ -46,9 +46,8 @@ def count(obj, settings):
     except objects.InputError as error:
         _counts[key] = str(error)
         return _counts[key]
-    n = len(job.positions)
-    loose = np.bincount(job.edges.ravel(), minlength=n) == 0  # the core fixes vertices without edges
-    _counts[key] = (int(np.count_nonzero(job.fixed | loose)), n)
+    still = jobs.make_smoother(job, jobs.core_options(settings)).still()  # the run's own rules
+    _counts[key] = (int(np.count_nonzero(still)), len(job.positions))
     return _counts[key]
 
 
