@@ -7,10 +7,10 @@ run the same numbers.
 
 Numbers a caller gives are used exactly. The Automatic Amount (HC only) chooses what is left at
 ``"auto"``: with ``iterations="auto"`` and ``alpha="auto"`` it chooses the iterations from the mesh's
-own noise (core.mesh_amount) with alpha 0 and gives every closed part its volume back
-(core.volume); with ``beta="auto"`` it may take gentler steps on light noise. Either number given
-switches it off: the other then takes its default (``DEFAULT_ALPHA``, ``DEFAULT_ITERATIONS``) and
-the run is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
+own noise (core.mesh_amount) with alpha 0, holding parts without noise, and gives every closed part
+its volume back within bounds (core.volume); with ``beta="auto"`` it may take gentler steps on light
+noise. Either number given switches it off: the other then takes its default (``DEFAULT_ALPHA``,
+``DEFAULT_ITERATIONS``) and the run is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
 """
 
 import time
@@ -138,14 +138,15 @@ class MeshSmoother:
         self.report = None
 
     def closed(self) -> bool:
-        """Whether the faces enclose a volume (asked only when the volume is to be given back)."""
+        """Whether the faces enclose a volume, as the caller said or found from the faces. The volume
+        restore does not need it: core.volume finds each closed part itself."""
         if callable(self._closed):
             self._closed = bool(self._closed())
         elif self._closed is None:
             self._closed = self.faces is not None and closed_from_triangles(self.faces)
         return self._closed
 
-    def _smoothing(self, alpha, beta, iterations):
+    def _smoothing(self, alpha, beta, iterations, fixed=None):
         with warnings.catch_warnings():  # callers report the convergence region themselves
             warnings.simplefilter("ignore", ConvergenceWarning)
             return Smoothing(
@@ -157,7 +158,7 @@ class MeshSmoother:
                 iterations=iterations,
                 mode=self.mode,
                 tolerance=self.tolerance,
-                fixed=self.fixed,
+                fixed=self.fixed if fixed is None else fixed,
                 influence=self.influence,
                 operator=self.operator,
             )
@@ -178,27 +179,28 @@ class MeshSmoother:
             alpha, beta, iterations = amount.alpha, amount.beta, amount.iterations
             if self.influence is None and self.mode == "simultaneous" and not self.tolerance:
                 done = chooser.result()  # the choice ran exactly these iterations on its way: not again
+        fixed = self.fixed if amount is None else chooser.fixed  # the Automatic Amount holds parts without noise
         if done is not None:
             result, ran = done, iterations
         else:
-            smoothing = self._smoothing(alpha, beta, iterations)
+            smoothing = self._smoothing(alpha, beta, iterations, fixed)
             for fraction in smoothing.steps(chunk):
                 if fraction < 1.0:
                     yield share + (1.0 - share) * fraction
             smoothed = smoothing.result()
             result, ran = smoothed.positions, smoothed.iterations
         offset = 0.0
-        if self.automatic and self.closed():
-            result, offset = self._keep_volume(result)
+        if self.automatic and ran > 0 and self.faces is not None:
+            result, offset = self._keep_volume(result, fixed, volume.NOISE_OFFSETS * amount.sigma)
         self.result = result
         self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, time.perf_counter() - start)
         yield 1.0
 
-    def _keep_volume(self, result):
-        """Each closed part's volume given back by a uniform offset of its moving vertices along their
-        normals. Fixed vertices and those of influence 0 stay bit for bit."""
-        movable = ~self.fixed if self.influence is None else ~self.fixed & (self.influence > 0.0)
-        restored, offsets = volume.restore_volume(self.positions, result, self.faces, movable=movable)
+    def _keep_volume(self, result, fixed, limit):
+        """Each closed part's volume given back by a bounded uniform offset of its moving vertices along
+        their normals (core.volume). Fixed vertices and those of influence 0 stay bit for bit."""
+        movable = ~fixed if self.influence is None else ~fixed & (self.influence > 0.0)
+        restored, offsets = volume.restore_volume(self.positions, result, self.faces, movable=movable, limit=limit)
         restored = restored.astype(result.dtype)
         restored[~movable] = result[~movable]
         return restored, float(np.abs(offsets).max()) if offsets.size else 0.0
@@ -230,7 +232,8 @@ def smooth_mesh(
     faces : (f, k) integer array, or (offsets, corner_verts), optional
         The faces; needed to give closed parts their volume back (Automatic Amount).
     closed : bool, optional
-        Whether the faces enclose a volume (found from the faces if not given).
+        Whether the faces enclose a volume (found from the faces if not given); the volume restore finds
+        each closed part itself and does not read it.
     method : {"hc", "plain", "central", "original"}
         HC (paper section 4) or a Laplacian variant (3.1-3.3).
     alpha, beta : float or "auto"
@@ -251,9 +254,10 @@ def smooth_mesh(
         ``progress(fraction)`` after each iteration; False cancels (raises core.Cancelled).
 
     With ``alpha`` and ``iterations`` both ``"auto"`` (the default) and method HC, the Automatic Amount
-    chooses the iterations from the mesh's own noise, runs them with alpha 0 and gives each closed part
-    its volume back; ``beta="auto"`` lets it take gentler steps on light noise. A number for either of
-    ``alpha`` or ``iterations`` switches it off; the other then takes its default (0.1, 10).
+    chooses the iterations from the mesh's own noise (none where it finds none: nothing moves), runs them
+    with alpha 0 and gives each closed part its volume back; ``beta="auto"`` lets it take gentler steps
+    on light noise. A number for either of ``alpha`` or ``iterations`` switches it off; the other then
+    takes its default (0.1, 10).
 
     Examples
     --------
