@@ -26,7 +26,8 @@ iterations and says so (``noise_found``). On the noisy parts:
   is flat near its minimum, and flat in k where its resolution ends (a few iterations on lightly
   noisy meshes with sharp edges): the amount chosen is the largest k whose GCV is within
   ``TOLERANCE`` of the minimum, i.e. the most smoothing the estimate cannot tell from the best.
-* The square root of the minimum GCV is the noise estimate (standard deviation along the normals).
+* The square root of the minimum GCV is the noise estimate (standard deviation along the normals),
+  at most ROBUST_SIGMAS times core.mesh_noise's robust one.
 * **Light noise on coarse meshes**: where that picks at most ``FINE_MAX`` iterations, whole steps at
   the given beta are too coarse to say how much smoothing is wanted: k steps smooth a low frequency
   as much as k (1 - beta) steps of the gentlest kind, and below beta 0.75 a step also overshoots the
@@ -73,6 +74,10 @@ PATCH_PROBE_ENTRIES = 180_000  # more probe entries on the patches' fewer vertic
 _SEED = 20_161_999  # the probes' seed: fixed, so the choice is reproducible
 FINE_MAX = 3  # choices of at most this many iterations are made again on gentler steps (see above) ...
 FINE_BETA = 0.75  # ... of this beta
+# The noise estimate is GCV's, at most this many times core.mesh_noise's: on coarse meshes GCV reads the
+# shape as noise (up to ~5x the truth at light noise), the robust estimate never does (it reads heavy
+# noise along the normals low, 0.65x at a noise of 3 edge lengths).
+ROBUST_SIGMAS = 2.0
 
 
 @dataclass(frozen=True)
@@ -83,7 +88,8 @@ class MeshAmount:
     beta: float
     iterations: int
     # Estimated noise, standard deviation along the normals (the positions' units): GCV's where noise was
-    # found, else core.mesh_noise's robust estimate (~0 on a clean mesh).
+    # found (at most ROBUST_SIGMAS times the robust one), else core.mesh_noise's robust estimate (~0 on a
+    # clean mesh).
     sigma: float
     edge_length: float  # median edge length of the input
     explored: int  # iterations the estimate ran
@@ -320,6 +326,7 @@ class AmountChooser:
         chosen = _chosen(steps, score)
         minimum = max(float(score.min()), 0.0)
         sigma = math.sqrt(minimum) if self.use_normals else math.sqrt(minimum / 3)
+        sigma = min(sigma, ROBUST_SIGMAS * self.noise.level())
         return MeshAmount(0.0, self.beta, int(chosen), sigma, self.edge_length, int(done), True)
 
 
