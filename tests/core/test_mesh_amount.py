@@ -263,3 +263,17 @@ def test_patches_estimate_the_trace_of_the_whole_mesh(monkeypatch):
     for k, t in whole.traces.items():
         assert patched.traces[k] == pytest.approx(t, rel=0.01)
     assert patched.amount.iterations == whole.amount.iterations
+
+
+def test_sigma_is_capped_by_the_robust_estimate_on_coarse_meshes():
+    """On Blender's cone (33 vertices) with light noise GCV reads the shape as noise (~4x the truth); the
+    amount's sigma is at most ROBUST_SIGMAS times core.mesh_noise's estimate, within 2x of the truth."""
+    from primitives import PRIMITIVES, with_noise
+
+    cone, sigma = with_noise(PRIMITIVES["cone_ngon"](), 0.1, "isotropic")
+    chooser = core.AmountChooser(cone.positions, cone.edges)
+    for _ in chooser.steps():
+        pass
+    assert chooser.amount.noise_found
+    assert chooser.amount.sigma == pytest.approx(noise.ROBUST_SIGMAS * chooser.noise.level())
+    assert 0.5 * sigma < chooser.amount.sigma < 3.0 * sigma
