@@ -28,6 +28,7 @@ _SETTLED = 1e-6  # a root Newton left further than this (relative to the volume)
 _FLAT = 1e-6  # a part enclosing less than this times its box diagonal cubed has no volume to keep
 DEGENERATE = 4  # parts of at most this many vertices have no volume worth keeping (a tetrahedron at most)
 GROWTH = 0.01  # the most an offset may grow a part's bounding box, along any axis (relative)
+KEPT = 0.5  # a part that kept less than this share of its volume collapsed: it is not restored
 NOISE_OFFSETS = 1.0  # callers bound the offset to this many noise deviations (see restore_volume)
 _BLOCK = 1 << 18  # triangles per block: bounds the temporaries
 
@@ -105,11 +106,12 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     ``triangles`` (t, 3), consistently oriented; ``movable`` a boolean mask (default: every vertex);
     ``limit`` the largest offset allowed (None: no limit but the bounding box's). A part is left as it
     is where it is open (not every edge in two faces, in opposite directions), has at most
-    ``DEGENERATE`` vertices or no volume (nothing to give back), has no movable vertex, or where the
-    volume has no root within reach (an offset that does not grow the volume, Newton that does not
-    settle). An offset outwards never makes the part's bounding box more than ``GROWTH`` larger than its
-    box in ``before`` along any axis; inwards it is at most half the part's thinnest side; either way at
-    most ``limit``: a root beyond that is clipped to it.
+    ``DEGENERATE`` vertices or no volume (nothing to give back), has no movable vertex, kept less than
+    ``KEPT`` of its volume (collapsed), or where the volume has no root within reach (an offset that
+    does not grow the volume, Newton that does not settle). An offset outwards never makes the part's
+    bounding box more than ``GROWTH`` larger than its box in ``before`` along any axis; inwards it is
+    at most half the part's thinnest side; either way at most ``limit``: a root beyond that is clipped
+    to it.
     """
     before = np.asarray(before, dtype=np.float64)
     result = np.array(after, dtype=np.float64)
@@ -142,6 +144,9 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     eligible = closed_parts(triangles, part_of_triangle, parts) & (sizes > DEGENERATE) & has_movable
     eligible &= np.abs(target) > _FLAT * np.linalg.norm(extent, axis=1) ** 3
     eligible &= c1 > 0.0  # the volume grows as the surface moves along its normals
+    # Smoothing that took more than half the volume collapsed the part (or turned it inside out): no
+    # uniform offset mends that, and one that tried would balloon it. (Same sign as target: c0 / target.)
+    eligible &= c0 * np.sign(target) > KEPT * np.abs(target)
     offsets = np.zeros(parts)
     for _ in range(_NEWTON_STEPS):
         d = offsets
