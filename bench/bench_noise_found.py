@@ -1,6 +1,6 @@
 """Does the Automatic Amount find noise where there is some, and only there? (core.mesh_noise)
 
-For each mesh, clean and with Gaussian noise of 0.1, 0.3 and 0.5 median edge lengths (along the
+For each mesh, clean and with Gaussian noise of 0.05, 0.1, 0.3 and 0.5 median edge lengths (along the
 normals and isotropic, seed 0): whether noise was found (*), the robust estimate of core.mesh_noise
 over the true noise and, where noise was found, the Automatic Amount's sigma (GCV's, which the
 deviation limit uses) over the true noise. Clean meshes: the robust estimate in edge lengths, and the
@@ -38,7 +38,7 @@ from report import RESULTS, Report  # noqa: E402
 
 import core  # noqa: E402
 
-LEVELS = (0.1, 0.3, 0.5)
+LEVELS = (0.05, 0.1, 0.3, 0.5)
 SCANS = {
     "bunny": "bunny.obj",
     "bunny10k": "bunny10k_textured.obj",
