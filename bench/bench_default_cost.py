@@ -55,11 +55,9 @@ def main():
     del vertices
     runs = {
         "fixed: alpha 0.1, beta 0.6, 10 iterations": lambda: core.smooth_mesh(
-            noisy, edges, faces=faces, closed=True, alpha=0.1, beta=0.6, iterations=10, return_report=True
+            noisy, edges, faces=faces, alpha=0.1, beta=0.6, iterations=10, return_report=True
         ),
-        "default: Automatic Amount": lambda: core.smooth_mesh(
-            noisy, edges, faces=faces, closed=True, return_report=True
-        ),
+        "default: Automatic Amount": lambda: core.smooth_mesh(noisy, edges, faces=faces, return_report=True),
     }
     figures = {name: [] for name in runs}
     for _ in range(args.repeat):

@@ -124,7 +124,7 @@ def hc_default_settings():
 def hc_default(case):
     """HC Smooth's default result: what the operator and the command line give with nothing changed
     (core.smooth_mesh, the pipeline they all run)."""
-    result, report = core.smooth_mesh(case.noisy, case.edges, faces=case.faces, closed=case.closed, return_report=True)
+    result, report = core.smooth_mesh(case.noisy, case.edges, faces=case.faces, return_report=True)
     settings = {"alpha": report.alpha, "beta": report.beta, "iterations": report.iterations}
     if report.amount is not None:
         settings.update(noise=report.amount.sigma / case.diagonal, noise_over_edge=report.amount.ratio)
@@ -610,7 +610,7 @@ def plot(args, out):
         beta=defaults["beta"],
     )
     follow(f"HC (α 0, β {defaults['beta']:g}: the Automatic Amount's path)", "hc", alpha=0.0, beta=defaults["beta"])
-    chosen, report = core.smooth_mesh(case.noisy, case.edges, faces=case.faces, closed=case.closed, return_report=True)
+    chosen, report = core.smooth_mesh(case.noisy, case.edges, faces=case.faces, return_report=True)
     follow("Laplacian (paper 3.1)", "plain")
     try:  # trimesh counts the λ and the μ pass as one iteration each: a pair costs what an HC iteration does
         values = [case.rms(trimesh_taubin(case, {"lamb": 0.5, "nu": 0.5, "iterations": 2 * int(k)})) for k in steps]

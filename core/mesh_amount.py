@@ -3,7 +3,12 @@
 With alpha = 0, k HC iterations are a linear filter of the input: every coordinate goes through the
 same matrix S_k, a polynomial in the umbrella operator T (paper section 5). Too few iterations leave
 noise, too many flatten the shape; the best k depends on the noise, the edge lengths and the shape's
-detail. It is chosen here from the mesh alone, by generalized cross-validation (GCV) along one HC run:
+detail. It is chosen here from the mesh alone, by generalized cross-validation (GCV) along one HC run.
+
+First, which parts have noise at all (core.mesh_noise): GCV cannot tell a clean mesh's curvature from
+noise and would smooth a Blender primitive's shape away. Parts without noise, and parts of at most four
+vertices (nothing tells their noise from their shape), are held fixed; a mesh with no noisy part gets 0
+iterations and says so (``noise_found``). On the noisy parts:
 
 * **Residual**: R(k) = mean over sample vertices of ((y_i - x_i(k)) . n_i)^2, the part of what the
   smoothing removed that lies along the surface normal n_i (y the input, x(k) the result after k
@@ -21,7 +26,8 @@ detail. It is chosen here from the mesh alone, by generalized cross-validation (
   is flat near its minimum, and flat in k where its resolution ends (a few iterations on lightly
   noisy meshes with sharp edges): the amount chosen is the largest k whose GCV is within
   ``TOLERANCE`` of the minimum, i.e. the most smoothing the estimate cannot tell from the best.
-* The square root of the minimum GCV is the noise estimate (standard deviation along the normals).
+* The square root of the minimum GCV is the noise estimate (standard deviation along the normals),
+  at most ROBUST_SIGMAS times core.mesh_noise's robust one.
 * **Light noise on coarse meshes**: where that picks at most ``FINE_MAX`` iterations, whole steps at
   the given beta are too coarse to say how much smoothing is wanted: k steps smooth a low frequency
   as much as k (1 - beta) steps of the gentlest kind, and below beta 0.75 a step also overshoots the
@@ -49,6 +55,7 @@ from scipy.sparse import csgraph
 
 from .adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError
+from .mesh_noise import find_noise, neighbours
 from .smoothing import Smoothing
 from .validation import check_fixed, check_positions, check_unit_interval
 
@@ -67,6 +74,10 @@ PATCH_PROBE_ENTRIES = 180_000  # more probe entries on the patches' fewer vertic
 _SEED = 20_161_999  # the probes' seed: fixed, so the choice is reproducible
 FINE_MAX = 3  # choices of at most this many iterations are made again on gentler steps (see above) ...
 FINE_BETA = 0.75  # ... of this beta
+# The noise estimate is GCV's, at most this many times core.mesh_noise's: on coarse meshes GCV reads the
+# shape as noise (up to ~5x the truth at light noise), the robust estimate never does (it reads heavy
+# noise along the normals low, 0.65x at a noise of 3 edge lengths).
+ROBUST_SIGMAS = 2.0
 
 
 @dataclass(frozen=True)
@@ -100,9 +111,13 @@ class MeshAmount:
     alpha: float
     beta: float
     iterations: int
-    sigma: float  # estimated noise, standard deviation along the normals (the positions' units)
+    # Estimated noise, standard deviation along the normals (the positions' units): GCV's where noise was
+    # found (at most ROBUST_SIGMAS times the robust one), else core.mesh_noise's robust estimate (~0 on a
+    # clean mesh).
+    sigma: float
     edge_length: float  # median edge length of the input
     explored: int  # iterations the estimate ran
+    noise_found: bool  # False: no part has noise to remove, and nothing is smoothed (iterations 0)
 
     @property
     def ratio(self):
@@ -120,7 +135,7 @@ def _checkpoints(limit):
 
 def _ring_normals(points, rows, operator):
     """Unit normals at ``rows``: the smallest PCA axis of each row's neighbours in ``points``."""
-    owner, neighbour = _neighbours(rows, operator)
+    owner, neighbour = neighbours(rows, operator)
     ring = points[neighbour]
     centre = np.zeros((rows.size, 3))
     np.add.at(centre, owner, ring)
@@ -203,7 +218,9 @@ def choose_amount(
     -------
     MeshAmount
         alpha = 0, the iterations chosen and the beta to run them with (the given one, or FINE_BETA
-        on light noise); a mesh with nothing to smooth gets 0 iterations.
+        on light noise); a mesh with nothing to smooth (no noise found, or every vertex fixed) gets 0
+        iterations. Parts without noise are held fixed: the chooser's ``fixed`` mask says which
+        vertices the run must keep.
 
     See Also
     --------
@@ -232,7 +249,8 @@ class AmountChooser:
     """choose_amount in slices, for callers that show progress and let the user cancel: checks and
     prepares on construction; ``steps()`` yields the fraction of the largest possible run done, as
     core.Smoothing.steps does; once it is exhausted ``amount`` holds the MeshAmount. Arguments as
-    for ``choose_amount``.
+    for ``choose_amount``. ``fixed`` is the mask the smoothing must run with: the given fixed
+    vertices and the parts held (no noise).
 
     Examples
     --------
@@ -258,7 +276,9 @@ class AmountChooser:
         elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
             raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
         self.operator = operator
-        fixed_mask = check_fixed(fixed, n) | operator.isolated
+        # Parts without noise (clean ones, and those too small to tell noise from shape) are held: fixed.
+        self.noise = find_noise(start, operator)
+        self.fixed = fixed_mask = check_fixed(fixed, n) | operator.isolated | self.noise.quiet
         self.movable = movable = np.flatnonzero(~fixed_mask)
         self.edge_length = _median_edge_length(start, operator)
         self.fine_beta = FINE_BETA  # light noise: choose again on steps of this beta (None: never)
@@ -267,7 +287,7 @@ class AmountChooser:
         self._fine = None  # the choice made again on gentler steps, where it is taken (light noise)
         self._start, self._fixed_mask = start, fixed_mask
         if movable.size == 0:
-            self.amount = MeshAmount(0.0, beta, 0, 0.0, self.edge_length, 0)
+            self.amount = MeshAmount(0.0, beta, 0, self.noise.level(), self.edge_length, 0, self.noise.found)
             return
 
         surface_rows = movable[operator.degree[movable] >= _MIN_NEIGHBOURS]
@@ -365,18 +385,21 @@ class AmountChooser:
         caller runs them. Bit for bit what core.Smoothing gives for that run, without running it again."""
         if self._fine is not None:
             return self._fine.result()
+        if self.amount is not None and self.amount.iterations == 0:
+            return self._start.copy()
         if self.amount is None or self._kept is None or self._kept[0] != self.amount.iterations:
             return None
         return self.data.positions(self._kept[1])
 
     def _amount(self, steps, traces, residuals, normals, done):
         if not steps:  # diverged at once (beta far below 0.5): no amount is safe
-            return MeshAmount(0.0, self.beta, 0, 0.0, self.edge_length, 0)
+            return MeshAmount(0.0, self.beta, 0, 0.0, self.edge_length, 0, True)
         score = _scores(residuals, traces, normals)
         chosen = _chosen(steps, score)
         minimum = max(float(score.min()), 0.0)
         sigma = math.sqrt(minimum) if self.use_normals else math.sqrt(minimum / 3)
-        return MeshAmount(0.0, self.beta, int(chosen), sigma, self.edge_length, int(done))
+        sigma = min(sigma, ROBUST_SIGMAS * self.noise.level())
+        return MeshAmount(0.0, self.beta, int(chosen), sigma, self.edge_length, int(done), True)
 
 
 def _patches(operator, fixed_mask, movable):
@@ -390,7 +413,7 @@ def _patches(operator, fixed_mask, movable):
     chosen = np.flatnonzero(rings <= PATCH_RINGS)
     number = np.full(n, -1, dtype=np.int64)
     number[chosen] = np.arange(chosen.size)
-    owner, neighbour = _neighbours(chosen, operator)
+    owner, neighbour = neighbours(chosen, operator)
     keep = number[neighbour] >= 0
     inner = number[chosen[rings[chosen] <= PATCH_RINGS - PATCH_MARGIN]]
     # The operator's own pairs (a directed pattern stays directed: core.borders' curves).
@@ -400,17 +423,9 @@ def _patches(operator, fixed_mask, movable):
     return patches, fixed_mask[chosen], inner
 
 
-def _neighbours(rows, operator):
-    """(owner, neighbour): every neighbour of every row, owner the row's place in ``rows``."""
-    starts, counts = operator.indptr[rows], operator.degree[rows]
-    owner = np.repeat(np.arange(rows.size), counts)
-    offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-    return owner, operator.indices[np.repeat(starts, counts) + offsets]
-
-
 def _ring_of(rows, operator):
     """The neighbours of ``rows``, each once."""
-    return np.unique(_neighbours(rows, operator)[1])
+    return np.unique(neighbours(rows, operator)[1])
 
 
 def _scores(residuals, traces, normals):

@@ -7,10 +7,10 @@ run the same numbers.
 
 Numbers a caller gives are used exactly. The Automatic Amount (HC only) chooses what is left at
 ``"auto"``: with ``iterations="auto"`` and ``alpha="auto"`` it chooses the iterations from the mesh's
-own noise (core.mesh_amount) with alpha 0 and gives every closed part its volume back
-(core.volume); with ``beta="auto"`` it may take gentler steps on light noise. Either number given
-switches it off: the other then takes its default (``DEFAULT_ALPHA``, ``DEFAULT_ITERATIONS``) and
-the run is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
+own noise (core.mesh_amount) with alpha 0, holding parts without noise, and gives every closed part
+its volume back within bounds (core.volume); with ``beta="auto"`` it may take gentler steps on light
+noise. Either number given switches it off: the other then takes its default (``DEFAULT_ALPHA``,
+``DEFAULT_ITERATIONS``) and the run is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
 
 Two options change the mesh the run sees, both off by default: ``weld`` runs coincident vertices as
 one (core.welding), ``border`` chooses what open borders do (core.borders).
@@ -31,7 +31,6 @@ from .convergence import ConvergenceWarning
 from .mesh_amount import AmountChooser, MeshAmount
 from .metrics import fan_triangles
 from .smoothing import METHODS, Cancelled, Smoothing
-from .topology import closed_from_triangles
 from .validation import check_choice, check_fixed, check_influence, check_positions
 
 AUTO = "auto"
@@ -120,7 +119,6 @@ class MeshSmoother:
         edges: ArrayLike | None = None,
         *,
         faces: ArrayLike | None = None,
-        closed: bool | Callable[[], bool] | None = None,
         method: str = "hc",
         alpha: float | str = AUTO,
         beta: float | str = AUTO,
@@ -153,7 +151,6 @@ class MeshSmoother:
         self.fixed = check_fixed(fixed, n)
         self.influence = check_influence(influence, n)
         self.faces = None if faces is None else fan_triangles(faces)
-        self._closed = closed
         self.border = check_choice(border, "border", BORDERS)
         # Coincident vertices run as one welded vertex (core.welding); the result is scattered back.
         self.welding = welding.weld(start, operator) if weld else None
@@ -161,7 +158,7 @@ class MeshSmoother:
             self.positions, operator = self.welding.positions(), self.welding.operator(operator)
             self.fixed, self.influence = self.welding.fixed(self.fixed), self.welding.influence(self.influence)
             if self.faces is not None:
-                self.faces, self._closed = self.welding.triangles(self.faces), None  # closed as welded
+                self.faces = self.welding.triangles(self.faces)
         self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed)
         # Checks every number now (a Smoothing is cheap to make: the heavy parts are built on first use).
         self._smoothing(self.alpha, self.beta, self.iterations, 0.0 if self.max_deviation == AUTO else max_deviation)
@@ -174,15 +171,7 @@ class MeshSmoother:
         still = self.fixed | self.operator.isolated
         return still if self.welding is None else still[self.welding.label]
 
-    def closed(self) -> bool:
-        """Whether the faces enclose a volume (asked only when the volume is to be given back)."""
-        if callable(self._closed):
-            self._closed = bool(self._closed())
-        elif self._closed is None:
-            self._closed = self.faces is not None and closed_from_triangles(self.faces)
-        return self._closed
-
-    def _smoothing(self, alpha, beta, iterations, max_deviation):
+    def _smoothing(self, alpha, beta, iterations, max_deviation, fixed=None):
         with warnings.catch_warnings():  # callers report the convergence region themselves
             warnings.simplefilter("ignore", ConvergenceWarning)
             return Smoothing(
@@ -194,7 +183,7 @@ class MeshSmoother:
                 iterations=iterations,
                 mode=self.mode,
                 tolerance=self.tolerance,
-                fixed=self.fixed,
+                fixed=self.fixed if fixed is None else fixed,
                 influence=self.influence,
                 max_deviation=max_deviation,
                 operator=self.operator,
@@ -219,29 +208,30 @@ class MeshSmoother:
                 limit = DEVIATION_IN_NOISE * amount.sigma
             if self.influence is None and self.mode == "simultaneous" and not self.tolerance and not limit:
                 done = chooser.result()  # the choice ran exactly these iterations on its way: not again
+        fixed = self.fixed if amount is None else chooser.fixed  # the Automatic Amount holds parts without noise
         if done is not None:
             result, ran = done, iterations
         else:
-            smoothing = self._smoothing(alpha, beta, iterations, limit)
+            smoothing = self._smoothing(alpha, beta, iterations, limit, fixed)
             for fraction in smoothing.steps(chunk):
                 if fraction < 1.0:
                     yield share + (1.0 - share) * fraction
             smoothed = smoothing.result()
             result, ran = smoothed.positions, smoothed.iterations
         offset = 0.0
-        if self.automatic and self.closed():
-            result, offset = self._keep_volume(result)
+        if self.automatic and ran > 0 and self.faces is not None:
+            result, offset = self._keep_volume(result, fixed, volume.NOISE_OFFSETS * amount.sigma)
             if limit:  # the offset keeps to the limit too
                 result = _within(result, self.positions, limit)
         self.result = result if self.welding is None else self.welding.scatter(result)
         self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, limit, time.perf_counter() - start)
         yield 1.0
 
-    def _keep_volume(self, result):
-        """Each closed part's volume given back by a uniform offset of its moving vertices along their
-        normals. Fixed vertices and those of influence 0 stay bit for bit."""
-        movable = ~self.fixed if self.influence is None else ~self.fixed & (self.influence > 0.0)
-        restored, offsets = volume.restore_volume(self.positions, result, self.faces, movable=movable)
+    def _keep_volume(self, result, fixed, limit):
+        """Each closed part's volume given back by a bounded uniform offset of its moving vertices along
+        their normals (core.volume). Fixed vertices and those of influence 0 stay bit for bit."""
+        movable = ~fixed if self.influence is None else ~fixed & (self.influence > 0.0)
+        restored, offsets = volume.restore_volume(self.positions, result, self.faces, movable=movable, limit=limit)
         restored = restored.astype(result.dtype)
         restored[~movable] = result[~movable]
         return restored, float(np.abs(offsets).max()) if offsets.size else 0.0
@@ -283,8 +273,6 @@ def smooth_mesh(
         Vertex pairs, undirected; order, direction, duplicates and self-loops do not matter.
     faces : (f, k) integer array, or (offsets, corner_verts), optional
         The faces; needed to give closed parts their volume back (Automatic Amount).
-    closed : bool, optional
-        Whether the faces enclose a volume (found from the faces if not given).
     method : {"hc", "plain", "central", "original"}
         HC (paper section 4) or a Laplacian variant (3.1-3.3).
     alpha, beta : float or "auto"
@@ -317,9 +305,10 @@ def smooth_mesh(
         ``progress(fraction)`` after each iteration; False cancels (raises core.Cancelled).
 
     With ``alpha`` and ``iterations`` both ``"auto"`` (the default) and method HC, the Automatic Amount
-    chooses the iterations from the mesh's own noise, runs them with alpha 0 and gives each closed part
-    its volume back; ``beta="auto"`` lets it take gentler steps on light noise. A number for either of
-    ``alpha`` or ``iterations`` switches it off; the other then takes its default (0.1, 10).
+    chooses the iterations from the mesh's own noise (none where it finds none: nothing moves), runs them
+    with alpha 0 and gives each closed part its volume back; ``beta="auto"`` lets it take gentler steps
+    on light noise. A number for either of ``alpha`` or ``iterations`` switches it off; the other then
+    takes its default (0.1, 10).
 
     Examples
     --------

@@ -10,6 +10,13 @@ moves far-away vertices most).
 The volume of a part after an offset d along the (area-weighted, unit) vertex normals is a cubic in
 d: its four coefficients per part come from one pass over the triangles, and Newton steps from d = 0
 solve it.
+
+The offset gives back what smoothing took, a little, and nothing else: it is bounded. A part that
+smoothing collapsed (too small to smooth, flattened: it kept less than KEPT of its volume) has a cubic
+whose root lies far away or nowhere, and following it would blow the part up; such a part keeps its
+smoothed shape. Only closed parts with more than DEGENERATE vertices and a volume are restored, each
+on its own; no offset grows a part's bounding box by more than GROWTH, and a caller's ``limit`` bounds
+it further (the mesh pipeline passes NOISE_OFFSETS times the estimated noise).
 """
 
 import numpy as np
@@ -18,6 +25,14 @@ from scipy.sparse.csgraph import connected_components
 
 _NEWTON_STEPS = 6  # at most; the volume is a cubic in the offset, Newton from 0 needs two or three
 _RELATIVE_ACCURACY = 1e-12
+_SETTLED = 1e-6  # a root Newton left further than this (relative to the volume) is no root
+_FLAT = 1e-6  # a part enclosing less than this times its box diagonal cubed has no volume to keep
+DEGENERATE = 4  # parts of at most this many vertices have no volume worth keeping (a tetrahedron at most)
+GROWTH = 0.01  # the most an offset may grow a part's bounding box, along any axis (relative)
+KEPT = 0.5  # a part that kept less than this share of its volume collapsed: it is not restored
+# The mesh pipeline's limit, in noise deviations: the offsets that give back what HC took measure 0.01-0.3
+# noise deviations on dense meshes, up to 0.75 on a coarse tube (noise 0.2-1 edge lengths).
+NOISE_OFFSETS = 1.0
 _BLOCK = 1 << 18  # triangles per block: bounds the temporaries
 
 
@@ -81,26 +96,48 @@ def _volume_cubics(positions, normals, triangles, part_of_triangle, parts, centr
     return cubics
 
 
-def restore_volume(before, after, triangles, movable=None):
-    """``after`` with each closed part's enclosed volume set back to its volume in ``before``, by a
-    uniform offset of that part's movable vertices along their normals. Returns (positions, offsets)
-    with offsets the distance per part (same units as the positions).
+def closed_parts(triangles, part_of_triangle, parts):
+    """(parts,) bool: whether each part's triangles close a consistently oriented surface (every directed
+    edge once, and its reverse once)."""
+    heads = triangles.ravel().astype(np.int64)
+    tails = np.roll(triangles, -1, axis=1).ravel().astype(np.int64)
+    n = int(triangles.max()) + 1
+    keys, counts = np.unique(heads * n + tails, return_counts=True)
+    reverse = np.searchsorted(keys, tails * n + heads)
+    found = keys[np.minimum(reverse, keys.size - 1)] == tails * n + heads
+    good = found & (counts[np.searchsorted(keys, heads * n + tails)] == 1)
+    good &= counts[np.minimum(reverse, keys.size - 1)] == 1
+    bad = np.bincount(np.repeat(part_of_triangle, 3)[~good], minlength=parts)
+    return bad == 0
 
-    ``triangles`` (t, 3) of a closed, consistently oriented mesh; ``movable`` a boolean mask (default:
-    every vertex). A part without movable vertices, or with no volume, is left as it is.
+
+def restore_volume(before, after, triangles, movable=None, limit=None):
+    """``after`` with each closed part's enclosed volume set back to its volume in ``before``, by a
+    uniform offset of that part's movable vertices along their normals, within bounds. Returns
+    (positions, offsets) with offsets the distance per part (same units as the positions).
+
+    ``triangles`` (t, 3), consistently oriented; ``movable`` a boolean mask (default: every vertex);
+    ``limit`` the largest offset allowed (None: no limit but the bounding box's). A part is left as it
+    is where it is open (not every edge in two faces, in opposite directions), has at most
+    ``DEGENERATE`` vertices or no volume (nothing to give back), has no movable vertex, kept less than
+    ``KEPT`` of its volume (collapsed), or where the volume has no root within reach (an offset that
+    does not grow the volume, Newton that does not settle). An offset outwards never makes the part's
+    bounding box more than ``GROWTH`` larger than its box in ``before`` along any axis; inwards it is
+    at most half the part's thinnest side; either way at most ``limit``: a root beyond that is clipped
+    to it.
 
     Examples
     --------
     >>> import numpy as np
     >>> from core import metrics, volume
-    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
-    >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
-    >>> shrunk = 0.9 * positions + 0.025
+    >>> positions = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
+    >>> triangles = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
+    >>> shrunk = 0.95 * positions  # an octahedron
     >>> restored, offsets = volume.restore_volume(positions, shrunk, triangles)
     >>> [round(float(metrics.enclosed_volume(p, triangles)), 4) for p in (positions, shrunk, restored)]
-    [0.1667, 0.1215, 0.1667]
+    [1.3333, 1.1432, 1.3333]
     >>> offsets.round(4).tolist()  # one part, moved this far along its normals
-    [0.0642]
+    [0.05]
     """
     before = np.asarray(before, dtype=np.float64)
     result = np.array(after, dtype=np.float64)
@@ -113,17 +150,52 @@ def restore_volume(before, after, triangles, movable=None):
     graph = sp.coo_matrix((np.ones(len(pairs), np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     parts, part_of_vertex = connected_components(graph, directed=False)
     part_of_triangle = part_of_vertex[triangles[:, 0]]
+    used = np.zeros(n, bool)
+    used[triangles.ravel()] = True
+    sizes = np.bincount(part_of_vertex[used], minlength=parts)
+    low_before, high_before = _boxes(before, part_of_vertex, used, parts)
+    low_after, high_after = _boxes(result, part_of_vertex, used, parts)
+    extent = high_before - low_before
     centre = before.mean(axis=0)
     target = _volume_cubics(before, None, triangles, part_of_triangle, parts, centre)[0]
     normals = vertex_normals(result, triangles) * movable[:, None]
     c0, c1, c2, c3 = _volume_cubics(result, normals, triangles, part_of_triangle, parts, centre)
+    # An offset d moves every vertex by at most |d|: outwards, each side of the box grows by at most 2 d.
+    # Inwards the box does not grow; there half the part's thinnest side bounds d (it would turn inside out).
+    outward = np.maximum(((1.0 + GROWTH) * extent - (high_after - low_after)).min(axis=1), 0.0) / 2.0
+    inward = (high_after - low_after).min(axis=1) / 2.0
+    if limit is not None:
+        outward, inward = np.minimum(outward, float(limit)), np.minimum(inward, float(limit))
+    has_movable = np.bincount(part_of_vertex[movable & used], minlength=parts) > 0
+    eligible = closed_parts(triangles, part_of_triangle, parts) & (sizes > DEGENERATE) & has_movable
+    eligible &= np.abs(target) > _FLAT * np.linalg.norm(extent, axis=1) ** 3
+    eligible &= c1 > 0.0  # the volume grows as the surface moves along its normals
+    # Smoothing that took more than half the volume collapsed the part (or turned it inside out): no
+    # uniform offset mends that, and one that tried would balloon it. (Same sign as target: c0 / target.)
+    eligible &= c0 * np.sign(target) > KEPT * np.abs(target)
     offsets = np.zeros(parts)
     for _ in range(_NEWTON_STEPS):
         d = offsets
         missing = target - (c0 + d * (c1 + d * (c2 + d * c3)))
         slope = c1 + d * (2.0 * c2 + 3.0 * d * c3)
-        usable = (np.abs(slope) > 0.0) & (target != 0.0)
-        if np.all(np.abs(np.where(usable, missing, 0.0)) <= _RELATIVE_ACCURACY * np.abs(target)):
+        step = eligible & (slope > 0.0) & np.isfinite(missing)
+        settled = np.abs(missing) <= _RELATIVE_ACCURACY * np.abs(target)
+        if np.all(settled | ~step):
             break
-        offsets = offsets + np.where(usable, missing / np.where(usable, slope, 1.0), 0.0)
+        offsets = offsets + np.where(step & ~settled, missing / np.where(step, slope, 1.0), 0.0)
+    missing = target - (c0 + offsets * (c1 + offsets * (c2 + offsets * c3)))
+    # A root is sensible where Newton settled near it (the volume a cubic: from 0 it takes two or three steps).
+    sensible = eligible & np.isfinite(offsets) & (np.abs(missing) <= _SETTLED * np.abs(target))
+    offsets = np.where(sensible, np.clip(offsets, -inward, outward), 0.0)
     return result + normals * offsets[part_of_vertex][:, None], offsets
+
+
+def _boxes(points, part_of_vertex, used, parts):
+    """(low, high) corners of each part's bounding box, (parts, 3) each."""
+    low = np.full((parts, 3), np.inf)
+    high = np.full((parts, 3), -np.inf)
+    np.minimum.at(low, part_of_vertex[used], points[used])
+    np.maximum.at(high, part_of_vertex[used], points[used])
+    empty = ~np.isfinite(low[:, 0])  # a part without triangles (a loose vertex) has no box
+    low[empty] = high[empty] = 0.0
+    return low, high

@@ -154,7 +154,6 @@ def make_smoother(job, options):
         job.positions,
         job.edges,
         faces=job.faces,
-        closed=lambda: input_measure(job).result().closed,
         fixed=job.fixed,
         influence=job.influence,
         **options,

@@ -63,7 +63,7 @@ def test_more_noise_more_iterations():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("ratio", [0.05, 0.2, 0.8])
+@pytest.mark.parametrize("ratio", [0.2, 0.8])
 def test_chosen_amount_is_near_the_best_number_of_iterations(ratio):
     """Within 10 % of the least error any number of iterations (alpha 0, beta 0.6) reaches, and better
     than the fixed amount alpha 0.1, 10 iterations."""
@@ -82,7 +82,18 @@ def test_chosen_amount_is_near_the_best_number_of_iterations(ratio):
     chosen = errors[amount.iterations - 1]
     fixed = surface_error(core.hc_smooth(noisy, edges, alpha=0.1, beta=0.6, iterations=10), vertices)
     assert chosen <= 1.1 * min(errors)
-    assert chosen < fixed or ratio < 0.1  # at very light noise both leave about the same
+    assert chosen < fixed
+
+
+def test_noise_below_the_threshold_is_left_alone():
+    """Noise of 0.05 edge lengths is too light to tell from a coarse mesh's own shape (core.mesh_noise):
+    no noise found, 0 iterations, the estimate below the threshold."""
+    vertices, faces = bumpy_sphere()
+    edges = edges_of(faces)
+    noisy, _ = with_normal_noise(vertices, 0.05, edges, seed=3)
+    amount = core.choose_amount(noisy, edges)
+    assert not amount.noise_found and amount.iterations == 0
+    assert 0.0 < amount.ratio < core.mesh_noise.NOISE_THRESHOLD
 
 
 def test_scale_position_and_orientation_do_not_change_the_choice():
@@ -175,7 +186,7 @@ def test_the_choice_hands_back_the_run_it_made_bit_for_bit(ratio, dtype):
     assert kept.dtype == dtype and np.array_equal(kept.view(np.uint8), fresh.view(np.uint8))
 
 
-@pytest.mark.parametrize("ratio, seed, taken", [(0.15, 0, True), (0.1, 0, False), (0.3, 0, False)])
+@pytest.mark.parametrize("ratio, seed, taken", [(0.15, 0, True), (0.12, 0, False), (0.3, 0, False)])
 def test_light_noise_is_chosen_again_on_gentler_steps_where_they_smooth_more(monkeypatch, ratio, seed, taken):
     """Where whole steps pick at most FINE_MAX iterations, the choice is made again with beta FINE_BETA
     and taken only where it smooths a low frequency more (k' (1 - 0.75) > k (1 - 0.6)); the result
@@ -202,12 +213,15 @@ def test_light_noise_is_chosen_again_on_gentler_steps_where_they_smooth_more(mon
     assert core.choose_amount(noisy, edges, beta=0.8).beta == 0.8
 
 
-def test_no_kept_result_when_nothing_ran():
+def test_nothing_ran_hands_back_the_input():
     vertices, faces = icosphere(2)
-    chooser = core.AmountChooser(vertices, edges_of(faces), fixed=np.ones(len(vertices), dtype=bool))
+    noisy, _ = with_normal_noise(vertices, 0.5, edges_of(faces))
+    chooser = core.AmountChooser(noisy, edges_of(faces), fixed=np.ones(len(vertices), dtype=bool))
     for _ in chooser.steps():
         pass
-    assert chooser.amount.iterations == 0 and chooser.result() is None
+    assert chooser.amount.iterations == 0 and chooser.amount.noise_found
+    result = chooser.result()
+    assert np.array_equal(result, noisy) and result is not noisy
 
 
 def noisy_torus_grid(around=500, across=100, ratio=0.4, seed=0):
@@ -252,3 +266,17 @@ def test_patches_estimate_the_trace_of_the_whole_mesh(monkeypatch):
     for k, t in whole.traces.items():
         assert patched.traces[k] == pytest.approx(t, rel=0.01)
     assert patched.amount.iterations == whole.amount.iterations
+
+
+def test_sigma_is_capped_by_the_robust_estimate_on_coarse_meshes():
+    """On Blender's cone (33 vertices) with light noise GCV reads the shape as noise (~4x the truth); the
+    amount's sigma is at most ROBUST_SIGMAS times core.mesh_noise's estimate, within 2x of the truth."""
+    from primitives import PRIMITIVES, with_noise
+
+    cone, sigma = with_noise(PRIMITIVES["cone_ngon"](), 0.1, "isotropic")
+    chooser = core.AmountChooser(cone.positions, cone.edges)
+    for _ in chooser.steps():
+        pass
+    assert chooser.amount.noise_found
+    assert chooser.amount.sigma == pytest.approx(noise.ROBUST_SIGMAS * chooser.noise.level())
+    assert 0.5 * sigma < chooser.amount.sigma < 3.0 * sigma

@@ -57,3 +57,61 @@ def test_float32_in_float64_out_and_normals():
     assert restored.dtype == np.float64
     normals = vertex_normals(vertices, faces)
     assert np.allclose(np.einsum("ij,ij->i", normals, vertices), 1.0, atol=0.02)
+
+
+@pytest.mark.parametrize("kept", [1e-3, 0.4])
+def test_a_collapsed_part_is_not_blown_up(kept):
+    """A part flattened to less than half its volume collapsed: its volume's root lies far away, and no
+    offset is made; one that kept more is restored within bounds."""
+    vertices, faces = icosphere(2)
+    flat = vertices * [1.0, 1.0, kept]
+    restored, offsets = restore_volume(vertices, flat, faces)
+    assert offsets[0] == 0.0 and np.array_equal(restored, flat)
+    _, offsets = restore_volume(vertices, vertices * [1.0, 1.0, 0.6], faces)
+    assert 0.0 < offsets[0] <= 0.01 + 1e-12
+
+
+def test_the_offset_is_bounded_by_the_box_and_the_limit():
+    vertices, faces = icosphere(3)
+    # Flattened by 20 %: the root (~0.07) would widen the box by 7 %; the offset stops at 1 % (0.01 a side).
+    restored, offsets = restore_volume(vertices, vertices * [1.0, 1.0, 0.8], faces)
+    assert offsets[0] == pytest.approx(0.01, rel=1e-9)
+    assert np.ptp(restored[:, :2], axis=0) == pytest.approx(1.01 * np.ptp(vertices[:, :2], axis=0), rel=1e-3)
+    assert volume(restored, faces) < volume(vertices, faces)
+    _, limited = restore_volume(vertices, vertices * 0.99, faces, limit=0.004)
+    assert limited[0] == 0.004
+    _, free = restore_volume(vertices, vertices * 0.99, faces, limit=0.02)
+    assert 0.0 < free[0] < 0.02
+    inward, shrunk = restore_volume(vertices, vertices * 1.05, faces, limit=0.01)
+    assert shrunk[0] == -0.01 and np.all(np.ptp(inward, axis=0) < np.ptp(vertices * 1.05, axis=0))
+
+
+def test_only_closed_parts_with_a_volume_and_more_than_four_vertices():
+    """An open part, a tetrahedron, a closed part with no volume (two faces back to back) and an
+    inside-out part beside a sphere: only the sphere is restored; the inside-out one too (its volume is
+    negative, the offset along its inward normals still gives it back)."""
+    vertices, faces = icosphere(2)
+    n = len(vertices)
+    tetrahedron = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float) * 0.5 + [3, 0, 0]
+    sheet = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float) + [6, 0, 0]
+    parts = [
+        (vertices, faces),  # closed sphere
+        (vertices + [0, 3, 0], faces[1:]),  # open: one face less
+        (tetrahedron, np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])),
+        (sheet, np.array([[0, 1, 2], [0, 2, 1]])),  # closed, no volume
+        (vertices + [0, -3, 0], faces[:, ::-1]),  # inside out
+    ]
+    before, triangles, offset = [], [], 0
+    for points, tris in parts:
+        before.append(points)
+        triangles.append(tris + offset)
+        offset += len(points)
+    before, triangles = np.concatenate(before), np.concatenate(triangles)
+    centres = np.repeat([[0, 0, 0], [0, 3, 0], [3, 0, 0], [6, 0, 0], [0, -3, 0]], [n, n, 4, 3, n], axis=0)
+    after = centres + (before - centres) * 0.995
+    restored, offsets = restore_volume(before, after, triangles)
+    assert offsets[0] > 0 and offsets[4] < 0 and np.all(offsets[1:4] == 0.0)
+    assert np.array_equal(restored[n : 2 * n + 7], after[n : 2 * n + 7])
+    for part, sign in ((slice(0, n), 1), (slice(2 * n + 7, 3 * n + 7), -1)):
+        local = faces if sign > 0 else faces[:, ::-1]
+        assert volume(restored[part], local) == pytest.approx(volume(before[part], local), rel=1e-9)

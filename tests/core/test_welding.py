@@ -11,7 +11,7 @@ import core
 from core import welding
 
 
-def noisy_sphere(rings=10, segments=16, sigma=0.03, seed=1):
+def noisy_sphere(rings=10, segments=16, sigma=0.08, seed=1):
     positions, faces = sm.uv_sphere(rings, segments)
     return sm.noisy(positions, sigma=sigma, seed=seed), np.array(faces)
 

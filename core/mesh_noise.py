@@ -1,0 +1,194 @@
+"""Is there noise on a mesh? A robust estimate that is ~0 on clean modelled meshes and close to the noise
+on scans, per connected part.
+
+GCV (core.mesh_amount) cannot tell a clean mesh's curvature from noise: on a Blender primitive it finds
+"noise" and smooths the shape away. This test looks at what noise does and a modelled shape does not:
+
+* s_i = L_i . n_i, the umbrella vector L_i = mean(adj(i)) - x_i along the normal n_i of the plane
+  fitted to i's neighbours (after PLANE_STEPS averages): how far i sits off its neighbours. On a
+  clean surface s is the curvature times the squared edge length; it changes slowly from vertex to
+  vertex, or not at all where the mesh repeats itself (every corner of a cube, every rim vertex of a
+  cylinder is alike).
+* r_i = s_i - median of s_j over i's neighbours j (their normals turned to agree with n_i): ~0 on
+  clean surfaces. At a crease a vertex's neighbours differ, but the median follows the majority of
+  them (a trifan cap's centre is one neighbour of four), and crease vertices are few where the mesh is
+  dense. Noise makes every s_i independent: r is then Gaussian, of standard deviation ``GAIN`` times
+  the noise.
+* The noise of a part is median |r| / (0.6745 GAIN) over its sample vertices (a robust standard
+  deviation: creases, corners and the odd vertex do not move it). Vertices with fewer than three
+  neighbours (curves, the corners of an open grid) use the whole vector L_i - median L_j instead
+  (``CURVE_GAIN``).
+
+A part has noise when that estimate exceeds NOISE_THRESHOLD median edge lengths. GAIN and the
+threshold were chosen on a tuning set of meshes and checked on others (bench/bench_noise_found.py
+prints both). Everything is independent of the coordinates' scale, position and orientation, and
+deterministic.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse import csgraph
+
+GAIN = 1.6  # r's standard deviation over the noise's, on the tuning set's dense meshes (valence 4 to 6)
+# On a curve, r = L_i - (L_{i-1} + L_{i+1}) / 2 = (4 e_{i-1} + 4 e_{i+1} - 6 e_i - e_{i-2} - e_{i+2}) / 4 of
+# the noise e: each coordinate has standard deviation sqrt(70) / 4 times the noise's, and the length of
+# three such is chi-distributed (median 1.5382 times that).
+CURVE_GAIN = math.sqrt(70.0) / 4.0 * 1.5382
+# Noise found where the estimate exceeds this many median edge lengths: 1.35 times the largest estimate on
+# the clean meshes it was tuned on (0.089 on Blender's Monkey as it comes; bench/bench_noise_found.py).
+NOISE_THRESHOLD = 0.12
+DEGENERATE = 4  # parts of at most this many vertices have no noise to find (their shape is all they have)
+SAMPLES = 4096  # sample vertices over the whole mesh ...
+PART_SAMPLES = 64  # ... and at least this many (or all) in every part
+_MAD = 0.6745  # median |N(0, 1)|
+# The planes are fitted to the rings after this many umbrella averages of the positions: noise along the
+# normals as large as the edges would otherwise tilt them towards itself (a symmetric mesh stays symmetric).
+PLANE_STEPS = 2
+
+
+@dataclass(frozen=True)
+class Noise:
+    """The noise found on a mesh, per connected part (parts numbered as ``part_of_vertex``)."""
+
+    part_of_vertex: np.ndarray  # (n,) the part of each vertex
+    sigma: np.ndarray  # (parts,) estimated noise, standard deviation along the normals
+    edge_length: np.ndarray  # (parts,) median edge length at the sample vertices
+    noisy: np.ndarray  # (parts,) bool: noise found (never on a part of at most DEGENERATE vertices)
+
+    @property
+    def found(self):
+        return bool(self.noisy.any())
+
+    @property
+    def quiet(self):
+        """(n,) bool: vertices of parts without noise, which nothing should move."""
+        return ~self.noisy[self.part_of_vertex]
+
+    def level(self):
+        """The estimate for the whole mesh: over the noisy parts if there are any, else over all parts
+        (each weighted by its vertices)."""
+        chosen = self.noisy if self.found else np.ones(self.noisy.size, dtype=bool)
+        weights = np.bincount(self.part_of_vertex, minlength=self.noisy.size)[chosen]
+        return float(np.average(self.sigma[chosen], weights=weights)) if weights.sum() else 0.0
+
+
+def neighbours(rows, operator):
+    """(owner, neighbour): every neighbour of every row, owner the row's place in ``rows``."""
+    starts, counts = operator.indptr[rows], operator.degree[rows]
+    owner = np.repeat(np.arange(rows.size), counts)
+    offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    return owner, operator.indices[np.repeat(starts, counts) + offsets]
+
+
+def find_noise(positions, operator):
+    """The Noise of a mesh: ``positions`` (n, 3), ``operator`` its core.umbrella_operator."""
+    points = np.asarray(positions, dtype=np.float64)
+    n = operator.n_vertices
+    graph = sp.csr_matrix((np.ones(operator.indices.size, np.int8), operator.indices, operator.indptr), shape=(n, n))
+    parts, part_of_vertex = csgraph.connected_components(graph, directed=False)
+    sizes = np.bincount(part_of_vertex, minlength=parts)
+    rows = _sample(part_of_vertex, sizes, operator)
+    residual, edge = _residuals(points, rows, operator)
+    owner = part_of_vertex[rows]
+    sigma, edge_length = np.zeros(parts), np.zeros(parts)
+    for values, out in ((residual, sigma), (edge, edge_length)):
+        keep = np.isfinite(values)
+        out[:] = _group_medians(owner[keep], values[keep], parts)
+    sigma /= _MAD * GAIN
+    sigma[sizes <= DEGENERATE] = 0.0
+    noisy = (sizes > DEGENERATE) & (sigma > NOISE_THRESHOLD * edge_length)
+    return Noise(part_of_vertex, sigma, edge_length, noisy)
+
+
+def _sample(part_of_vertex, sizes, operator):
+    """Evenly spaced vertices with neighbours: SAMPLES over the mesh, at least PART_SAMPLES (or all) per part."""
+    want = np.minimum(sizes, np.maximum(PART_SAMPLES, np.ceil(SAMPLES * sizes / max(1, sizes.sum()))))
+    stride = np.ceil(sizes / np.maximum(want, 1)).astype(np.int64)
+    order = np.argsort(part_of_vertex, kind="stable")
+    rank = np.arange(order.size) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    rows = order[rank % stride[part_of_vertex[order]] == 0]
+    return np.sort(rows[operator.degree[rows] > 0])
+
+
+def _residuals(points, rows, operator):
+    """(|r_i| at each row, NaN where undefined; the median length of each row's edges)."""
+    owner, neighbour = neighbours(rows, operator)
+    ring = np.unique(np.concatenate([rows, neighbour]))
+    place = np.full(operator.n_vertices, -1, dtype=np.int64)
+    place[ring] = np.arange(ring.size)
+    normals, umbrella = _planes(points, ring, operator, _averaged(points, operator, PLANE_STEPS))
+    row_at, neighbour_at = place[rows], place[neighbour]
+    surface = operator.degree[rows] >= 3
+
+    # Surfaces: the normal part of the umbrella against its neighbours' median.
+    n_row = normals[row_at]
+    agree = np.sign(np.einsum("ij,ij->i", normals[neighbour_at], n_row[owner]))
+    agree[agree == 0] = 1.0
+    s_neighbour = np.einsum("ij,ij->i", umbrella[neighbour_at], normals[neighbour_at]) * agree
+    s_row = np.einsum("ij,ij->i", umbrella[row_at], n_row)
+    residual = np.abs(s_row - _group_medians(owner, s_neighbour, rows.size))
+
+    # Curves (and the odd vertex with fewer than three neighbours): the whole umbrella vector.
+    curve = ~surface
+    if curve.any():
+        medians = np.stack([_group_medians(owner, umbrella[neighbour_at, k], rows.size) for k in range(3)], axis=1)
+        vector = umbrella[row_at] - medians
+        residual[curve] = np.linalg.norm(vector[curve], axis=1) * (_MAD * GAIN / CURVE_GAIN)
+
+    lengths = np.linalg.norm(points[neighbour] - points[rows[owner]], axis=1)
+    return residual, _group_medians(owner, lengths, rows.size)
+
+
+def _averaged(points, operator, steps):
+    """``points`` after ``steps`` umbrella averages (each vertex to the mean of its neighbours)."""
+    n = operator.n_vertices
+    if steps == 0:
+        return points
+    weights = np.repeat(1.0 / np.maximum(operator.degree, 1), operator.degree)
+    average = sp.csr_matrix((weights, operator.indices, operator.indptr), shape=(n, n))
+    lonely = operator.degree == 0
+    for _ in range(steps):
+        moved = average @ points
+        moved[lonely] = points[lonely]
+        points = moved
+    return points
+
+
+def _planes(points, ring, operator, plane_points):
+    """(normal, umbrella vector) at each vertex of ``ring``: the smallest PCA axis of its neighbours in
+    ``plane_points`` (with itself where it has fewer than three), and mean(adj) - x in ``points``."""
+    owner, neighbour = neighbours(ring, operator)
+    few = np.flatnonzero(operator.degree[ring] < 3)
+    owner_all = np.concatenate([owner, few])
+    spots = plane_points[np.concatenate([neighbour, ring[few]])]
+    counts = np.bincount(owner_all, minlength=ring.size).astype(np.float64)
+    centre = np.stack([np.bincount(owner_all, spots[:, k], ring.size) for k in range(3)], axis=1) / counts[:, None]
+    spread = spots - centre[owner_all]
+    covariance = np.empty((ring.size, 3, 3))
+    for a in range(3):
+        for b in range(a, 3):
+            covariance[:, a, b] = covariance[:, b, a] = np.bincount(owner_all, spread[:, a] * spread[:, b], ring.size)
+    normals = np.linalg.eigh(covariance)[1][:, :, 0]
+    degree = operator.degree[ring].astype(np.float64)
+    mean = np.stack([np.bincount(owner, points[neighbour, k], ring.size) for k in range(3)], axis=1)
+    umbrella = mean / np.maximum(degree, 1.0)[:, None] - points[ring]
+    return normals, umbrella
+
+
+def _group_medians(owner, values, groups):
+    """The median of ``values`` per group (``owner`` in [0, groups)); NaN for an empty group."""
+    out = np.full(groups, np.nan)
+    if owner.size == 0:
+        return out
+    order = np.lexsort((values, owner))
+    counts = np.bincount(owner, minlength=groups)
+    starts = np.cumsum(counts) - counts
+    has = counts > 0
+    low = starts[has] + (counts[has] - 1) // 2
+    high = starts[has] + counts[has] // 2
+    ordered = values[order]
+    out[has] = 0.5 * (ordered[low] + ordered[high])
+    return out

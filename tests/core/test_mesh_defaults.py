@@ -1,0 +1,144 @@
+"""The Automatic Amount never harms a mesh: nothing to smooth, nothing moves; never a blow-up, never a
+collapse (core.smooth_mesh at its defaults, core.choose_amount, core.volume.restore_volume)."""
+
+import warnings
+
+import numpy as np
+import pytest
+from primitives import CAD, PRIMITIVES, TINY, joined, moved, with_noise
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+import core
+
+CLEAN = {**PRIMITIVES, **CAD, **TINY}
+
+
+def diagonal(points):
+    return float(np.linalg.norm(np.ptp(points, axis=0)))
+
+
+def default_run(part):
+    return core.smooth_mesh(part.positions, part.edges, faces=part.faces or None, return_report=True)
+
+
+def face_areas(points, part):
+    triangles = part.triangles()
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+
+
+def part_boxes(points, part_of_vertex):
+    return np.array([np.ptp(points[part_of_vertex == p], axis=0) for p in range(part_of_vertex.max() + 1)])
+
+
+def parts_of(part):
+    """The connected part of each vertex."""
+    n, e = len(part.positions), part.edges
+    return connected_components(coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)), directed=False)[1]
+
+
+@pytest.mark.parametrize("name", CLEAN)
+def test_nothing_to_smooth_nothing_moves(name):
+    """Every Blender primitive at its defaults (each fill type), CAD-like parts, two vertices, a
+    triangle, a tetrahedron: moved by at most 0.1 % of the diagonal (in fact not at all), and the
+    amount says no noise was found."""
+    part = CLEAN[name]()
+    result, report = default_run(part)
+    assert np.linalg.norm(result - part.positions, axis=1).max() <= 1e-3 * diagonal(part.positions)
+    assert not report.amount.noise_found and report.iterations == 0 and report.volume_offset == 0.0
+    assert np.array_equal(result, part.positions)
+
+
+def test_closed_cone_neither_smoothed_nor_blown_up():
+    """The reproducer: choose_amount chose 198 iterations (alpha 0) for the closed 32-segment cone, and
+    restore_volume then offset it by 7e18. Now the cone has no noise; and restore_volume after those
+    iterations stays bounded: the box grows by 1 % at most."""
+    cone = PRIMITIVES["cone_ngon"]()
+    amount = core.choose_amount(cone.positions, cone.edges)
+    assert amount.iterations == 0 and not amount.noise_found
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", core.ConvergenceWarning)
+        collapsed = core.hc_smooth(cone.positions, cone.edges, alpha=0.0, beta=0.6, iterations=198)
+    kept = core.metrics.enclosed_volume(collapsed, cone.triangles()) / core.metrics.enclosed_volume(
+        cone.positions, cone.triangles()
+    )
+    assert kept < core.volume.KEPT  # collapsed: no offset mends it
+    restored, offsets = core.volume.restore_volume(cone.positions, collapsed, cone.triangles())
+    assert np.array_equal(offsets, [0.0]) and np.array_equal(restored, collapsed)
+    assert np.all(np.ptp(restored, axis=0) <= 1.01 * np.ptp(cone.positions, axis=0) + 1e-12)
+
+
+@pytest.fixture(scope="module")
+def sphere_cube_cone():
+    """A noisy UV sphere joined with a small clean cube (size 0.05) and cone, and tiny parts."""
+    sphere, sigma = with_noise(PRIMITIVES["uv_sphere"](), 0.5, "isotropic", seed=2)
+    others = [
+        moved(PRIMITIVES["cube"](), 0.025, (1.5, 0.0, 0.0)),
+        moved(PRIMITIVES["cone_trifan"](), 0.1, (0.0, 1.5, 0.0)),
+        moved(TINY["tetrahedron"](), 0.1, (0.0, 0.0, 1.5)),
+        moved(TINY["triangle"](), 0.1, (0.0, 0.0, -1.5)),
+        moved(TINY["two_vertices"](), 0.1, (-1.5, 0.0, 0.0)),
+    ]
+    return joined(sphere, *others), len(sphere.positions), sigma
+
+
+def test_small_clean_parts_beside_a_noisy_one_stay(sphere_cube_cone):
+    """The reproducer: the cube grew from 0.05 to 3e14. Now the clean parts stay bit for bit, no part's
+    box grows by more than 1 %, the sphere is smoothed and keeps its volume."""
+    mesh, n, _ = sphere_cube_cone
+    result, report = default_run(mesh)
+    assert report.amount.noise_found and report.iterations > 0
+    assert np.array_equal(result[n:], mesh.positions[n:])
+    parts = parts_of(mesh)
+    assert np.all(part_boxes(result, parts) <= 1.01 * part_boxes(mesh.positions, parts))
+    sphere = PRIMITIVES["uv_sphere"]().triangles()
+    before, after = core.metrics.enclosed_volumes(sphere, mesh.positions[:n], result[:n])
+    assert after == pytest.approx(before, rel=1e-6)
+
+
+def test_no_face_collapses(sphere_cube_cone):
+    """No face larger than the noise (shortest edge over 1.5 times the noise, 0.5 median edge lengths)
+    shrinks under 10 % of its area; the UV sphere's small faces by its poles, which the noise inflated,
+    come back to their clean size, and no face ends under half its clean area."""
+    mesh, n, sigma = sphere_cube_cone
+    result, _ = default_run(mesh)
+    clean = joined(PRIMITIVES["uv_sphere"](), moved(PRIMITIVES["cube"](), 0.025)).positions[: n + 8]
+    sphere = PRIMITIVES["uv_sphere"]()
+    triangles = sphere.triangles()
+    shortest = np.min(
+        [np.linalg.norm(clean[triangles[:, k]] - clean[triangles[:, (k + 1) % 3]], axis=1) for k in range(3)], axis=0
+    )
+    before, after = face_areas(mesh.positions, mesh), face_areas(result, mesh)
+    sphere_faces = np.arange(len(triangles))  # the sphere's triangles come first
+    large = shortest > 1.5 * sigma
+    assert large.sum() > 0.4 * len(triangles)
+    assert np.all(after[sphere_faces][large] >= 0.1 * before[sphere_faces][large])
+    assert np.all(after[sphere_faces] >= 0.5 * face_areas(clean, sphere))
+    assert np.array_equal(after[len(triangles) :], before[len(triangles) :])
+
+
+@pytest.mark.parametrize("name", ["grid", "plane"])
+def test_flat_meshes_keep_their_area(name):
+    """The reproducer: a noise-free Grid lost 17 % of its area, a Plane 40 %."""
+    part = PRIMITIVES[name]()
+    result, _ = default_run(part)
+    assert face_areas(result, part).sum() == pytest.approx(face_areas(part.positions, part).sum(), rel=1e-12)
+
+
+def test_open_and_closed_parts_each_as_it_is(sphere_cube_cone):
+    """A closed noisy sphere beside an open noisy grid: the sphere gets its volume back, the grid no
+    offset (it is the HC run itself)."""
+    sphere, _ = with_noise(PRIMITIVES["uv_sphere"](), 0.5, "isotropic", seed=2)
+    grid, _ = with_noise(moved(PRIMITIVES["grid"](), 1.0, (3.0, 0.0, 0.0)), 0.4, "normal", seed=3)
+    mesh = joined(sphere, grid)
+    n = len(sphere.positions)
+    result, report = default_run(mesh)
+    assert report.volume_offset > 0.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", core.ConvergenceWarning)
+        smoothed = core.hc_smooth(mesh.positions, mesh.edges, alpha=0.0, beta=report.beta, iterations=report.iterations)
+    assert np.array_equal(result[n:], smoothed[n:])
+    triangles = PRIMITIVES["uv_sphere"]().triangles()
+    before, after = core.metrics.enclosed_volumes(triangles, mesh.positions[:n], result[:n])
+    assert after == pytest.approx(before, rel=1e-6)
