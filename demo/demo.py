@@ -65,7 +65,7 @@ def smooth_copy(source, name, location, **operator_args):
 
 def iterations_of(report):
     """How many iterations the operator says it ran."""
-    return int(re.search(r"(\d+) iterations", report).group(1))
+    return int(re.search(r"(\d+) iterations?\b", report).group(1))
 
 
 def least_error_count(noisy, mesh_edges, surface, most):

@@ -39,7 +39,7 @@ def faces_of(mesh):
     return [tuple(p.vertices) for p in mesh.polygons]
 
 
-def noisy_sphere(name="Sphere", subdivisions=3, sigma=0.02, seed=0):
+def noisy_sphere(name="Sphere", subdivisions=3, sigma=0.08, seed=0):
     """An icosphere of radius 1 with Gaussian noise, as a new selected, active object."""
     bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=subdivisions, radius=1.0)
     obj = bpy.context.active_object
