@@ -149,7 +149,10 @@ def run(jobs, props, chunk=None, given=frozenset()):
 
 
 def make_smoother(job, options):
-    """The core.MeshSmoother of a job with ``core_options``' options (checks them: ValueError)."""
+    """The core.MeshSmoother of a job with ``core_options``' options (checks them: ValueError). A mesh
+    without faces (loose edges) has no border to follow or hold."""
+    if job.faces is None:
+        options = {**options, "border": "free"}
     return core.MeshSmoother(
         job.positions,
         job.edges,
@@ -224,7 +227,9 @@ def amount_words(reports):
     if not amounts:
         count = max(report.iterations for report in reports)
         return f"{count} iteration" + ("" if count == 1 else "s")
-    noise = "/".join(f"{report.amount.ratio:.2f}" for report in amounts)
+    if not any(report.amount.noise_found for report in amounts):
+        return "automatic amount: no noise found, nothing to smooth"
+    noise = "/".join(f"{report.amount.ratio:.2f}" if report.amount.noise_found else "none" for report in amounts)
     words = f"automatic amount: noise {noise}x edge length, {iterations} iterations, alpha 0"
     words += ", beta " + "/".join(sorted({f"{report.beta:.3g}" for report in amounts}))
     if any(report.volume_offset for report in reports):

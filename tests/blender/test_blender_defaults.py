@@ -1,0 +1,77 @@
+"""The default never harms a mesh: Blender's primitives (no noise) stay where they are, small parts
+beside a noisy one neither blow up nor collapse (object.hc_smooth with nothing set)."""
+
+import bpy
+import numpy as np
+import pytest
+from blender_scene import noisy_sphere, positions_of, select_only
+
+PRIMITIVES = [
+    ("cube", "primitive_cube_add", {}),
+    ("plane", "primitive_plane_add", {}),
+    ("grid", "primitive_grid_add", {}),
+    ("circle", "primitive_circle_add", {}),
+    ("circle ngon", "primitive_circle_add", {"fill_type": "NGON"}),
+    ("circle trifan", "primitive_circle_add", {"fill_type": "TRIFAN"}),
+    ("uv sphere", "primitive_uv_sphere_add", {}),
+    ("ico sphere", "primitive_ico_sphere_add", {}),
+    ("cylinder", "primitive_cylinder_add", {}),
+    ("cylinder trifan", "primitive_cylinder_add", {"end_fill_type": "TRIFAN"}),
+    ("cylinder open", "primitive_cylinder_add", {"end_fill_type": "NOTHING"}),
+    ("cone", "primitive_cone_add", {}),
+    ("cone trifan", "primitive_cone_add", {"end_fill_type": "TRIFAN"}),
+    ("torus", "primitive_torus_add", {}),
+    ("monkey", "primitive_monkey_add", {}),
+]
+
+
+def box_diagonal(points):
+    return float(np.linalg.norm(np.ptp(points.astype(np.float64), axis=0)))
+
+
+@pytest.mark.parametrize("name, operator, options", PRIMITIVES, ids=[p[0] for p in PRIMITIVES])
+def test_a_primitive_without_noise_stays(scene, capfd, name, operator, options):
+    getattr(bpy.ops.mesh, operator)(**options)
+    obj = bpy.context.active_object
+    before = positions_of(obj.data)
+    assert bpy.ops.object.hc_smooth() == {"FINISHED"}
+    moved = np.linalg.norm(positions_of(obj.data).astype(np.float64) - before, axis=1).max()
+    assert moved <= 1e-3 * box_diagonal(before)
+    assert "no noise found" in capfd.readouterr().out
+
+
+def test_suzanne_subdivided_stays(scene, capfd):
+    bpy.ops.mesh.primitive_monkey_add()
+    obj = bpy.context.active_object
+    obj.modifiers.new("subdivision", "SUBSURF").levels = 2
+    bpy.ops.object.modifier_apply(modifier="subdivision")
+    before = positions_of(obj.data)
+    assert bpy.ops.object.hc_smooth() == {"FINISHED"}
+    moved = np.linalg.norm(positions_of(obj.data).astype(np.float64) - before, axis=1).max()
+    assert moved <= 1e-3 * box_diagonal(before)
+
+
+def test_small_parts_beside_a_noisy_one_neither_blow_up_nor_collapse(scene):
+    """A noisy sphere joined with a small cube and cone: the sphere is smoothed, the small parts keep
+    their size (no part's box grows by more than 1 %)."""
+    sphere = noisy_sphere("Scan")
+    bpy.ops.mesh.primitive_cube_add(size=0.05, location=(1.5, 0, 0))
+    cube = bpy.context.active_object
+    bpy.ops.mesh.primitive_cone_add(radius1=0.05, depth=0.1, location=(0, 1.5, 0))
+    cone = bpy.context.active_object
+    parts = {"sphere": len(sphere.data.vertices), "cube": len(cube.data.vertices), "cone": len(cone.data.vertices)}
+    select_only(sphere, cube, cone)
+    bpy.ops.object.join()
+    obj = bpy.context.active_object
+    before = positions_of(obj.data)
+    assert bpy.ops.object.hc_smooth() == {"FINISHED"}
+    after = positions_of(obj.data)
+    start = 0
+    for name, count in parts.items():
+        part = slice(start, start + count)
+        start += count
+        growth = np.ptp(after[part], axis=0) / np.ptp(before[part], axis=0)
+        assert growth.max() <= 1.01, name
+        if name != "sphere":
+            assert growth.min() >= 0.99, name
+    assert np.abs(after[: parts["sphere"]] - before[: parts["sphere"]]).max() > 1e-3  # the scan was smoothed
