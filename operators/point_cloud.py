@@ -213,11 +213,16 @@ def summary(clouds, settings):
         noise = f"noise {report.noise.ratio:.2f}x spacing: " if automatic else ""
         return f"{noise}{amount(report)}, alpha {report.alpha:.3g}"
 
+    moved = "; ".join(  # the words of the mesh operators' reports (core.Change.summary)
+        core.measure_change(c.positions, c.result).summary().replace("vertices", "points").replace("vertex", "point")
+        for c in clouds
+    )
     return (
         f"HC Smooth Points on {names}: {points} points, "
         + "; ".join(described(c.report) for c in clouds)
         + f", {seconds:.2f} s"
         + (f", {still} points without RFS faces stayed put" if still else "")
+        + f"; {moved}"
     )
 
 
