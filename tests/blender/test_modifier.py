@@ -27,6 +27,7 @@ INPUT_NAMES = (
     "Alpha",
     "Beta",
     "Iterations",
+    "Deviation Limit",
     "Fixed Group",
     "Invert Fixed Group",
     "Pin Boundary",
@@ -593,6 +594,7 @@ def test_panel_button_and_add_modifier_menu_carry_the_scene_settings(scene):
     settings = scene.hc_smooth
     settings.iterations, settings.method, settings.pin_boundary = 17, "LAPLACIAN_CENTRAL", True
     settings.influence_group, settings.invert_influence_group = "Paint", True
+    settings.max_deviation = 0.02
     for draw in (
         lambda layout: bpy.types.VIEW3D_PT_hc_smooth.draw(type("P", (), {"layout": layout})(), bpy.context),
         lambda layout: panel.draw_modifier_menu_entry(type("M", (), {"layout": layout})(), bpy.context),
@@ -602,11 +604,19 @@ def test_panel_button_and_add_modifier_menu_carry_the_scene_settings(scene):
         ((idname, button),) = [entry for entry in layout.buttons() if entry[0] == "object.hc_smooth_modifier_add"]
         assert (button.iterations, button.method, button.pin_boundary) == (17, "LAPLACIAN_CENTRAL", True)
         assert (button.influence_group, button.invert_influence_group) == ("Paint", True)
+        assert button.max_deviation == pytest.approx(0.02)
     assert panel.draw_modifier_menu_entry in bpy.types.OBJECT_MT_modifier_add_deform._dyn_ui_initialize()
     settings.mode = "SEQUENTIAL"
+    most = module("settings_spec").MODIFIER_MAX_ITERATIONS
+    settings.iterations = 3 * most  # the mesh operators have no hard maximum; the modifier's operator clamps it
     layout = RecordingLayout()
     bpy.types.VIEW3D_PT_hc_smooth.draw(type("P", (), {"layout": layout})(), bpy.context)
     assert "The modifier runs Simultaneous mode" in layout.labels()
+    assert f"The modifier runs at most {most} iterations" in layout.labels()
+    ((idname, button),) = [entry for entry in layout.buttons() if entry[0] == "object.hc_smooth_modifier_add"]
+    assert bpy.ops.object.hc_smooth_modifier_add(**vars(button)) == {"FINISHED"}  # the click
+    modifier = bpy.context.active_object.modifiers[-1]
+    assert module("nodes.inputs").get_input(modifier, "Iterations") == most
 
 
 # --- a file with the modifier, opened without the add-on -------------------------------------------------
