@@ -122,7 +122,7 @@ def _interface(tree):
             socket.min_value = spec["min"]
         if spec["max"] is not None:
             socket.max_value = spec["max"]
-        if setting.subtype and hasattr(socket, "subtype"):  # Deviation Limit in scene units (4.5+)
+        if setting.subtype and hasattr(socket, "subtype"):  # Deviation Limit in scene units
             socket.subtype = setting.subtype
         if setting.name not in FIELDS:
             _single_value(socket)
