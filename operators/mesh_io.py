@@ -124,19 +124,23 @@ def group_read_by_name(obj, group_index):
 def geometry_nodes_move_vertices(obj):
     """Whether a Geometry Nodes modifier can move the vertices of ``obj``'s mesh: Blender 5.2 writes Set
     Position into a vertex group named "position" instead (and Edge Vertices read it), which leaves every
-    such modifier, HC Smooth's too, with a wrong result. A throw-away copy is moved by 1 in z and read back."""
+    such modifier, HC Smooth's too, with a wrong result. A throw-away copy's vertices are all set to one
+    point and read back."""
     if obj.vertex_groups.get("position") is None or not len(obj.data.vertices):
         return True  # nothing of that name: the positions are the position attribute
+    target = (0.25, -0.5, 1.75)
 
     def build(tree, group_input, group_output):
-        move = tree.nodes.new("GeometryNodeSetPosition")
-        move.inputs["Offset"].default_value = (0.0, 0.0, 1.0)
+        move, point = tree.nodes.new("GeometryNodeSetPosition"), tree.nodes.new("ShaderNodeCombineXYZ")
+        for socket, value in zip(point.inputs, target):
+            socket.default_value = value
+        tree.links.new(point.outputs[0], move.inputs["Position"])  # its own value is the Position field
         tree.links.new(group_input.outputs["Geometry"], move.inputs["Geometry"])
         tree.links.new(move.outputs["Geometry"], group_output.inputs[0])
 
     with _evaluated_copy(obj.data, build) as (_, evaluated):
         moved = read_positions(evaluated)
-    return np.array_equal(moved[:, 2], read_positions(obj.data)[:, 2] + np.float32(1.0))
+    return bool(np.all(moved == np.array(target, dtype=np.float32)))
 
 
 _BULK_MINIMUM = 2_000  # below this the loop is as fast as setting up an evaluation
