@@ -480,7 +480,7 @@ MODIFIER_ITERATIONS = replace(
     ITERATIONS,
     description="Number of smoothing iterations (heavier noise needs more). At most "
     f"{MODIFIER_MAX_ITERATIONS}: Blender cannot interrupt a modifier while it evaluates, and {MODIFIER_MAX_ITERATIONS} "
-    "HC iterations take about 20 s on 100k vertices",
+    "HC iterations take 15-20 s on 100k vertices",
     max=MODIFIER_MAX_ITERATIONS,
     flag=None,
     cli_default=None,
