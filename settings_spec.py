@@ -469,13 +469,35 @@ POINTS = (
 # --- the HC Smooth modifier: object.hc_smooth_modifier_add and the modifier's node group ------------------
 # The mesh settings a modifier can hold: it runs simultaneous mode and every iteration (no Mode, no
 # Tolerance), on the evaluated mesh (no Output). Each is an input of the node group named by the setting's
-# label: saved files and users' scripts set the inputs by these names.
+# label: saved files and users' scripts set the inputs by these names. Iterations and Deviation Limit are the
+# mesh settings of those names with the modifier's own limits and tooltips.
+
+# A Geometry Nodes evaluation cannot be cancelled: the modifier's Iterations has a hard maximum besides the
+# panels' soft one, chosen from the seconds per 1000 HC iterations that bench/bench_modifier_limits.py measures
+# (docs/modifier.md, "Limits").
+MODIFIER_MAX_ITERATIONS = 1000
+MODIFIER_ITERATIONS = replace(
+    ITERATIONS,
+    description="Number of smoothing iterations (heavier noise needs more). At most "
+    f"{MODIFIER_MAX_ITERATIONS}: Blender cannot interrupt a modifier while it evaluates, and {MODIFIER_MAX_ITERATIONS} "
+    "HC iterations take 15-20 s on 100k vertices",
+    max=MODIFIER_MAX_ITERATIONS,
+    flag=None,
+    cli_default=None,
+)
+MODIFIER_MAX_DEVIATION = replace(
+    MAX_DEVIATION,
+    description="The farthest any vertex may end from where it started, kept inside every iteration (0 = no limit)",
+    flag=None,
+    cli_default=None,
+)
 
 MODIFIER = (
     METHOD,
     ALPHA,
     BETA,
-    ITERATIONS,
+    MODIFIER_ITERATIONS,
+    MODIFIER_MAX_DEVIATION,
     VERTEX_GROUP,
     INVERT_VERTEX_GROUP,
     PIN_BOUNDARY,

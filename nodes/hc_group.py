@@ -29,20 +29,42 @@ Painted influence λ (the Influence input, a vertex group's weights) is core's i
 iteration a vertex takes q + λ (p - q) instead of p, q itself where λ = 0. For the Blur methods that
 is the central step with a per-vertex weight (see build()); the Repeat zone mixes p and q only when
 some vertex has λ < 1, so without a painted group it evaluates the unweighted step alone.
+
+The Deviation Limit r is core's max_deviation=: every iteration ends with p = o + d min(1, r / |d|), d = p - o,
+after the influence (0 = no limit). Plain and central Laplacian then run in the Repeat zone too (one Blur
+node cannot stop after each iteration); without a limit the zone is built without it.
+
+Guards (the modifier cannot write garbage, whoever sets its inputs: the panel, a script writing the modifier's
+ID properties, NaN included): each single-value input is clamped to its range inside the tree by comparisons
+(a Clamp or Minimum node passes NaN on); a NaN Alpha, Beta or Deviation Limit, HC with Beta below 0.5 for more
+than SAFE_HC_STEPS iterations, and a result that is not finite or has blown up (core's test: a bounding box
+BLOW_UP_FACTOR times the input's) pass the mesh through unchanged. Each case says why in the modifier's
+Warnings panel (the Warning node, Blender 4.3 and later; on 4.2 the pass-through alone).
 """
 
 import bpy
 
 from .. import settings_spec
+from ..core.smoothing import BLOW_UP_FACTOR
 
 GROUP_NAME = "HC Smooth"
 # Bump whenever the nodes or the interface change: an older group in a file is then rebuilt in place.
-VERSION = 2
+VERSION = 3
 VERSION_KEY = "hc_smooth_version"
 
 # Blur weight standing in for "only the neighbours" (plain Laplacian): the centre's own share is
 # 2^-40 of theirs, far below single-precision rounding, and W |q| stays finite up to |q| ~ 1e26.
 NEIGHBOURS_ONLY = 2.0**-40
+
+# HC with Beta below 0.5 grows without bound (on an alternating pattern each step multiplies it by up to 3 - α),
+# so it is refused beyond this many iterations. Within them it cannot reach the blow-up test: an iteration
+# keeps each coordinate within 3 times its largest distance from the input box's centre (T averages; b and T b
+# are at most twice that distance; the influence and the limit mix with q and o), so 2 iterations leave the
+# bounding box at most 3² = 9 times the input's. With Beta >= 0.5 the step's factors lie in [-1, 1] for every α
+# in [0, 1]: no growth, though only α > 0 and β > 0.5 are proven to converge (paper, Theorem 5.2).
+SAFE_HC_STEPS = 2
+LARGEST_FINITE = 3.0e38  # below float32's largest: a sum of |coordinates| beyond it is infinite or NaN
+PASSED_THROUGH = "the mesh is passed through unchanged"
 
 METHOD_ITEMS = tuple((choice.label, choice.description) for choice in settings_spec.METHOD.items)
 HC, LAPLACIAN, CENTRAL, ORIGINAL = range(4)  # the menu's values, in settings_spec.METHOD's order
@@ -100,6 +122,8 @@ def _interface(tree):
             socket.min_value = spec["min"]
         if spec["max"] is not None:
             socket.max_value = spec["max"]
+        if setting.subtype and hasattr(socket, "subtype"):  # Deviation Limit in scene units
+            socket.subtype = setting.subtype
         if setting.name not in FIELDS:
             _single_value(socket)
         sockets[name] = socket
@@ -202,18 +226,53 @@ class _Tree:
         return node.outputs["Geometry"]
 
     def clamp(self, value, low=0.0, high=1.0):
-        node = self.node("ShaderNodeClamp")
-        self.feed(node.inputs["Value"], value)
-        self.feed(node.inputs["Min"], low)
-        self.feed(node.inputs["Max"], high)
-        return node.outputs[0]
+        """``value`` within [low, high] (high None: no upper limit), NaN to ``low``. By comparisons, which are
+        false for NaN, where a Clamp or Minimum node passes NaN on; a value inside keeps its bits."""
+        value = self.switch("FLOAT", self.math("GREATER_THAN", value, low), low, value)
+        if high is None:
+            return value
+        return self.switch("FLOAT", self.math("LESS_THAN", value, high), high, value)
 
-    def minimum_on_points(self, geometry, value):
-        """The smallest value of a float field over the points of ``geometry``: a single value."""
+    def is_number(self, value):
+        """False for NaN only (every number is above 0 or below 1)."""
+        return self.boolean("OR", self.math("GREATER_THAN", value, 0.0), self.math("LESS_THAN", value, 1.0))
+
+    def outside(self, value, low, high=None):
+        """A number below ``low`` or above ``high`` (None: no upper limit); False for NaN."""
+        below = self.math("LESS_THAN", value, low)
+        return below if high is None else self.boolean("OR", below, self.math("GREATER_THAN", value, high))
+
+    def warning(self, show, message, kind="ERROR"):
+        """A line in the modifier's Warnings panel while ``show`` is true; returns ``show`` (a Warning node's
+        output is its input). Blender 4.2 has no Warning node: ``show`` alone."""
+        if not hasattr(bpy.types, "GeometryNodeWarning"):
+            return show
+        node = self.node("GeometryNodeWarning", warning_type=kind)
+        self.feed(node.inputs["Show"], show)
+        node.inputs["Message"].default_value = message
+        return node.outputs["Show"]
+
+    def any_of(self, conditions):
+        result = conditions[0]
+        for condition in conditions[1:]:
+            result = self.boolean("OR", result, condition)
+        return result
+
+    def statistic(self, geometry, value, output):
+        """``output`` ("Min", "Max") of a float field over the points of ``geometry``: a single value."""
         node = self.node("GeometryNodeAttributeStatistic", data_type="FLOAT", domain="POINT")
         self.feed(node.inputs["Geometry"], geometry)
         self.feed(node.inputs["Attribute"], value)
-        return node.outputs["Min"]
+        return node.outputs[output]
+
+    def diagonal(self, low, high):
+        return self.node_output("ShaderNodeVectorMath", "Value", operation="LENGTH", inputs=[self.subtract(high, low)])
+
+    def node_output(self, idname, output, inputs=(), **attributes):
+        node = self.node(idname, **attributes)
+        for socket, value in zip(node.inputs, inputs):
+            self.feed(socket, value)
+        return node.outputs[output]
 
     def position(self):
         return self.node("GeometryNodeInputPosition").outputs[0]
@@ -235,10 +294,9 @@ def build(tree):
     def value(setting):
         return inputs[input_name(setting)]
 
-    alpha, beta, iterations = value(settings_spec.ALPHA), value(settings_spec.BETA), value(settings_spec.ITERATIONS)
-
     # The method as its number. A new Menu Switch has two items (numbers 0, 1): renamed, not replaced,
     # so the items are numbered 0..3 in settings_spec's order and a 4.x script can set the number.
+    # A number outside the menu (a script can write one in 4.x) reads as 0, HC.
     menu = t.node("GeometryNodeMenuSwitch", data_type="INT")
     while len(menu.enum_items) < len(METHOD_ITEMS):
         menu.enum_items.new("")
@@ -251,6 +309,8 @@ def build(tree):
     def is_method(number):  # 1.0 or 0.0; COMPARE's third input, the tolerance, is 0.5 by default
         return t.math("COMPARE", method, float(number))
 
+    alpha, beta, iterations, limit, refused = _checked_inputs(t, value, is_method(HC))
+
     # Who moves: outside the fixed group (inside it, inverted), not on a pinned boundary, with neighbours.
     in_group = t.math("GREATER_THAN", value(settings_spec.VERTEX_GROUP), 0.0)
     fixed = t.boolean("XOR", in_group, value(settings_spec.INVERT_VERTEX_GROUP))
@@ -262,15 +322,16 @@ def build(tree):
     fixed = t.boolean("OR", fixed, t.math("LESS_THAN", degree, 0.5))
     movable = t.boolean("NOT", fixed)
 
-    # The painted influence, as core takes it: the group's weights (inverted: 1 - weight) clipped to [0, 1].
+    # The painted influence, as core takes it: the group's weights (inverted: 1 - weight) clipped to [0, 1]
+    # (NaN, which an attribute can hold: 0).
     painted = value(settings_spec.INFLUENCE_GROUP)
     influence = t.clamp(
         t.switch("FLOAT", value(settings_spec.INVERT_INFLUENCE_GROUP), painted, t.math("SUBTRACT", 1.0, painted))
     )
 
-    # Plain and central Laplacian: one Blur Attribute, all iterations (weights as in the module's docstring).
-    # Influence λ makes the step the central one with a' = a + (1 - a)(1 - λ): a' q + (1 - a') T q is
-    # q + λ (p - q). Where λ = 1 this is the same arithmetic as without influence (a' = a, 1 - a' = 1 - a).
+    # Plain and central Laplacian without a limit: one Blur Attribute, all iterations (weights as in the
+    # module's docstring). Influence λ makes the step the central one with a' = a + (1 - a)(1 - λ):
+    # a' q + (1 - a') T q is q + λ (p - q). Where λ = 1 this is the same arithmetic as without influence.
     a = t.math("MULTIPLY", alpha, is_method(CENTRAL))  # 0 for plain
     one_minus_a = t.math("SUBTRACT", 1.0, a)
     kept = t.math("MULTIPLY_ADD", one_minus_a, t.math("SUBTRACT", 1.0, influence), a)  # a'
@@ -284,7 +345,7 @@ def build(tree):
     # Blur gives q + 0 where the weight is 0, which turns -0.0 into 0.0: those vertices keep q itself.
     blurred = t.set_position(inputs["Geometry"], blur.outputs[0], t.math("GREATER_THAN", blur_weight, 0.0))
 
-    # HC and the Laplacian with the original point: a Repeat zone of simultaneous steps.
+    # Every method with a Deviation Limit, and HC and the original point always: a Repeat zone of simultaneous steps.
     position = t.position()
     start, (original, movable, influence) = t.capture(
         inputs["Geometry"],
@@ -292,7 +353,7 @@ def build(tree):
     )
     # A single value: whether any vertex takes less than the full step. If none does, the steps below are
     # built without the weighting (a Switch on a single value evaluates only the side it picks).
-    partly = t.math("LESS_THAN", t.minimum_on_points(start, influence), 1.0)
+    partly = t.math("LESS_THAN", t.statistic(start, influence, "Min"), 1.0)
 
     def weighted(p, q):
         """q + λ (p - q) as core computes it, λ the influence: that share of the iteration's move from q to p;
@@ -301,6 +362,15 @@ def build(tree):
         share = t.switch("VECTOR", t.math("GREATER_THAN", influence, 0.0), q, share)
         share = t.switch("VECTOR", t.math("LESS_THAN", influence, 1.0), p, share)
         return t.switch("VECTOR", partly, p, share)
+
+    limited = t.math("GREATER_THAN", limit, 0.0)  # a single value: the limit's nodes are evaluated only if on
+
+    def bounded(p):
+        """The Deviation Limit r as core applies it: p = o + d r / |d| where |d| > r (d = p - o), else p itself."""
+        away = t.subtract(p, original)
+        length = t.node_output("ShaderNodeVectorMath", "Value", operation="LENGTH", inputs=[away])
+        projected = t.add(original, t.scale(away, t.math("DIVIDE", limit, length)))
+        return t.switch("VECTOR", limited, p, t.switch("VECTOR", t.math("GREATER_THAN", length, limit), p, projected))
 
     repeat_in = t.node("GeometryNodeRepeatInput")
     repeat_out = t.node("GeometryNodeRepeatOutput")
@@ -311,9 +381,13 @@ def build(tree):
 
     q = t.position()
     tq = t.umbrella_of_positions()
+    # The Laplacian steps: a X + (1 - a) T q with X = o (original point) or q (central), a = 0 for plain.
+    a = t.math("MULTIPLY", alpha, t.math("SUBTRACT", 1.0, is_method(LAPLACIAN)))
+    pulled_to = t.switch("VECTOR", is_method(CENTRAL), original, q)
+    laplacian_step = t.add(t.scale(pulled_to, a), t.scale(tq, t.math("SUBTRACT", 1.0, a)))
+    laplacian = t.set_position(current, bounded(weighted(laplacian_step, q)), movable)
+
     one_minus_alpha = t.math("SUBTRACT", 1.0, alpha)
-    laplacian_step = t.add(t.scale(original, alpha), t.scale(tq, one_minus_alpha))
-    laplacian = t.set_position(current, weighted(laplacian_step, q), movable)
 
     def anchor(q):
         """s = α o + (1-α) q."""
@@ -324,16 +398,95 @@ def build(tree):
     with_q, (q_kept,) = t.capture(current, [("VECTOR", "Start", q)])  # q, while the positions carry w
     carrying_w = t.set_position(with_q, w)  # every vertex: T w below reads the neighbours' w, 0 if fixed
     hc_step = t.subtract(t.add(anchor(q_kept), t.position()), t.umbrella_of_positions())  # s + w - T w
-    hc_step = weighted(hc_step, q_kept)  # influence scales the move, not w: such vertices stay in V_var
+    hc_step = bounded(weighted(hc_step, q_kept))  # influence scales the move, not w: such vertices stay in V_var
     hc = t.set_position(carrying_w, t.switch("VECTOR", movable, original, hc_step))  # fixed: o = q, exactly
 
     t.feed(repeat_out.inputs["Geometry"], t.switch("GEOMETRY", is_method(HC), laplacian, hc))
     iterated = repeat_out.outputs["Geometry"]
-    uses_blur = t.boolean("OR", is_method(LAPLACIAN), is_method(CENTRAL))
-    t.feed(group_output.inputs["Geometry"], t.switch("GEOMETRY", uses_blur, iterated, blurred))
+    uses_blur = t.boolean("AND", t.boolean("OR", is_method(LAPLACIAN), is_method(CENTRAL)), t.boolean("NOT", limited))
+    smoothed = t.switch("GEOMETRY", uses_blur, iterated, blurred)
+    t.feed(group_output.inputs["Geometry"], _guarded(t, inputs["Geometry"], smoothed, refused))
 
     sockets[input_name(settings_spec.METHOD)].default_value = METHOD_NAMES[settings_spec.METHOD.default]
     return sockets
+
+
+def _checked_inputs(t, value, is_hc):
+    """(alpha, beta, iterations, limit, refused): the single-value inputs clamped to their ranges, and whether
+    the mesh must pass through unchanged (a NaN input; HC where it can blow up). Each case is a line in the
+    Warnings panel: a clamp is an Info, a refusal an Error."""
+    refusals = []
+
+    def checked(setting, low, high, clamped):
+        raw, name = value(setting), input_name(setting)
+        if setting.kind == "float":
+            not_a_number = t.boolean("NOT", t.is_number(raw))
+            refusals.append(t.warning(not_a_number, f"{name} is not a number: {PASSED_THROUGH}"))
+        t.warning(t.outside(raw, low, high), f"{name} {clamped}", "INFO")
+        return t.clamp(raw, low, high)
+
+    alpha = checked(settings_spec.ALPHA, 0.0, 1.0, "is outside 0 to 1: the nearest of the two is used")
+    beta = checked(settings_spec.BETA, 0.0, 1.0, "is outside 0 to 1: the nearest of the two is used")
+    most = settings_spec.MODIFIER_MAX_ITERATIONS
+    iterations = checked(
+        settings_spec.MODIFIER_ITERATIONS,
+        0.0,
+        float(most),
+        f"is outside 0 to {most} (Blender cannot interrupt a modifier while it evaluates): the nearest is used",
+    )
+    limit = checked(settings_spec.MODIFIER_MAX_DEVIATION, 0.0, None, "is below 0: no limit")
+
+    runs_hc = t.boolean("AND", is_hc, t.math("GREATER_THAN", iterations, 0.5))
+    unbounded = t.boolean(
+        "AND", t.math("LESS_THAN", beta, 0.5), t.math("GREATER_THAN", iterations, SAFE_HC_STEPS + 0.5)
+    )
+    unbounded = t.warning(
+        t.boolean("AND", is_hc, unbounded),
+        f"HC with Beta below 0.5 can blow up: it runs at most {SAFE_HC_STEPS} iterations; raise Beta to 0.5 or "
+        f"more (paper, Theorem 5.2): {PASSED_THROUGH}",
+    )
+    refusals.append(unbounded)
+    proven = t.boolean("AND", t.math("GREATER_THAN", alpha, 0.0), t.math("GREATER_THAN", beta, 0.5))
+    t.warning(
+        t.boolean("AND", t.boolean("AND", runs_hc, t.boolean("NOT", proven)), t.boolean("NOT", unbounded)),
+        "HC is proven to converge only for Alpha > 0 and Beta > 0.5 (paper, Theorem 5.2): many iterations may "
+        "drift or shrink the mesh",
+        "INFO",
+    )
+    return alpha, beta, iterations, limit, t.any_of(refusals)
+
+
+def _guarded(t, geometry, smoothed, refused):
+    """``smoothed``, or ``geometry`` unchanged where the inputs are refused or the result has blown up (a
+    coordinate not finite, or core's test: a bounding box around input and result BLOW_UP_FACTOR times the
+    input's diagonal)."""
+    result = t.switch("GEOMETRY", refused, smoothed, geometry)  # refused: the smoothing is not evaluated
+    box_in, box_out = t.node("GeometryNodeBoundBox"), t.node("GeometryNodeBoundBox")
+    t.feed(box_in.inputs[0], geometry)
+    t.feed(box_out.inputs[0], result)
+    low = t.vector("MINIMUM", box_in.outputs["Min"], box_out.outputs["Min"])
+    high = t.vector("MAXIMUM", box_in.outputs["Max"], box_out.outputs["Max"])
+    size = t.diagonal(box_in.outputs["Min"], box_in.outputs["Max"])
+    grown = t.math("GREATER_THAN", t.diagonal(low, high), t.math("MULTIPLY", size, BLOW_UP_FACTOR))
+    # Bounding Box skips NaN: each point's sum of |coordinates|, compared so that NaN and inf fail.
+    magnitude = t.node_output(
+        "ShaderNodeVectorMath",
+        "Value",
+        operation="DOT_PRODUCT",
+        inputs=[
+            t.node_output("ShaderNodeVectorMath", "Vector", operation="ABSOLUTE", inputs=[t.position()]),
+            (1, 1, 1),
+        ],
+    )
+    infinite = t.math("SUBTRACT", 1.0, t.math("LESS_THAN", magnitude, LARGEST_FINITE))
+    infinite = t.math("GREATER_THAN", t.statistic(result, infinite, "Max"), 0.0)
+    blown = t.boolean("AND", t.boolean("NOT", refused), t.boolean("OR", grown, infinite))
+    blown = t.warning(
+        blown,
+        f"Smoothing blew up (a coordinate not finite, or the bounding box more than {BLOW_UP_FACTOR:g} times the "
+        f"input's): {PASSED_THROUGH}",
+    )
+    return t.switch("GEOMETRY", blown, result, geometry)
 
 
 # --- one group per file, rebuilt when the add-on's is newer -------------------------------------------------

@@ -12,6 +12,7 @@ from bpy.props import BoolProperty
 from .. import settings_spec
 from ..nodes import hc_group, inputs
 from ..ui.draw import draw_settings, modifier_differences
+from . import mesh_io, undo_steps
 from .properties import annotations
 
 MODIFIER_NAME = "HC Smooth"
@@ -66,11 +67,28 @@ def draw_add_as_modifier(layout, smoothing):
 
 
 def undo_last_smoothing(context):
-    """Ctrl+Z the smoothing just made, if the last operator was object.hc_smooth; True if it did."""
+    """Ctrl+Z the smoothing just made: None if it did, else (level, message) saying why not.
+
+    Only the smoothing's own undo step is taken back. The last operator can be object.hc_smooth while another
+    undo step came after it (an edited property pushes one, and is no operator): then undoing one step would
+    take back that edit and leave the mesh smoothed, so nothing is undone and the caller stops ("ERROR")."""
     operators = context.window_manager.operators
-    if not operators or operators[-1].bl_idname != SMOOTH_OPERATOR or not bpy.ops.ed.undo.poll():
-        return False
-    return bpy.ops.ed.undo() == {"FINISHED"}
+    if not operators or operators[-1].bl_idname != SMOOTH_OPERATOR:
+        return "WARNING", "The last operation was not HC Smooth: nothing was undone"
+    step = undo_steps.active_step_name(context.window_manager)
+    if step is None or not bpy.ops.ed.undo.poll():
+        return (
+            "ERROR",
+            "The undo history could not be read: nothing was changed. Undo the smoothing, then add the modifier",
+        )
+    if step != operators[-1].bl_label:
+        return "ERROR", (
+            f"Another change ('{step}') came after HC Smooth, and Ctrl+Z would take that back instead: nothing was "
+            "changed. Undo back to before the smoothing, then add the modifier"
+        )
+    if bpy.ops.ed.undo() != {"FINISHED"}:
+        return "ERROR", "The smoothing could not be undone: nothing was changed"
+    return None
 
 
 class OBJECT_OT_hc_smooth_modifier_add(bpy.types.Operator):
@@ -91,14 +109,24 @@ class OBJECT_OT_hc_smooth_modifier_add(bpy.types.Operator):
         return any(obj.type == "MESH" for obj in _targets(context))
 
     def execute(self, context):
-        if self.replace_smoothing:
-            self.replace_smoothing = False  # a redo of this operator must not undo anything again
-            if not undo_last_smoothing(context):
-                self.report({"WARNING"}, "The last operation was not HC Smooth: nothing was undone")
         objects = [obj for obj in _targets(context) if obj.type == "MESH"]
         if not objects:
             self.report({"ERROR"}, "Select at least one mesh object")
             return {"CANCELLED"}
+        unreadable = [problem for obj in objects for problem in shadowed_groups(obj, self)]
+        for problem in unreadable:
+            self.report({"ERROR"}, problem)
+        if unreadable:
+            return {"CANCELLED"}
+        if self.replace_smoothing:
+            self.replace_smoothing = False  # a redo of this operator must not undo anything again
+            problem = undo_last_smoothing(context)
+            if problem is not None:
+                level, message = problem
+                self.report({level}, message)
+                if level == "ERROR":
+                    return {"CANCELLED"}
+            objects = [obj for obj in _targets(context) if obj.type == "MESH"]  # undo reloads the objects
         for obj in objects:
             add_modifier(obj, self)
             for warning in missing_groups(obj, self):
@@ -122,6 +150,27 @@ def missing_groups(obj, settings):
     if settings.influence_group and obj.vertex_groups.get(settings.influence_group) is None:
         still = "every vertex takes the full step" if settings.invert_influence_group else "no vertex moves"
         yield f"{name} '{settings.influence_group}' (the influence group): {still}"
+
+
+def shadowed_groups(obj, settings):
+    """The vertex groups of ``settings`` that the modifier would not read on ``obj``, as messages: Geometry Nodes
+    look a group up by its name, and an attribute of that name comes first (Blender 4.x: built-in ones such as
+    "id", "material_index", "sharp_edge" even where the mesh lacks them; every version: the mesh's own, such
+    as "position" or a UV map). The operators read such groups correctly; the modifier cannot."""
+    if not mesh_io.geometry_nodes_move_vertices(obj):
+        yield (
+            f"Object '{obj.name}' has a vertex group named 'position', which this Blender's Geometry Nodes write the "
+            "positions into: no Geometry Nodes modifier can move its vertices. Rename the vertex group"
+        )
+    for setting in SETTINGS:
+        if setting.kind != "string" or not getattr(settings, setting.name):
+            continue
+        group = obj.vertex_groups.get(getattr(settings, setting.name))
+        if group is not None and not mesh_io.group_read_by_name(obj, group.index):
+            yield (
+                f"Object '{obj.name}': Geometry Nodes read the attribute '{group.name}', not the vertex group of that "
+                f"name ({setting.label}): rename the vertex group to use it in the modifier"
+            )
 
 
 def _targets(context):

@@ -77,7 +77,9 @@ def modifier_differences(settings):
     """Why a smoothing with these mesh settings is not what the modifier gives: short lines, none if it is."""
     lines = []
     if settings_spec.automatic(values_of(settings, settings_spec.MESH)):
-        lines.append("The modifier takes Alpha and Iterations as set")
+        lines.append("The modifier takes Alpha, Iterations and Deviation Limit as set")
+    if settings.iterations > settings_spec.MODIFIER_MAX_ITERATIONS:
+        lines.append(f"The modifier runs at most {settings_spec.MODIFIER_MAX_ITERATIONS} iterations")
     if settings.mode != "SIMULTANEOUS":
         lines.append("The modifier runs Simultaneous mode")
     if settings.tolerance > 0.0:

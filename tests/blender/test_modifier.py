@@ -27,6 +27,7 @@ INPUT_NAMES = (
     "Alpha",
     "Beta",
     "Iterations",
+    "Deviation Limit",
     "Fixed Group",
     "Invert Fixed Group",
     "Pin Boundary",
@@ -573,6 +574,42 @@ def test_add_as_modifier_replaces_the_smoothing_just_made(scene):
     assert len(obj.modifiers) == 0 and np.array_equal(positions_of(obj.data), before)
 
 
+def test_add_as_modifier_after_a_property_edit_changes_nothing(scene):
+    # An edited property pushes an undo step and is no operator: the smoothing is still the last operator (its
+    # panel still shows), but one Ctrl+Z would take back the edit and leave the mesh smoothed for the modifier to
+    # smooth again. Nothing is undone or added.
+    obj = noisy_sphere()
+    select_only(obj)
+    bpy.ops.ed.undo_push(message="Before")
+    settings = dict(method="HC", alpha=ALPHA, beta=BETA, iterations=ITERATIONS)
+    assert bpy.ops.object.hc_smooth("INVOKE_DEFAULT", True, **manual(**settings)) == {"FINISHED"}
+    smoothed = positions_of(bpy.data.objects["Sphere"].data)
+    bpy.context.scene.hc_smooth.iterations = 33  # what the UI does when a field is edited: the edit, its step
+    bpy.ops.ed.undo_push(message="Iterations")
+    assert bpy.context.window_manager.operators[-1].bl_idname == "OBJECT_OT_hc_smooth"
+    with pytest.raises(RuntimeError, match=r"Another change \('Iterations'\) came after HC Smooth"):
+        bpy.ops.object.hc_smooth_modifier_add("INVOKE_DEFAULT", True, replace_smoothing=True, **settings)
+    obj = bpy.data.objects["Sphere"]
+    assert len(obj.modifiers) == 0 and np.array_equal(positions_of(obj.data), smoothed)
+    assert bpy.context.scene.hc_smooth.iterations == 33  # the edit is kept
+
+
+def test_add_as_modifier_undoes_only_the_smoothing(scene):
+    obj = noisy_sphere()
+    select_only(obj)
+    bpy.ops.ed.undo_push(message="Before")
+    bpy.context.scene.hc_smooth.pin_boundary = True  # an edit before the smoothing: it must stay
+    bpy.ops.ed.undo_push(message="Pin Boundary")
+    before = positions_of(obj.data)
+    assert bpy.ops.object.hc_smooth("INVOKE_DEFAULT", True, **manual(iterations=3)) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth_modifier_add("INVOKE_DEFAULT", True, replace_smoothing=True, iterations=3) == {
+        "FINISHED"
+    }
+    obj = bpy.data.objects["Sphere"]
+    assert len(obj.modifiers) == 1 and np.array_equal(positions_of(obj.data), before)
+    assert bpy.context.scene.hc_smooth.pin_boundary
+
+
 def test_replace_after_another_operation_only_adds(scene):
     obj = noisy_sphere()
     select_only(obj)
@@ -593,6 +630,7 @@ def test_panel_button_and_add_modifier_menu_carry_the_scene_settings(scene):
     settings = scene.hc_smooth
     settings.iterations, settings.method, settings.pin_boundary = 17, "LAPLACIAN_CENTRAL", True
     settings.influence_group, settings.invert_influence_group = "Paint", True
+    settings.max_deviation = 0.02
     for draw in (
         lambda layout: bpy.types.VIEW3D_PT_hc_smooth.draw(type("P", (), {"layout": layout})(), bpy.context),
         lambda layout: panel.draw_modifier_menu_entry(type("M", (), {"layout": layout})(), bpy.context),
@@ -602,11 +640,19 @@ def test_panel_button_and_add_modifier_menu_carry_the_scene_settings(scene):
         ((idname, button),) = [entry for entry in layout.buttons() if entry[0] == "object.hc_smooth_modifier_add"]
         assert (button.iterations, button.method, button.pin_boundary) == (17, "LAPLACIAN_CENTRAL", True)
         assert (button.influence_group, button.invert_influence_group) == ("Paint", True)
+        assert button.max_deviation == pytest.approx(0.02)
     assert panel.draw_modifier_menu_entry in bpy.types.OBJECT_MT_modifier_add_deform._dyn_ui_initialize()
     settings.mode = "SEQUENTIAL"
+    most = module("settings_spec").MODIFIER_MAX_ITERATIONS
+    settings.iterations = 3 * most  # the mesh operators have no hard maximum; the modifier's operator clamps it
     layout = RecordingLayout()
     bpy.types.VIEW3D_PT_hc_smooth.draw(type("P", (), {"layout": layout})(), bpy.context)
     assert "The modifier runs Simultaneous mode" in layout.labels()
+    assert f"The modifier runs at most {most} iterations" in layout.labels()
+    ((idname, button),) = [entry for entry in layout.buttons() if entry[0] == "object.hc_smooth_modifier_add"]
+    assert bpy.ops.object.hc_smooth_modifier_add(**vars(button)) == {"FINISHED"}  # the click
+    modifier = bpy.context.active_object.modifiers[-1]
+    assert module("nodes.inputs").get_input(modifier, "Iterations") == most
 
 
 # --- a file with the modifier, opened without the add-on -------------------------------------------------

@@ -157,7 +157,17 @@ def test_settings_class_holds_the_declared_defaults(settings):
 def test_mesh_parts_make_up_the_mesh_settings():
     # Every mesh setting is drawn with one part (N-panel: main, Fixed Vertices, after the convergence box).
     assert spec.MESH == spec.MESH_SMOOTHING + spec.MESH_VERTICES + spec.MESH_RESULT
-    assert set(spec.MODIFIER) <= set(spec.MESH)
+    # The modifier holds mesh settings, two of them with its own limits and tooltips.
+    mesh = {s.name: s for s in spec.MESH}
+    assert {s.name for s in spec.MODIFIER} <= set(mesh)
+    own = {s.name for s in spec.MODIFIER if s is not mesh[s.name]}
+    assert own == {"iterations", "max_deviation"}
+    for setting in spec.MODIFIER:
+        assert (setting.label, setting.kind, setting.default) == (
+            mesh[setting.name].label,
+            mesh[setting.name].kind,
+            mesh[setting.name].default,
+        )
 
 
 @pytest.mark.parametrize("settings", [spec.MESH, spec.POINTS, spec.MODIFIER], ids=["mesh", "points", "modifier"])

@@ -1,0 +1,153 @@
+"""What the HC Smooth modifier's limits rest on: seconds per 1000 iterations, and what its guards cost.
+
+    .envs/bpy45/bin/python bench/bench_modifier_limits.py [--sizes 10k,100k] [--iterations 200] [--repeats 3]
+
+A Geometry Nodes evaluation cannot be cancelled, so the modifier's Iterations has a hard maximum
+(settings_spec.MODIFIER_MAX_ITERATIONS). On noisy closed triangle tori of each size it times one evaluation
+of the modifier (median of --repeats, after a warm-up), per method, with --iterations iterations, and prints
+the seconds per 1000 iterations; then the same for HC with a Deviation Limit, and the evaluation at 0
+iterations (the guards and the group's set-up alone) beside the input passed through (HC with Beta 0, refused).
+Last, the price of welding coincident vertices inside Geometry Nodes: Merge by Distance, then each vertex
+takes its merged vertex's position back (Sample Nearest, Sample Index), timed alone beside 10 HC iterations.
+Run it with either test environment (Blender 4.5 or 5.2 as the bpy module); it installs the extension itself.
+"""
+
+import argparse
+import pathlib
+import platform
+import statistics
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT / "scripts"), str(ROOT / "bench")]
+
+from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
+
+# isort: split
+
+import bpy  # noqa: E402
+import meshes  # noqa: E402
+import numpy as np  # noqa: E402
+
+METHODS = ("HC", "LAPLACIAN", "LAPLACIAN_CENTRAL", "LAPLACIAN_ORIGINAL")
+
+
+def count(text):
+    text = text.strip().lower()
+    scale = {"k": 1_000, "m": 1_000_000}.get(text[-1], 1)
+    return int(float(text.rstrip("km")) * scale)
+
+
+def noisy_torus(n_vertices, seed=0):
+    vertices, faces = meshes.torus(n_vertices)
+    vertices = meshes.add_noise(vertices, 0.002, seed=seed)
+    mesh = bpy.data.meshes.new("Torus")
+    mesh.vertices.add(len(vertices))
+    mesh.vertices.foreach_set("co", vertices.astype(np.float32).ravel())
+    mesh.loops.add(faces.size)
+    mesh.loops.foreach_set("vertex_index", faces.astype(np.int32).ravel())
+    mesh.polygons.add(len(faces))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, faces.size, 3, dtype=np.int32))
+    mesh.update(calc_edges=True)
+    obj = bpy.data.objects.new("Torus", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    for other in bpy.context.scene.objects:
+        other.select_set(other == obj)
+    bpy.context.view_layer.objects.active = obj
+    return obj
+
+
+def evaluation_seconds(obj, repeats):
+    """Median wall seconds of re-evaluating ``obj``'s modifier stack, after one warm-up."""
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+
+    def evaluate():
+        obj.update_tag(refresh={"DATA"})
+        depsgraph.update()
+        obj.evaluated_get(depsgraph).data  # noqa: B018 - the evaluated mesh is the product
+
+    evaluate()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        evaluate()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", default="10k,100k", help="torus vertex counts, comma-separated")
+    parser.add_argument("--iterations", type=int, default=200, help="iterations per timed evaluation")
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    install_extension(ROOT / "build" / "bench")
+    inputs = sys.modules[ADDON + ".nodes.inputs"]
+    settings_spec = sys.modules[ADDON + ".settings_spec"]
+    print(f"Blender {bpy.app.version_string}, {platform.processor() or platform.machine()}, ", end="")
+    print(f"{args.iterations} iterations per evaluation, median of {args.repeats}\n")
+    print("| vertices | case | s per evaluation | s per 1000 iterations |")
+    print("|---:|---|---:|---:|")
+    for size in (count(text) for text in args.sizes.split(",")):
+        bpy.ops.wm.read_homefile(use_empty=True)
+        obj = noisy_torus(size)
+        assert bpy.ops.object.hc_smooth_modifier_add(iterations=args.iterations) == {"FINISHED"}
+        modifier = obj.modifiers[-1]
+        n = len(obj.data.vertices)
+        cases = [(method, dict(Method=_menu_name(settings_spec, method))) for method in METHODS]
+        cases.append(("HC, Deviation Limit 0.001", dict(Method="HC", **{"Deviation Limit": 0.001})))
+        cases.append(("Laplacian, Deviation Limit 0.001", dict(Method="Laplacian", **{"Deviation Limit": 0.001})))
+        for name, values in cases:
+            inputs.set_input(modifier, "Deviation Limit", 0.0)
+            for key, value in values.items():
+                inputs.set_input(modifier, key, value)
+            seconds = evaluation_seconds(obj, args.repeats)
+            print(f"| {n:,} | {name} | {seconds:.3f} | {1000 * seconds / args.iterations:.2f} |")
+        inputs.set_input(modifier, "Deviation Limit", 0.0)
+        inputs.set_input(modifier, "Method", "HC")
+        inputs.set_input(modifier, "Iterations", 0)
+        print(f"| {n:,} | HC, 0 iterations (set-up and guards) | {evaluation_seconds(obj, args.repeats):.3f} | |")
+        inputs.set_input(modifier, "Iterations", args.iterations)
+        inputs.set_input(modifier, "Beta", 0.0)
+        print(f"| {n:,} | HC, Beta 0 (refused: passed through) | {evaluation_seconds(obj, args.repeats):.3f} | |")
+        inputs.set_input(modifier, "Beta", 0.6)
+        inputs.set_input(modifier, "Iterations", 10)
+        print(f"| {n:,} | HC, 10 iterations | {evaluation_seconds(obj, args.repeats):.3f} | |")
+        modifier.show_viewport = False
+        obj.modifiers.new("Weld", "NODES").node_group = weld_tree()
+        seconds = evaluation_seconds(obj, args.repeats)
+        print(f"| {n:,} | welding alone (Merge by Distance, sampled back) | {seconds:.3f} | |")
+
+
+def weld_tree():
+    """Merge by Distance, then every vertex reads back the position of the merged vertex nearest to it: what
+    welding inside the modifier would add to each evaluation (without the smoothing in between)."""
+    tree = bpy.data.node_groups.new("Weld and sample back", "GeometryNodeTree")
+    tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    nodes, links = tree.nodes, tree.links
+    group_input, group_output = nodes.new("NodeGroupInput"), nodes.new("NodeGroupOutput")
+    merge = nodes.new("GeometryNodeMergeByDistance")
+    merge.inputs["Distance"].default_value = 1e-6
+    nearest = nodes.new("GeometryNodeSampleNearest")
+    sample = nodes.new("GeometryNodeSampleIndex")
+    sample.data_type, sample.domain = "FLOAT_VECTOR", "POINT"
+    move = nodes.new("GeometryNodeSetPosition")
+    links.new(group_input.outputs[0], merge.inputs["Geometry"])
+    links.new(merge.outputs["Geometry"], nearest.inputs["Geometry"])
+    links.new(merge.outputs["Geometry"], sample.inputs["Geometry"])
+    links.new(nodes.new("GeometryNodeInputPosition").outputs[0], sample.inputs["Value"])
+    links.new(nearest.outputs["Index"], sample.inputs["Index"])
+    links.new(group_input.outputs[0], move.inputs["Geometry"])
+    links.new(sample.outputs[0], move.inputs["Position"])
+    links.new(move.outputs["Geometry"], group_output.inputs[0])
+    return tree
+
+
+def _menu_name(settings_spec, identifier):
+    return next(choice.label for choice in settings_spec.METHOD.items if choice.identifier == identifier)
+
+
+if __name__ == "__main__":
+    run_and_exit(main)
