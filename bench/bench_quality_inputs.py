@@ -8,12 +8,33 @@ twice (open: its eyes are separate parts with holes behind them), exported once 
 of .envs/bpy45 and cached in bench/results/. Generated: a cube (sharp edges and corners), a thin
 plate (sharp edges, 4 % as thick as wide) and a thin torus (tube radius 1/12 of the ring's).
 
+These eight are the TUNING set: the Automatic Amount was tuned on them. The HELD_OUT set is real scans
+it never saw, open ones among them (their borders count in every measure):
+
+* face: a raw range scan from the pymeshlab wheel (rangemaps/face000.ply; 85,182 vertices, 20 parts,
+  holes and a ragged border);
+* scan_bunny: the Stanford bunny as pymeshfix ships it to be repaired (examples/StanfordBunny.ply;
+  50,000 vertices, open, holes in the base, 132 non-manifold edges);
+* planar_scan: pymeshfix's examples/planar_mesh.ply (1,403 vertices, a nearly flat open patch with
+  holes, a fifth of its vertices on a border);
+* bunny10k: the bunny of the pymeshlab wheel in another tessellation (bunny10k_textured.obj; 5,051
+  vertices, open): the same shape as the tuning bunny, so it tests a new tessellation, not a new shape;
+* armadillo and dragon: the Stanford Armadillo (26,002 vertices, closed) and the Chinese Dragon scan
+  (ChineseDragon-10kv.off; 10,000 vertices, one small hole) of CGAL's data, which Debian's
+  libcgal-demo package ships (read from its installed data.tar.gz, else from the package fetched with
+  ``apt-get download libcgal-demo``; cached in bench/results/).
+
+The pymeshlab wheel's colored_airplane.ply is the tuning airplane vertex for vertex, so it is not used.
+
 Benchmark tools only: trimesh loads the files and Open3D measures distances (bench/requirements.txt).
 """
 
+import io
 import pathlib
 import subprocess
 import sys
+import tarfile
+import tempfile
 
 import numpy as np
 
@@ -27,6 +48,19 @@ BPY45 = ROOT / ".envs" / "bpy45" / "bin" / "python"
 REAL = {"bunny": "bunny.obj", "cow": "cow.obj", "bone": "bone.ply", "airplane": "airplane.obj"}
 GENERATED = ("cube", "plate", "thin_torus")
 ALL_MESHES = ("bunny", "cow", "bone", "airplane", "suzanne") + GENERATED
+TUNING = ALL_MESHES
+# Held-out real scans: (package, path inside it) of the file.
+SCANS = {
+    "face": ("pymeshlab", "tests/sample_meshes/rangemaps/face000.ply"),
+    "scan_bunny": ("pymeshfix", "examples/StanfordBunny.ply"),
+    "planar_scan": ("pymeshfix", "examples/planar_mesh.ply"),
+    "bunny10k": ("pymeshlab", "tests/sample_meshes/bunny10k_textured.obj"),
+    "armadillo": ("libcgal-demo", "data/meshes/armadillo.off"),
+    "dragon": ("libcgal-demo", "data/meshes/ChineseDragon-10kv.off"),
+}
+HELD_OUT = tuple(SCANS)
+SETS = {"tuning": TUNING, "heldout": HELD_OUT}
+CGAL_DATA = pathlib.Path("/usr/share/doc/libcgal-dev/data.tar.gz")  # where libcgal-demo installs it
 
 
 def pymeshlab_samples():
@@ -35,11 +69,15 @@ def pymeshlab_samples():
     return pathlib.Path(pymeshlab.__file__).resolve().parent / "tests" / "sample_meshes"
 
 
-def _load_file(path):
-    """(vertices, faces) of a triangle mesh file, coincident vertices merged (OBJ/PLY seams split them)."""
+def _load_file(path, file_type=None):
+    """(vertices, faces) of a triangle mesh file (a path, or an open file with ``file_type``),
+    coincident vertices merged (OBJ/PLY seams split them)."""
     import trimesh
 
-    mesh = trimesh.load(str(path), process=False, force="mesh")
+    if file_type is None:
+        mesh = trimesh.load(str(path), process=False, force="mesh")
+    else:
+        mesh = trimesh.load(path, file_type=file_type, process=False, force="mesh")
     mesh = trimesh.Trimesh(
         np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64), process=True, validate=False
     )
@@ -70,6 +108,34 @@ def suzanne():
             raise FileNotFoundError(f"Suzanne comes from Blender's bpy module: {BPY45} is missing")
         RESULTS.mkdir(exist_ok=True)
         subprocess.run([str(BPY45), "-c", SUZANNE_SCRIPT, str(cache)], check=True, capture_output=True, timeout=300)
+    data = np.load(cache)
+    return data["vertices"].astype(np.float64), data["faces"].astype(np.int64)
+
+
+def _cgal_data(member):
+    """The bytes of ``member`` of CGAL's data archive (Debian's libcgal-demo package)."""
+    if CGAL_DATA.exists():
+        with tarfile.open(CGAL_DATA) as archive:
+            return archive.extractfile(member).read()
+    with tempfile.TemporaryDirectory() as folder:
+        subprocess.run(["apt-get", "download", "libcgal-demo"], cwd=folder, check=True, capture_output=True)
+        package = next(pathlib.Path(folder).glob("libcgal-demo_*.deb"))
+        subprocess.run(["dpkg-deb", "-x", str(package), folder], check=True)
+        with tarfile.open(pathlib.Path(folder) / CGAL_DATA.relative_to("/")) as archive:
+            return archive.extractfile(member).read()
+
+
+def scan(name):
+    """(vertices, faces) of a held-out scan (SCANS); CGAL's are cached in bench/results/."""
+    package, member = SCANS[name]
+    if package != "libcgal-demo":
+        root = pathlib.Path(__import__(package).__file__).resolve().parent
+        return _load_file(root / member)
+    cache = RESULTS / f"cgal_{pathlib.Path(member).stem}.npz"
+    if not cache.exists():
+        vertices, faces = _load_file(io.BytesIO(_cgal_data(member)), file_type=pathlib.Path(member).suffix[1:])
+        RESULTS.mkdir(exist_ok=True)
+        np.savez(cache, vertices=vertices, faces=faces)
     data = np.load(cache)
     return data["vertices"].astype(np.float64), data["faces"].astype(np.int64)
 
@@ -115,8 +181,10 @@ def load_mesh(name):
         vertices, faces = box((2.0, 2.0, 0.08), 0.04)
     elif name == "thin_torus":
         vertices, faces = meshes.torus(4000, ratio=12.0, minor_radius=0.08)
+    elif name in SCANS:
+        vertices, faces = scan(name)
     else:
-        raise ValueError(f"unknown mesh {name!r}; known: {', '.join(ALL_MESHES)}")
+        raise ValueError(f"unknown mesh {name!r}; known: {', '.join(TUNING + HELD_OUT)}")
     if is_closed(faces) and signed_volume(vertices, faces) < 0:
         faces = faces[:, ::-1].copy()
     return vertices, faces
