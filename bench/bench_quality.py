@@ -123,8 +123,11 @@ def hc_default_settings():
 
 def hc_default(case):
     """HC Smooth's default result: what the operator and the command line give with nothing changed
-    (core.smooth_mesh, the pipeline they all run)."""
-    result, report = core.smooth_mesh(case.noisy, case.edges, faces=case.faces, return_report=True)
+    (core.smooth_mesh, the pipeline they all run, with the options the add-on passes: split vertices
+    welded, open borders smoothed as curves)."""
+    result, report = core.smooth_mesh(
+        case.noisy, case.edges, faces=case.faces, weld=True, border="curve", return_report=True
+    )
     settings = {"alpha": report.alpha, "beta": report.beta, "iterations": report.iterations}
     if report.amount is not None:
         settings.update(noise=report.amount.sigma / case.diagonal, noise_over_edge=report.amount.ratio)
