@@ -6,9 +6,12 @@ noise, too many flatten the shape; the best k depends on the noise, the edge len
 detail. It is chosen here from the mesh alone, by generalized cross-validation (GCV) along one HC run.
 
 First, which parts have noise at all (core.mesh_noise): GCV cannot tell a clean mesh's curvature from
-noise and would smooth a Blender primitive's shape away. Parts without noise, and parts of at most four
-vertices (nothing tells their noise from their shape), are held fixed; a mesh with no noisy part gets 0
-iterations and says so (``noise_found``). On the noisy parts:
+noise and would smooth a Blender primitive's shape away. Clean parts (an estimate of at most
+core.mesh_noise.CLEAN edge lengths: analytic shapes) and parts of at most four vertices (nothing tells
+their noise from their shape) are held fixed; a mesh with nothing else gets 0 iterations. Quiet parts
+(noise found below the threshold: light noise, or a coarse shape's detail) are smoothed with the others,
+and core.MeshSmoother keeps their vertices within a small radius (core.mesh_noise.Noise.quiet_radius);
+``noise_found`` says whether any part is above the threshold. On the parts that move:
 
 * **Residual**: R(k) = mean over sample vertices of ((y_i - x_i(k)) . n_i)^2, the part of what the
   smoothing removed that lies along the surface normal n_i (y the input, x(k) the result after k
@@ -117,7 +120,7 @@ class MeshAmount:
     sigma: float
     edge_length: float  # median edge length of the input
     explored: int  # iterations the estimate ran
-    noise_found: bool  # False: no part has noise to remove, and nothing is smoothed (iterations 0)
+    noise_found: bool  # False: no part's noise is above core.mesh_noise's threshold (light noise at most)
 
     @property
     def ratio(self):
@@ -276,9 +279,10 @@ class AmountChooser:
         elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
             raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
         self.operator = operator
-        # Parts without noise (clean ones, and those too small to tell noise from shape) are held: fixed.
+        # Clean parts (analytic shapes) and those too small to tell noise from shape are held: fixed.
+        # Quiet parts (noise too light to tell from shape) are smoothed within a small radius (the caller).
         self.noise = find_noise(start, operator)
-        self.fixed = fixed_mask = check_fixed(fixed, n) | operator.isolated | self.noise.quiet
+        self.fixed = fixed_mask = check_fixed(fixed, n) | operator.isolated | self.noise.held()
         self.movable = movable = np.flatnonzero(~fixed_mask)
         self.edge_length = _median_edge_length(start, operator)
         self.fine_beta = FINE_BETA  # light noise: choose again on steps of this beta (None: never)
@@ -399,7 +403,7 @@ class AmountChooser:
         minimum = max(float(score.min()), 0.0)
         sigma = math.sqrt(minimum) if self.use_normals else math.sqrt(minimum / 3)
         sigma = min(sigma, ROBUST_SIGMAS * self.noise.level())
-        return MeshAmount(0.0, self.beta, int(chosen), sigma, self.edge_length, int(done), True)
+        return MeshAmount(0.0, self.beta, int(chosen), sigma, self.edge_length, int(done), self.noise.found)
 
 
 def _patches(operator, fixed_mask, movable):

@@ -41,6 +41,8 @@ CURVE_GAIN = math.sqrt(70.0) / 4.0 * 1.5382
 # the clean meshes it was tuned on (0.089 on Blender's Monkey as it comes; bench/bench_noise_found.py).
 NOISE_THRESHOLD = 0.12
 DEGENERATE = 4  # parts of at most this many vertices have no noise to find (their shape is all they have)
+CLEAN = 0.01  # a quiet part whose estimate is at most this many edge lengths is held: an analytic shape
+QUIET_SHARE = 0.001  # a quiet part's vertices move at most this share of its bounding-box diagonal
 SAMPLES = 4096  # sample vertices over the whole mesh ...
 PART_SAMPLES = 64  # ... and at least this many (or all) in every part
 _MAD = 0.6745  # median |N(0, 1)|
@@ -64,8 +66,30 @@ class Noise:
 
     @property
     def quiet(self):
-        """(n,) bool: vertices of parts without noise, which nothing should move."""
+        """(n,) bool: vertices of parts without noise found."""
         return ~self.noisy[self.part_of_vertex]
+
+    def held(self, sizes_only=False):
+        """(n,) bool: vertices no smoothing should move: parts of at most DEGENERATE vertices (their shape is
+        all they have) and parts whose estimate is ``CLEAN`` or less of their edge length (analytic shapes:
+        Blender's primitives, CAD parts)."""
+        held = np.bincount(self.part_of_vertex, minlength=self.noisy.size) <= DEGENERATE
+        held |= ~self.noisy & (self.sigma <= CLEAN * self.edge_length)
+        return held[self.part_of_vertex]
+
+    def quiet_radius(self, positions, deviations):
+        """(n,) the deviation limit of a light-noise run: on a part where noise is found, 0 (the caller's
+        limit applies); on a quiet part, ``deviations`` times its estimate, at most ``QUIET_SHARE`` of the
+        part's bounding-box diagonal: where noise cannot be told from shape, no vertex moves farther
+        than a share of the size no one sees."""
+        parts = self.noisy.size
+        low = np.full((parts, 3), np.inf)
+        high = np.full((parts, 3), -np.inf)
+        np.minimum.at(low, self.part_of_vertex, positions)
+        np.maximum.at(high, self.part_of_vertex, positions)
+        diagonal = np.sqrt(np.sum((high - low) ** 2, axis=1))
+        radius = np.where(self.noisy, 0.0, np.minimum(deviations * self.sigma, QUIET_SHARE * diagonal))
+        return radius[self.part_of_vertex]
 
     def level(self):
         """The estimate for the whole mesh: over the noisy parts if there are any, else over all parts

@@ -206,7 +206,11 @@ class MeshSmoother:
             alpha, beta, iterations = amount.alpha, amount.beta, amount.iterations
             if self.max_deviation == AUTO:
                 limit = DEVIATION_IN_NOISE * amount.sigma
-            if self.influence is None and self.mode == "simultaneous" and not self.tolerance and not limit:
+                if not chooser.noise.noisy.all():  # quiet parts: within a small radius (core.mesh_noise)
+                    quiet = chooser.noise.quiet_radius(self.positions, DEVIATION_IN_NOISE)
+                    limit = np.where(chooser.noise.quiet, quiet, limit)
+            unlimited = not isinstance(limit, np.ndarray) and not limit
+            if self.influence is None and self.mode == "simultaneous" and not self.tolerance and unlimited:
                 done = chooser.result()  # the choice ran exactly these iterations on its way: not again
         fixed = self.fixed if amount is None else chooser.fixed  # the Automatic Amount holds parts without noise
         if done is not None:
@@ -221,10 +225,11 @@ class MeshSmoother:
         offset = 0.0
         if self.automatic and ran > 0 and self.faces is not None:
             result, offset = self._keep_volume(result, fixed, volume.NOISE_OFFSETS * amount.sigma)
-            if limit:  # the offset keeps to the limit too
+            if np.any(limit):  # the offset keeps to the limit too
                 result = _within(result, self.positions, limit)
         self.result = result if self.welding is None else self.welding.scatter(result)
-        self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, limit, time.perf_counter() - start)
+        largest = float(np.max(limit)) if np.size(limit) else 0.0
+        self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, largest, time.perf_counter() - start)
         yield 1.0
 
     def _keep_volume(self, result, fixed, limit):
@@ -245,12 +250,14 @@ class MeshSmoother:
 
 
 def _within(points, start, radius):
-    """``points`` projected onto the balls of ``radius`` around ``start`` (rows beyond it only)."""
+    """``points`` projected onto the balls of ``radius`` (a distance, or one per row) around ``start``
+    (rows beyond it only)."""
     away = points - start
     lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
     over = lengths > radius
     if over.any():
         points = points.copy()
+        radius = radius[over] if isinstance(radius, np.ndarray) else radius
         points[over] = start[over] + away[over] * (radius / lengths[over])[:, None].astype(points.dtype)
     return points
 

@@ -146,10 +146,10 @@ operator : Umbrella, optional
 influence : (n,) array_like of float in [0, 1], optional
     Per-vertex share of each iteration's move (a painted vertex group): vertex i ends an
     iteration at q_i + w_i (p_i - q_i). 0 stays bit-identical; 1 (or None) is the paper's step.
-max_deviation : float >= 0, default 0.0
+max_deviation : float >= 0, or (n,) ndarray of them, default 0.0
     The deviation limit: the farthest any vertex may end an iteration from its input position, in
     the positions' units (every iteration ends with a projection onto that ball); 0: no limit, the
-    paper's algorithm.""",
+    paper's algorithm. An array gives each vertex its own distance (0 keeps that vertex in place).""",
     "progress": """\
 progress : callable, optional
     ``progress(done, total)`` is called after each iteration; returning False stops the run and
@@ -338,8 +338,8 @@ class Smoothing:
         self.beta = check_unit_interval(beta, "beta")
         self.iterations = check_iterations(iterations)
         tolerance = check_tolerance(tolerance)
-        max_deviation = check_max_deviation(max_deviation)
         start = check_positions(positions)
+        max_deviation = check_max_deviation(max_deviation, start.shape[0])
         n = start.shape[0]
         if original is None or original is positions:
             origin = start
@@ -376,7 +376,11 @@ class Smoothing:
         influence_moves = _Influence.of(weights, fixed_mask, start.dtype)
         # The iterations work on planar copies, one contiguous row per coordinate (see core.parallel).
         self.current = _planar(start, self.order)
-        limit = _Limit(self.current.copy(), max_deviation) if max_deviation > 0.0 and self.iterations > 0 else None
+        per_vertex = isinstance(max_deviation, np.ndarray)  # then 0 keeps a vertex where it is
+        limited = (per_vertex or max_deviation > 0.0) and self.iterations > 0
+        if isinstance(max_deviation, np.ndarray) and self.order is not None:
+            max_deviation = max_deviation[self.order]
+        limit = _Limit(self.current.copy(), max_deviation) if limited else None
         self.step = _step_for(
             operator,
             fixed_mask,
@@ -500,15 +504,18 @@ class _Limit:
 
     def __init__(self, start, radius):
         self.start = start  # planar (3, n), in the run's vertex order
-        self.radius = radius
+        self.radius = radius  # a distance, or one per vertex (in the run's vertex order)
+        self.squared = radius * radius
 
     def apply(self, p, rows=slice(None)):
         p_rows, start = p[:, rows], self.start[:, rows]
         away = np.subtract(p_rows, start)
         squares = np.einsum("ij,ij->j", away, away)
-        over = np.flatnonzero(squares > self.radius * self.radius)
+        per_vertex = isinstance(self.radius, np.ndarray)
+        over = np.flatnonzero(squares > (self.squared[rows] if per_vertex else self.squared))
         if over.size:
-            scale = (self.radius / np.sqrt(squares[over])).astype(p.dtype)
+            radius = self.radius[rows][over] if per_vertex else self.radius
+            scale = (radius / np.sqrt(squares[over])).astype(p.dtype)
             for k in range(p_rows.shape[0]):
                 p_rows[k, over] = start[k, over] + away[k, over] * scale
 

@@ -151,8 +151,12 @@ def check_influence(influence, n_vertices):
     return weights
 
 
-def check_max_deviation(value):
-    """The deviation limit: a finite distance >= 0 (0: no limit)."""
+def check_max_deviation(value, n_vertices):
+    """The deviation limit: a finite distance >= 0 (0: no limit), or one per vertex (float64 (n,))."""
+    if isinstance(value, np.ndarray):
+        if value.shape != (n_vertices,) or not np.all((value >= 0.0) & (value < math.inf)):
+            raise ValueError(f"max_deviation per vertex must be {n_vertices} finite distances >= 0")
+        return value.astype(np.float64)
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (0.0 <= value < math.inf):
         raise ValueError(f"max_deviation must be a distance >= 0 (0 for no limit), got {value!r}")
     return float(value)

