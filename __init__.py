@@ -3,8 +3,8 @@
 Blender loads this package as an extension (``bl_ext.<repo>.hc_smooth``). Registration only:
 the operators live in ``operators/``, the panel, menus and settings in ``ui/``, the
 `blender -c hc_smooth` command in ``cli/``, the modifier's Geometry Nodes group in ``nodes/``, the
-mathematics in ``core/`` (which never imports bpy). Two plain modules import without Blender:
-``settings_spec.py`` (every setting, declared once) and ``console_capture.py``.
+mathematics in ``core/`` (which never imports bpy). ``settings_spec.py`` (every setting, declared
+once) and the command line's parsing (``cli/arguments.py``) import without Blender.
 """
 
 from . import cli, operators, ui

@@ -250,6 +250,14 @@ def parse(argv):
     }
     if "alpha" in point_options or "iterations_per_round" in point_options:
         point_options["auto_amount"] = False  # as the operator: a manual amount uses alpha and steps as set
+    if args.points:
+        reach = point_options.get("spacing_factor", settings_spec.SPACING_FACTOR.default)
+        gap = point_options.get("gap_factor", settings_spec.GAP_FACTOR.default)
+        if reach > gap:
+            raise UsageError(
+                f"--reach ({reach:g}) must not exceed --gap ({gap:g}): "
+                "a neighbour within reach would be cut off as a gap"
+            )
     inputs, notes = expand_inputs(args.inputs)
     if args.objects and not any(os.path.splitext(path)[1].lower() == BLEND for path in inputs):
         raise UsageError(

@@ -16,11 +16,11 @@ from dataclasses import dataclass, field
 import bpy
 
 from .. import core
-from ..console_capture import captured
 from ..operators import jobs as jobs_module
 from ..operators import point_cloud
 from ..operators.objects import InputError, unique_data
 from . import arguments, files
+from .console_capture import captured
 from .files import FileError
 
 
@@ -111,14 +111,8 @@ def main(argv):
 
 
 def point_settings(plan):
-    """The point operator's settings with what the command line gave; refuses an inconsistent set."""
-    settings = point_cloud.PointSettings(**plan.point_options)
-    if settings.spacing_factor > settings.gap_factor:
-        raise arguments.UsageError(
-            f"--reach ({settings.spacing_factor:g}) must not exceed --gap "
-            f"({settings.gap_factor:g}): a neighbour within reach would be cut off as a gap"
-        )
-    return settings
+    """The point operator's settings with what the command line gave."""
+    return point_cloud.PointSettings(**plan.point_options)
 
 
 def process(source, target, plan, settings):

@@ -93,40 +93,10 @@ def test_help(cli, capsys):
     assert "Existing files are never replaced" in text and "keeps the input" in text
 
 
-def declared_options(spec):
-    """{option name: (setting, the argument that makes the option apply)} for every setting with a flag."""
-    options = {s.flag: (s, []) for s in spec.MESH if s.flag}
-    options.update({s.flag: (s, ["--points"]) for s in spec.POINTS if s.flag and s.flag not in options})
-    return options
-
-
-def test_options_are_built_from_the_declarations(addon, tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
+def test_plain_settings_start_from_the_declared_defaults(addon):
+    """The plain settings the command line hands to the job code (the parsing is tested in tests/core)."""
     arguments = sys.modules[ADDON + ".cli.arguments"]
     spec = sys.modules[ADDON + ".settings_spec"]
-    actions = {option: action for action in arguments.make_parser()._actions for option in action.option_strings}
-    points = {s.flag: s for s in spec.POINTS if s.flag}
-    for flag, (setting, extra) in declared_options(spec).items():
-        action = actions["--" + flag]
-        assert action.help.startswith(setting.help), flag
-        if setting.kind in ("float", "int", "enum"):
-            assert action.default is None  # not given: the operator's default applies
-            stated = [setting, points[flag]] if flag in points and points[flag] is not setting else [setting]
-            for declared in stated:  # --help states the declared default (for shared options, both)
-                assert arguments._default_text(declared) in action.help, flag
-        if setting.kind == "enum":
-            assert tuple(action.choices) == setting.identifiers
-        # The declared limits: accepted on the limit, refused beyond it.
-        for bound, beyond in ((setting.min, -1), (setting.max, 1)):
-            if bound is None:
-                continue
-            plan = arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", str(bound)])
-            given = plan.point_options if extra else vars(plan.settings)
-            assert given[setting.name] == bound, flag
-            with pytest.raises(arguments.UsageError):
-                arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", str(bound + beyond)])
-    assert set(arguments.MESH_ONLY) == {name.replace("-", "_") for name in declared_options(spec) if name not in points}
-    # The plain settings the command line hands to the job code start from the declared defaults.
     point_settings = sys.modules[ADDON + ".operators.point_cloud"].PointSettings()
     for plain, declared in ((arguments.Settings(), spec.MESH), (point_settings, spec.POINTS)):
         assert vars(plain) == {s.name: s.default for s in declared}
@@ -136,49 +106,12 @@ def test_options_are_built_from_the_declarations(addon, tmp_path, monkeypatch):
     "argv, message",
     [
         (["a.ply"], "either -o OUTDIR or --in-place"),
-        (["a.ply", "-o", "out", "--in-place"], "either -o OUTDIR or --in-place"),
-        (["a.ply", "-o", "out", "--alpha", "1.5"], "outside [0, 1]"),
-        (["a.ply", "-o", "out", "--iterations", "-1"], "negative"),
-        (["a.ply", "-o", "out", "--invert-group"], "--invert-group needs --fixed-group"),
-        (["a.ply", "-o", "out", "--method", "taubin"], "invalid choice"),
-        (["x/a.ply", "y/a.ply", "-o", "out"], "would both be written"),
-        # Numbers that are not finite pass no range check by comparison: refused by name, before any file is read.
-        (["a.ply", "-o", "out", "--tolerance", "inf"], "inf is not a finite number"),
-        (["a.ply", "-o", "out", "--tolerance", "nan"], "nan is not a finite number"),
-        (["a.ply", "-o", "out", "--alpha", "nan"], "nan is not a finite number"),
-        (["a.ply", "-o", "out", "--beta=-inf"], "-inf is not a finite number"),
-        (["a.ply", "-o", "out", "--points", "--reach", "inf"], "inf is not a finite number"),
-        (["a.ply", "-o", "out", "--points", "--gap", "0"], "0 is below 0.1"),  # the operator's Gap minimum
-        (["a.ply", "-o", "out", "--points", "--steps-per-round", "0"], "0 is below 1"),
+        (["a.ply", "-o", "out", "--alpha", "1.5"], "blender -b -c hc_smooth: error: argument --alpha"),
         (["a.ply", "-o", "out", "--points", "--reach", "4"], "--reach (4) must not exceed --gap (3)"),
-        # --object picks objects inside .blend files; with none among the inputs it would do nothing.
-        (["a.ply", "b.obj", "-o", "out", "--object", "Scan"], "no input is a .blend file"),
-        # Mesh-only options mean nothing to the point smoother, and point options nothing to meshes.
-        (["a.ply", "-o", "out", "--points", "--iterations", "20"], "--iterations does not apply to point clouds"),
-        (
-            [
-                "a.ply",
-                "-o",
-                "out",
-                "--points",
-                "--mode",
-                "sequential",
-                "--tolerance",
-                "0.1",
-                "--method",
-                "laplacian",
-                "--pin-boundary",
-            ],
-            "--mode, --tolerance, --method, --pin-boundary do not apply to point clouds (--points): "
-            "they take --alpha, --beta, --rounds",
-        ),
-        (
-            ["a.ply", "-o", "out", "--rounds", "2", "--reach", "2"],
-            "--rounds, --reach apply to point clouds only: add --points",
-        ),
     ],
 )
 def test_usage_errors(cli, capsys, tmp_path, monkeypatch, argv, message):
+    """Exit status 2, the reason on stderr, nothing written (every refusal: tests/core/test_cli_arguments.py)."""
     monkeypatch.chdir(tmp_path)
     assert cli.main(argv) == 2
     assert message in capsys.readouterr().err
