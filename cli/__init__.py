@@ -11,11 +11,12 @@ COMMAND = "hc_smooth"
 _handle = None
 
 
-def main(argv):
-    """Run the command on ``argv`` (the arguments after `-c hc_smooth`); returns the exit status."""
+def main(argv, prog=None):
+    """Run the command on ``argv`` (the arguments after `-c hc_smooth`); returns the exit status.
+    ``prog`` names the command in usage messages (default: `blender -b -c hc_smooth`)."""
     from .command import main as run
 
-    return run(argv)
+    return run(argv) if prog is None else run(argv, prog=prog)
 
 
 def register():
