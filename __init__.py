@@ -7,7 +7,17 @@ mathematics in ``core/`` (which never imports bpy). ``settings_spec.py`` (every 
 once) and the command line's parsing (``cli/arguments.py``) import without Blender.
 """
 
-from . import cli, operators, ui
+try:
+    import scipy  # noqa: F401  (the operators need it; Blender does not bundle it)
+except ModuleNotFoundError:
+    raise ImportError(  # name: Blender then says "Add-on not loaded: <name>, cause: <this message>"
+        "HC Smooth needs SciPy, which this Blender cannot import. Install the HC Smooth zip built for "
+        "your platform (it carries SciPy: `make dist`), or install SciPy into this Python "
+        "(python -m pip install scipy)",
+        name=__name__,
+    ) from None
+
+from . import cli, operators, ui  # noqa: E402
 
 
 def register():
