@@ -207,11 +207,12 @@ def test_export_failure_keeps_the_previous_output(cli, capsys, tmp_path, monkeyp
     def disk_full(*args):
         raise OSError("disk full (simulated)")
 
-    monkeypatch.setattr(cli.files, "_rename_material_library", disk_full)  # after the exporter wrote its files
+    monkeypatch.setattr(cli.files.os, "replace", disk_full)  # the temporary is written, then cannot be moved
     assert cli.main([str(source), "-o", str(out), "--overwrite"]) == 1
+    monkeypatch.undo()
     assert "FAILED: disk full (simulated)" in capsys.readouterr().out
     assert (out / "scan.obj").read_text() == "previous result\n"
-    assert sorted(os.listdir(out)) == ["scan.obj"]  # no temporary .obj/.mtl left behind
+    assert sorted(os.listdir(out)) == ["scan.obj"]  # no temporary left behind
 
 
 def test_in_place_replaces_the_input(cli, tmp_path):
@@ -345,7 +346,8 @@ def test_points_take_the_point_options_and_report_the_real_amount(cli, capsys, t
     # Without an amount the run follows the noise, as the operator's Automatic Amount; the line says what ran.
     assert cli.main([str(source), "-o", str(out), "--points", "--overwrite"]) == 0
     _, report = core.smooth_point_cloud(before, return_mesh=True)
-    amount = f"{report.rounds} rounds of {report.iterations_per_round} steps"
+    plural = sys.modules[ADDON + ".cli.command"].plural
+    amount = f"{plural(report.rounds, 'round')} of {plural(report.iterations_per_round, 'step')}"
     assert amount in capsys.readouterr().out
     after, _ = import_positions(out / "points.ply")
     assert np.array_equal(after, core.smooth_point_cloud(before))
@@ -400,24 +402,17 @@ def snapshot(folder):
 
 def test_in_place_with_another_format_never_replaces_unrelated_files(cli, capsys, tmp_path):
     source = export_noisy_sphere(tmp_path / "scan.ply")
-    (tmp_path / "scan.obj").write_text("v 0 0 0\n")  # someone else's files, not this scan's
+    (tmp_path / "scan.obj").write_text("v 0 0 0\n")  # someone else's file, not this scan's
     (tmp_path / "scan.mtl").write_text("newmtl Precious\n")
     before = snapshot(tmp_path)
     assert cli.main([str(source), "--in-place", "--format", "obj"]) == 2
     err = capsys.readouterr().err
-    assert f"\n  {tmp_path / 'scan.obj'}\n  {tmp_path / 'scan.mtl'}\n" in err
-    assert "or pass --overwrite" in err
+    assert f"would be replaced:\n  {tmp_path / 'scan.obj'}\n" in err and "or pass --overwrite" in err
     assert snapshot(tmp_path) == before
-    # The material library alone is reason enough to stop.
-    os.remove(tmp_path / "scan.obj")
-    before = snapshot(tmp_path)
-    assert cli.main([str(source), "--in-place", "--format", "obj"]) == 2
-    assert f"would be replaced:\n  {tmp_path / 'scan.mtl'}\n" in capsys.readouterr().err
-    assert snapshot(tmp_path) == before
-    # --overwrite replaces them; --in-place with --format writes beside the input and keeps it.
+    # --overwrite replaces it; --in-place with --format writes beside the input and keeps it.
     assert cli.main([str(source), "--in-place", "--format", "obj", "--overwrite"]) == 0
     assert digest(source) == before["scan.ply"]
-    assert (tmp_path / "scan.mtl").read_text() == "newmtl Precious\n"  # a PLY has no materials: no .mtl written
+    assert (tmp_path / "scan.mtl").read_text() == "newmtl Precious\n"  # no .mtl is ever written
     smoothed, _ = import_positions(tmp_path / "scan.obj")
     original, _ = import_positions(source)
     assert len(smoothed) == len(original) and not np.allclose(smoothed, original, atol=1e-4)
@@ -429,40 +424,27 @@ def test_output_folder_results_are_not_replaced_without_overwrite(cli, capsys, t
     good = export_noisy_sphere(folder / "good.ply")
     other = export_noisy_sphere(folder / "other.ply", seed=5)
     (folder / "good.obj").write_text("v 0 0 0\n")
-    (folder / "good.mtl").write_text("newmtl Precious\n")
     before = snapshot(folder)
     # other.ply could go ahead, but everything is checked before anything runs.
     assert cli.main([str(other), str(good), "-o", str(folder), "--format", "obj"]) == 2
     err = capsys.readouterr().err
-    assert f"\n  {folder / 'good.obj'}\n  {folder / 'good.mtl'}\nchoose another -o OUTDIR, or pass --overwrite" in err
+    assert f"\n  {folder / 'good.obj'}\nchoose another -o OUTDIR, or pass --overwrite" in err
     assert snapshot(folder) == before
-    # The .mtl of an OBJ result counts even when the OBJ itself is new.
-    out = tmp_path / "out"
-    out.mkdir()
-    (out / "good.mtl").write_text("newmtl Precious\n")
-    assert cli.main([str(good), "-o", str(out), "--format", "obj"]) == 2
-    assert f"would be replaced:\n  {out / 'good.mtl'}\n" in capsys.readouterr().err
-    assert snapshot(out) == {"good.mtl": digest(out / "good.mtl")}
-    assert cli.main([str(good), "-o", str(out), "--format", "obj", "--overwrite"]) == 0
-    assert sorted(os.listdir(out)) == ["good.mtl", "good.obj"]
-    assert (out / "good.mtl").read_text() == "newmtl Precious\n"  # a PLY has no materials: no .mtl written
+    assert cli.main([str(other), str(good), "-o", str(folder), "--format", "obj", "--overwrite"]) == 0
+    assert sorted(os.listdir(folder)) == ["good.obj", "good.ply", "other.obj", "other.ply"]
 
 
-def test_in_place_obj_replaces_only_its_own_material_library(cli, capsys, tmp_path):
+def test_in_place_obj_never_writes_a_material_library(cli, capsys, tmp_path):
     source = export_noisy_sphere(tmp_path / "scan.obj")
     assert "mtllib scan.mtl" in source.read_text()
+    library = (tmp_path / "scan.mtl").read_bytes()
     original, _ = import_positions(source)
-    assert cli.main([str(source), "--in-place"]) == 0  # scan.mtl is the input's own: part of it
+    assert cli.main([str(source), "--in-place"]) == 0
     smoothed, _ = import_positions(source)
     assert not np.allclose(smoothed, original, atol=1e-4)
     assert sorted(os.listdir(tmp_path)) == ["scan.mtl", "scan.obj"]
-    # An OBJ that does not name scan.mtl: the .mtl beside it belongs to something else.
-    source.write_text("".join(line for line in source.read_text().splitlines(True) if not line.startswith("mtllib")))
-    (tmp_path / "scan.mtl").write_text("newmtl Precious\n")
-    before = snapshot(tmp_path)
-    assert cli.main([str(source), "--in-place"]) == 2
-    assert f"would be replaced:\n  {tmp_path / 'scan.mtl'}\nmove them away" in capsys.readouterr().err
-    assert snapshot(tmp_path) == before
+    assert (tmp_path / "scan.mtl").read_bytes() == library
+    assert "mtllib scan.mtl" in source.read_text()
 
 
 def test_folder_inputs_skip_hidden_files(cli, capsys, tmp_path):
