@@ -115,7 +115,8 @@ class PlyFile:
         )
         if self.face is not None:
             name = next(n for n in FACE_LISTS if self.face.property(n))
-            self.corners, self.sizes = self._read_list(self.face, name)
+            corners, self.sizes = self._read_list(self.face, name)
+            self.corners = integers(np.asarray(corners, dtype=np.float64), f"PLY face {name}")
         else:
             self.corners, self.sizes = np.zeros(0, np.int64), np.zeros(0, np.int64)
         props = [vertex.property(n) for n in NORMALS]
@@ -189,12 +190,12 @@ class PlyFile:
         step = np.arange(total) - first  # item number within its list
         if self.format == "ascii":
             items = np.repeat(where + 1, counts) + step
-            values = integers(self.tokens.numbers(items, f"PLY {element.name} {name}"), f"PLY {element.name} {name}")
+            values = self.tokens.numbers(items, f"PLY {element.name} {name}")
         else:
             size = np.dtype(prop.type).itemsize
             items = np.repeat(where + np.dtype(prop.count_type).itemsize, counts) + step * size
             raw = np.frombuffer(self.data, dtype=np.uint8)
-            values = _gather(raw, items, FORMATS[self.format] + prop.type).astype(np.int64)
+            values = _gather(raw, items, FORMATS[self.format] + prop.type)
         return values, counts
 
     def write(self, updates):
