@@ -248,9 +248,8 @@ def smooth_mesh_file(outcome, plan, settings, console):
     console.stage(outcome, "smoothing", outcome.source)
     name = os.path.splitext(os.path.basename(outcome.source))[0]
     result = smooth_arrays(name, mesh.positions, mesh.corners, mesh.sizes, plan, settings, outcome)
-    data = files.result_bytes(mesh, result, outcome.target)
     console.stage(outcome, "writing", outcome.target)
-    files.write_bytes(outcome.target, data)
+    files.write_bytes(outcome.target, files.result_bytes(mesh, result, outcome.target))
 
 
 def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome):

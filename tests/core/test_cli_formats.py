@@ -1,6 +1,8 @@
 """The command line's scan-file readers and writers (cli/formats), without Blender: a result is its input
 with the positions and normals rewritten and nothing else; bad files are refused with a reason."""
 
+import gzip
+
 import numpy as np
 import pytest
 import scan_files
@@ -358,3 +360,40 @@ def test_conversions_carry_the_smoothed_geometry(source, target):
     triangles = result[mesh.corners.reshape(-1, 3)]
     np.testing.assert_array_equal(out.positions[out.corners.reshape(-1, 3)].astype(np.float32), triangles)
     assert out.has_normals == (source != ".stl" or target == ".stl")  # vertex normals only from vertex normals
+
+
+files = load("cli.files")
+
+
+@pytest.mark.parametrize(
+    "start, version",
+    [
+        (b"BLENDER-v405REND", (4, 5)),  # 64-bit pointers, little endian, Blender 4.5
+        (b"BLENDER_V279REND", (2, 79)),
+        (b"BLENDER17-01v0502REND", (5, 2)),  # the header of Blender 5.0 and later
+        (b"PK\x03\x04 not a blend", None),
+    ],
+)
+def test_blend_header_versions(tmp_path, start, version):
+    assert files.header_version(start) == version
+    plain, packed = tmp_path / "plain.blend", tmp_path / "packed.blend"
+    plain.write_bytes(start + bytes(100))
+    packed.write_bytes(gzip.compress(start + bytes(100)))
+    assert files.blend_version(str(plain)) == files.blend_version(str(packed)) == version
+    try:
+        import zstandard
+    except ImportError:  # no way to read a zstd header here: the command asks Blender after opening
+        zstandard = None
+    squeezed = tmp_path / "squeezed.blend"
+    squeezed.write_bytes(
+        b"\x28\xb5\x2f\xfd" + bytes(60) if zstandard is None else zstandard.compress(start + bytes(100))
+    )
+    assert files.blend_version(str(squeezed)) == (None if zstandard is None else version)
+
+
+def test_newer_blend_files_are_refused():
+    files.check_blend_version((4, 5), (4, 5, 3))
+    files.check_blend_version((4, 2), (5, 2, 0))
+    files.check_blend_version(None, (4, 5, 3))  # unknown here: checked again once Blender has opened it
+    with pytest.raises(files.FileError, match="saved by Blender 5.2, newer than this Blender"):
+        files.check_blend_version((5, 2), (4, 5, 3))
