@@ -247,21 +247,26 @@ def smooth_mesh_file(outcome, plan, settings, console):
     mesh = files.read_mesh(outcome.source)
     console.stage(outcome, "smoothing", outcome.source)
     name = os.path.splitext(os.path.basename(outcome.source))[0]
-    result = smooth_arrays(name, mesh.positions, mesh.corners, mesh.sizes, plan, settings, outcome)
+    wanted = {plan.settings.vertex_group, plan.settings.influence_group} - {""}
+    groups = mesh.groups(wanted) if wanted and hasattr(mesh, "groups") else {}
+    result = smooth_arrays(name, mesh.positions, mesh.corners, mesh.sizes, plan, settings, outcome, groups)
     console.stage(outcome, "writing", outcome.target)
     files.write_bytes(outcome.target, files.result_bytes(mesh, result, outcome.target))
 
 
-def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome):
+def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome, groups=None):
     """The smoothed positions ((n, 3) float32) of a file's mesh: vertex ``positions`` and faces given as
     ``corners`` (vertex indices, face after face) with ``sizes`` (corners per face; faces of fewer than
-    three corners take no part). No faces: a point cloud (--points).
+    three corners take no part). No faces: a point cloud (--points). ``groups``: {name: vertex
+    indices} for --fixed-group and --influence-group (an OBJ's groups, weight 1).
 
     The one place that hands a file's arrays to the smoothing: a Blender mesh named ``name`` (so that
     messages name it as the operators would) smoothed by the operators' own job code."""
     with in_blender(outcome):
         bpy.ops.wm.read_homefile(use_empty=True)  # each file starts from an empty scene
         obj = blender_object(name, positions, corners, sizes)
+        for group, members in (groups or {}).items():
+            obj.vertex_groups.new(name=group).add(members.tolist(), 1.0, "REPLACE")
         smooth_objects([obj], plan, settings, outcome)
         result = np.empty(3 * len(positions), dtype=np.float32)
         obj.data.vertices.foreach_get("co", result)

@@ -46,6 +46,9 @@ class ObjFile:
         self.normals = tokens.numbers(self.vn[:, None] + np.arange(1, 4), "OBJ vn") if self.has_normals else None
         self.sizes = arguments[np.searchsorted(statement, f)]
         self._faces(f)
+        self._f = f
+        g = statement[tokens.is_word(statement, b"g")]
+        self._g = g, arguments[np.searchsorted(statement, g)]
 
     def _faces(self, f):
         tokens = self.tokens
@@ -77,6 +80,23 @@ class ObjFile:
             before = np.searchsorted(tokens.lines[self.vn], line_of[with_normal])
             normals[with_normal] = _absolute(given, before, len(self.vn), "normal (vn)")
         self.corners, self.corner_normals = vertices, normals
+
+    def groups(self, names):
+        """{name: vertex indices} of the OBJ groups (`g` lines) among ``names``: the vertices of the faces
+        that follow a `g` line naming the group, up to the next `g` line (as Blender's importer makes
+        vertex groups of them)."""
+        g, counts = self._g
+        tokens = self.tokens
+        # Each face's group statement: the last g line before it (-1: none).
+        statement = np.searchsorted(g, self._f) - 1
+        corner_statement = np.repeat(statement, self.sizes)
+        found = {}
+        for k, (at, count) in enumerate(zip(g.tolist(), counts.tolist())):
+            for token in range(at + 1, at + 1 + count):
+                name = self.data[tokens.starts[token] : tokens.ends[token]].decode("utf-8", "replace")
+                if name in names:
+                    found.setdefault(name, []).append(k)
+        return {name: np.unique(self.corners[np.isin(corner_statement, ks)]) for name, ks in found.items()}
 
     def write(self, updates):
         """The file's bytes with ``updates`` ({"v" or "vn": (rows, values)}) written in."""

@@ -240,3 +240,18 @@ def test_an_interrupt_stops_the_batch_at_any_stage(route_user, tmp_path, stage):
     assert (tmp_path / "b.ply").read_bytes() == data  # stopped: as it was
     assert (tmp_path / "c.ply").read_bytes() == data  # not started
     assert sorted(os.listdir(tmp_path)) == names  # no temporary left
+
+
+def test_obj_groups_serve_as_fixed_group(cli, formats, tmp_path):
+    positions, faces = scan_files.octahedron(noise=0.01)
+    half = len(faces) // 2
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in positions]
+    lines += ["g Keep"] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces[:half]]
+    lines += ["g Rest"] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces[half:]]
+    source = tmp_path / "scan.obj"
+    source.write_text("\n".join(lines) + "\n")
+    assert cli.main([str(source), "-o", str(tmp_path / "out"), "--fixed-group", "Keep", "--iterations", "5"]) == 0
+    after = formats.parse((tmp_path / "out" / "scan.obj").read_bytes(), ".obj").positions
+    keep = np.unique(faces[:half])
+    np.testing.assert_array_equal(after[keep], positions[keep])  # their lines as they were
+    assert not np.allclose(np.delete(after, keep, axis=0), np.delete(positions, keep, axis=0), atol=1e-5)

@@ -397,3 +397,14 @@ def test_newer_blend_files_are_refused():
     files.check_blend_version(None, (4, 5, 3))  # unknown here: checked again once Blender has opened it
     with pytest.raises(files.FileError, match="saved by Blender 5.2, newer than this Blender"):
         files.check_blend_version((5, 2), (4, 5, 3))
+
+
+def test_obj_groups_name_the_vertices_of_their_faces():
+    data = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 0\ng left both\nf 1 2 3\ng right both\nf 2 4 3\ng\nf 3 4 5\n"
+    mesh = formats.parse(data, ".obj")
+    groups = mesh.groups({"left", "right", "both", "absent"})
+    assert {name: members.tolist() for name, members in groups.items()} == {
+        "left": [0, 1, 2],
+        "right": [1, 2, 3],
+        "both": [0, 1, 2, 3],
+    }
