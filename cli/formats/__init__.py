@@ -38,20 +38,27 @@ def check(mesh):
     """Refuse coordinates that are not finite and faces that name a vertex the file does not have."""
     bad = ~np.isfinite(mesh.positions)
     if bad.any():
-        row = int(np.flatnonzero(bad.any(axis=1))[0])
-        value = mesh.positions[row][bad[row]][0]
+        rows = np.flatnonzero(bad.any(axis=1))
+        value = mesh.positions[rows[0]][bad[rows[0]]][0]
+        others = (
+            f" (and {len(rows) - 1} more vertices)"
+            if len(rows) > 2
+            else " (and 1 more vertex)"
+            if len(rows) == 2
+            else ""
+        )
         raise FormatError(
-            f"vertex {row} has a coordinate that is not a finite number ({value}): "
-            f"{int(bad.any(axis=1).sum())} such vertices; nothing was written"
+            f"vertex {rows[0]} has a coordinate that is not a finite number ({value}){others}; nothing was written"
         )
     if mesh.corners.size:
         outside = (mesh.corners < 0) | (mesh.corners >= len(mesh.positions))
         if outside.any():
             corner = int(np.flatnonzero(outside)[0])
             face = int(np.searchsorted(np.cumsum(mesh.sizes), corner, side="right"))
+            count = len(mesh.positions)
+            has = f"{count} vertices (0 to {count - 1})" if count != 1 else "1 vertex (0)"
             raise FormatError(
-                f"face {face} uses vertex {int(mesh.corners[corner])}, but the file has "
-                f"{len(mesh.positions)} vertices (0 to {len(mesh.positions) - 1}); nothing was written"
+                f"face {face} uses vertex {int(mesh.corners[corner])}, but the file has {has}; nothing was written"
             )
 
 
