@@ -3,8 +3,8 @@
 register() hands ``main`` to Blender's command registry (bpy.utils.register_cli_command, Blender 4.2+),
 so the command exists while the extension is enabled. Importing this package loads no Blender module:
 ``arguments`` (the command line and the plan of which file goes where) and ``console_capture`` are
-plain Python and are tested without Blender; ``command`` (which runs the smoothing) is loaded on the
-first call of ``main``.
+plain Python and are tested without Blender (the demo imports ``cli.console_capture`` with the
+repository root on sys.path); ``command`` (which runs the smoothing) is loaded by ``register``.
 """
 
 COMMAND = "hc_smooth"
@@ -21,6 +21,8 @@ def main(argv, prog=None):
 
 def register():
     import bpy
+
+    from . import arguments, command  # noqa: F401  (loaded with the add-on, as its other modules)
 
     global _handle
     _handle = bpy.utils.register_cli_command(COMMAND, main)
