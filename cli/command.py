@@ -161,20 +161,19 @@ def run(plan, settings, console, outcomes):
     return 0
 
 
-class interruptible:
-    """Ctrl+C (SIGINT) raises KeyboardInterrupt while the command runs, whatever handler the host
-    (Blender) installed; the host's handler comes back afterwards."""
-
-    def __enter__(self):
-        self.previous = None
-        if threading.current_thread() is threading.main_thread():
-            self.previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-        return self
-
-    def __exit__(self, *exc):
-        if self.previous is not None:
-            signal.signal(signal.SIGINT, self.previous)
-        return False
+@contextlib.contextmanager
+def interruptible():
+    """Ctrl+C (SIGINT) raises KeyboardInterrupt while the command runs, whatever Python handler the host
+    installed, which comes back afterwards (a handler set from C cannot be put back from Python: Python's
+    stays, and the host exits after the command anyway)."""
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
 
 
 def interrupted(plan, outcomes, console):

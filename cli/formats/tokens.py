@@ -77,13 +77,25 @@ def gather(array, starts, ends, separator=32):
 
 def parse_numbers(text, count, what):
     """``count`` whitespace-separated numbers of ``text`` as float64 (nan and inf parse as such)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)  # fromstring warns when it stops early: counted below
-        values = np.fromstring(text, dtype=np.float64, sep=" ")
+    try:
+        with warnings.catch_warnings():
+            # NumPy < 2.5 warns and stops at a word that is not a number (counted below); 2.5 raises.
+            warnings.simplefilter("ignore", DeprecationWarning)
+            values = np.fromstring(text, dtype=np.float64, sep=" ")
+    except ValueError:
+        values = np.zeros(0)
     if len(values) != count:
-        bad = text.split()[len(values)] if len(values) < count else b"?"
+        bad = next((word for word in text.split() if not _is_number(word)), b"?")
         raise FormatError(f"{what}: '{bad.decode('ascii', 'replace')}' is not a number")
     return values
+
+
+def _is_number(word):
+    try:
+        float(word)
+    except ValueError:
+        return False
+    return True
 
 
 def integers(values, what):

@@ -81,6 +81,9 @@ def test_help(cli, capsys):
         "--fixed-group",
         "--invert-group",
         "--pin-boundary",
+        "--influence-group",
+        "--invert-influence",
+        "--verbose",
         "--points",
         "--object",
         "--rounds",
@@ -91,6 +94,7 @@ def test_help(cli, capsys):
     ):
         assert option in text
     assert "Existing files are never replaced" in text and "keeps the input" in text
+    assert "130 when interrupted" in text and "an OBJ's .mtl is neither read nor written" in text
 
 
 def test_plain_settings_start_from_the_declared_defaults(addon):

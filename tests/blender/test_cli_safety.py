@@ -122,20 +122,23 @@ def test_bad_files_fail_and_nothing_is_written(cli, capsys, tmp_path, name):
     assert source.read_bytes() == BAD_FILES[name] and os.listdir(tmp_path) == [name]
 
 
-def saved_blend(path, version=None, packer=None):
+def saved_blend(path, newer=False, packer=None):
     bpy.ops.wm.read_homefile(use_empty=True)
     bpy.ops.mesh.primitive_ico_sphere_add()
     bpy.ops.wm.save_as_mainfile(filepath=str(path), compress=False)
     data = bytearray(path.read_bytes())
-    if version is not None:  # as a newer Blender would have written it
-        data[9:12] = version
+    if newer:  # as Blender 9.99 would have written it
+        if data.startswith(b"BLENDER17-"):  # Blender 5.0 and later: four digits after the header size and format
+            data[12:16] = b"0999"
+        else:
+            data[9:12] = b"999"
     path.write_bytes(packer(bytes(data)) if packer else bytes(data))
     return path
 
 
 @pytest.mark.parametrize("packer", [None, gzip.compress], ids=["plain", "gzip"])
 def test_a_blend_from_a_newer_blender_is_refused(cli, capsys, tmp_path, packer):
-    source = saved_blend(tmp_path / "scene.blend", b"999", packer)
+    source = saved_blend(tmp_path / "scene.blend", newer=True, packer=packer)
     before = source.read_bytes()
     assert cli.main([str(source), "--in-place"]) == 1
     assert "saved by Blender 9.99, newer than this Blender" in capsys.readouterr().out
@@ -245,7 +248,7 @@ def test_an_interrupt_stops_the_batch_at_any_stage(route_user, tmp_path, stage):
 def test_obj_groups_serve_as_fixed_group(cli, formats, tmp_path):
     positions, faces = scan_files.octahedron(noise=0.01)
     half = len(faces) // 2
-    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in positions]
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in positions.tolist()]
     lines += ["g Keep"] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces[:half]]
     lines += ["g Rest"] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces[half:]]
     source = tmp_path / "scan.obj"

@@ -157,7 +157,7 @@ def rich_obj(positions, faces, normals=True):
     """An OBJ with a material library, groups, smoothing groups, texture coordinates, vertex colours,
     comments, v/vt/vn corners and negative (relative) indices in the second half."""
     lines = ["# scanned", "mtllib scan.mtl", "o Scan"]
-    lines += [f"v {x!r} {y!r} {z!r} 0.5 0.25 1" for x, y, z in positions]
+    lines += [f"v {x!r} {y!r} {z!r} 0.5 0.25 1" for x, y, z in positions.tolist()]
     lines += [f"vt {i / len(positions)!r} 0.5" for i in range(len(positions))]
     if normals:
         radial = positions / np.linalg.norm(positions, axis=1, keepdims=True)
