@@ -129,7 +129,7 @@ def saved_blend(path, newer=False, packer=None):
     data = bytearray(path.read_bytes())
     if newer:  # as Blender 9.99 would have written it
         if data.startswith(b"BLENDER17-"):  # Blender 5.0 and later: four digits after the header size and format
-            data[12:16] = b"0999"
+            data[13:17] = b"0999"
         else:
             data[9:12] = b"999"
     path.write_bytes(packer(bytes(data)) if packer else bytes(data))
