@@ -1,23 +1,36 @@
 """The command line: `blender -b -c hc_smooth INPUT... -o OUTDIR` (see docs/command_line.md).
 
-register() hands ``command.main`` to Blender's command registry (bpy.utils.register_cli_command,
-Blender 4.2+), so the command exists while the extension is enabled.
+register() hands ``main`` to Blender's command registry (bpy.utils.register_cli_command, Blender 4.2+),
+so the command exists while the extension is enabled. Importing this package loads no Blender module:
+``arguments`` (the command line and the plan of which file goes where) and ``console_capture`` are
+plain Python and are tested without Blender (the demo imports ``cli.console_capture`` with the
+repository root on sys.path); ``command`` (which runs the smoothing) is loaded by ``register``.
 """
-
-import bpy
-
-from .command import main
 
 COMMAND = "hc_smooth"
 _handle = None
 
 
+def main(argv, prog=None):
+    """Run the command on ``argv`` (the arguments after `-c hc_smooth`); returns the exit status.
+    ``prog`` names the command in usage messages (default: `blender -b -c hc_smooth`)."""
+    from .command import main as run
+
+    return run(argv) if prog is None else run(argv, prog=prog)
+
+
 def register():
+    import bpy
+
+    from . import arguments, command  # noqa: F401  (loaded with the add-on, as its other modules)
+
     global _handle
     _handle = bpy.utils.register_cli_command(COMMAND, main)
 
 
 def unregister():
+    import bpy
+
     global _handle
     if _handle is not None:
         bpy.utils.unregister_cli_command(_handle)

@@ -6,14 +6,13 @@ imports anything.
 
 import argparse
 import math
-import mmap
 import os
-import re
 import textwrap
 from dataclasses import dataclass, field
 
 from .. import settings_spec
 
+PROG = "blender -b -c hc_smooth"
 MESH_FORMATS = (".ply", ".obj", ".stl")
 BLEND = ".blend"
 
@@ -49,15 +48,18 @@ def _listed(names):
 
 DESCRIPTION = """\
 Smooth scanned meshes without shrinking them (HC algorithm, Vollmer, Mencl, Mueller 1999).
-Reads PLY, OBJ and STL files with Blender's own importers, smooths every mesh with the same code as
-the Object > HC Smooth operator, and writes the result in the same format (or --format) into OUTDIR.
-A .blend input is opened, its mesh objects (or those named with --object) are smoothed and a copy is
-saved into OUTDIR. Directories given as INPUT stand for the PLY/OBJ/STL/.blend files directly in them
+Reads PLY, OBJ and STL files, smooths every mesh with the same code as the Object > HC Smooth
+operator, and writes the result in the same format (or --format) into OUTDIR. A result is its input
+with the vertex positions (and the normals the file has) replaced; every other value, the header, the
+comments and the encoding stay as they were, and an OBJ's .mtl is neither read nor written. A .blend
+input is opened, its mesh objects (or those named with --object) are smoothed and a copy is saved
+into OUTDIR. Directories given as INPUT stand for the PLY/OBJ/STL/.blend files directly in them
 (hidden files skipped); a file named twice is smoothed once. A file that fails leaves no output behind.
 
-Existing files are never replaced, except the input itself with --in-place (same path, same format)
-and, with --overwrite, existing results (and their .mtl for OBJ). --in-place with --format writes a
-new file beside the input and keeps the input. Everything is checked before anything runs.
+Existing files are never replaced, except the input itself with --in-place (same path, same format;
+a symbolic link stays a link and its target is replaced) and, with --overwrite, existing results.
+--in-place with --format writes a new file beside the input and keeps the input. Everything is
+checked before anything runs. Ctrl+C stops the run: the file being written is left as it was.
 
 """
 DESCRIPTION += (
@@ -73,7 +75,7 @@ DESCRIPTION += (
 
 EPILOG = """\
 exit status: 0 when every file was smoothed, 1 when any file failed (the reason is printed),
-2 for a bad command line (nothing is read or written).
+2 for a bad command line (nothing is read or written), 130 when interrupted (Ctrl+C).
 
 examples:
   blender -b -c hc_smooth scans/*.ply -o smoothed/
@@ -146,9 +148,9 @@ def add_setting(group, setting, text):
     group.add_argument(_option(setting.flag), **options)
 
 
-def make_parser():
+def make_parser(prog=PROG):
     parser = _Parser(
-        prog="blender -b -c hc_smooth",
+        prog=prog,
         description=DESCRIPTION,
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -171,8 +173,14 @@ def make_parser():
     where.add_argument(
         "--overwrite",
         action="store_true",
-        help="replace results that already exist (and the .mtl beside an OBJ result); without it "
-        "an existing file that is not the input of --in-place stops the run before it starts",
+        help="replace results that already exist; without it an existing file that is not the input "
+        "of --in-place stops the run before it starts",
+    )
+    where.add_argument(
+        "-v",
+        "--verbose",
+        action="store_true",
+        help="say when each file starts being read, smoothed and written",
     )
     smoothing = parser.add_argument_group("smoothing (as the operators' properties)")
     for name, setting in MESH_OPTIONS.items():
@@ -213,13 +221,15 @@ class Plan:
     point_options: dict = field(default_factory=dict)  # PointSettings fields given on the command line
     objects: list = field(default_factory=list)
     notes: list = field(default_factory=list)  # said before the run (an input named twice)
+    verbose: bool = False
 
 
-def parse(argv):
+def parse(argv, prog=PROG):
     """argv (the arguments after `-c hc_smooth`) -> Plan; raises UsageError, or SystemExit(0) for --help.
 
-    Reads the file system (which inputs and outputs exist) but changes nothing on it."""
-    args = make_parser().parse_args(list(argv))
+    Reads the file system (which inputs and outputs exist) but changes nothing on it. ``prog`` names
+    the command in messages."""
+    args = make_parser(prog).parse_args(list(argv))
     if args.in_place == bool(args.output_dir):
         raise UsageError("give either -o OUTDIR or --in-place (inputs are never overwritten otherwise)")
     if args.invert_group and not args.fixed_group:
@@ -253,12 +263,22 @@ def parse(argv):
     }
     if "alpha" in point_options or "iterations_per_round" in point_options:
         point_options["auto_amount"] = False  # as the operator: a manual amount uses alpha and steps as set
+    if args.points:
+        from ..core.pointcloud.sdg import reach_gap_problem  # the rule and its words, once (NumPy only)
+
+        reach = point_options.get("spacing_factor", settings_spec.SPACING_FACTOR.default)
+        gap = point_options.get("gap_factor", settings_spec.GAP_FACTOR.default)
+        problem = reach_gap_problem(reach, gap, ("--reach", "--gap"))
+        if problem:
+            raise UsageError(problem)
     inputs, notes = expand_inputs(args.inputs)
     if args.objects and not any(os.path.splitext(path)[1].lower() == BLEND for path in inputs):
         raise UsageError(
             "--object names objects inside .blend files, and no input is a .blend file "
             "(PLY, OBJ and STL inputs are smoothed whole)"
         )
+    if args.output_dir:
+        check_output_dir(args.output_dir)
     files = plan_outputs(inputs, args.output_dir, args.format, args.in_place, args.overwrite)
     return Plan(
         settings=settings,
@@ -268,6 +288,7 @@ def parse(argv):
         point_options=point_options,
         objects=args.objects,
         notes=notes,
+        verbose=args.verbose,
     )
 
 
@@ -304,33 +325,24 @@ def expand_inputs(paths):
     return found, notes
 
 
+def check_output_dir(output_dir):
+    """Refuse an OUTDIR that is (or lies under) a file: found here, before any input is read."""
+    path = os.path.abspath(output_dir)
+    while not os.path.lexists(path) and os.path.dirname(path) != path:
+        path = os.path.dirname(path)
+    if not os.path.isdir(path):
+        where = "is" if path == os.path.abspath(output_dir) else f"lies under {path}, which is"
+        raise UsageError(f"-o {output_dir}: the output folder {where} a file, not a folder")
+
+
 def output_path(path, output_dir, fmt, in_place):
     stem, ext = os.path.splitext(os.path.basename(path))
     if fmt and ext.lower() in MESH_FORMATS:
         ext = "." + fmt
+    if in_place and ext == os.path.splitext(path)[1] and os.path.islink(path):
+        return os.path.realpath(path)  # the input itself, through the link: the link stays a link
     folder = os.path.dirname(os.path.abspath(path)) if in_place else os.path.abspath(output_dir)
     return os.path.join(folder, stem + ext)
-
-
-def companions(target):
-    """Files written beside ``target``: the material library of an OBJ result."""
-    stem, ext = os.path.splitext(target)
-    return [stem + ".mtl"] if ext.lower() == ".obj" else []
-
-
-def material_libraries(obj_path):
-    """Real paths of the .mtl files an OBJ file names in its `mtllib` lines (empty if it cannot be read)."""
-    folder = os.path.dirname(os.path.abspath(obj_path))
-    try:
-        with open(obj_path, "rb") as source, mmap.mmap(source.fileno(), 0, access=mmap.ACCESS_READ) as data:
-            lines = [
-                match.group(1).decode("utf-8", "replace").strip()
-                for match in re.finditer(rb"^mtllib[ \t]+([^\r\n]+)", data, re.M)
-            ]
-    except (OSError, ValueError):  # unreadable or empty: it names none (reading it fails that file later)
-        return set()
-    names = {name for line in lines for name in (line, *line.split())}  # one name with spaces, or several
-    return {_key(os.path.join(folder, name)) for name in names}
 
 
 def plan_outputs(inputs, output_dir, fmt, in_place, overwrite=False):
@@ -361,10 +373,6 @@ def plan_outputs(inputs, output_dir, fmt, in_place, overwrite=False):
             continue
         if os.path.lexists(target) and not (in_place and same):
             existing.append(target)
-        for extra in companions(target):
-            # In place, the .mtl the input OBJ names is part of the input; any other one is someone else's.
-            if os.path.lexists(extra) and not (in_place and same and _key(extra) in material_libraries(path)):
-                existing.append(extra)
     if existing:
         names = "".join(f"\n  {name}" for name in existing)
         where = "move them away or smooth into a folder with -o OUTDIR" if in_place else "choose another -o OUTDIR"

@@ -1,28 +1,40 @@
 """`blender -b -c hc_smooth INPUT... -o OUTDIR`: smooth scan files, one progress line per file, a summary.
 
 ``main(argv)`` is the function registered with bpy.utils.register_cli_command; tests call it directly
-with an argument list (the bpy module cannot run `blender -c`). Meshes are smoothed with the shared
-job code of the mesh operators (operators/jobs.py), point clouds with that of the point operator
-(operators/point_cloud.py): the same functions the operators call, fed from the command line.
+with an argument list (the bpy module cannot run `blender -c`). PLY, OBJ and STL files are read and
+written by cli/formats (NumPy); their meshes are smoothed with the shared job code of the mesh
+operators (operators/jobs.py), point clouds with that of the point operator (operators/point_cloud.py),
+through a Blender mesh built from the file's arrays (``smooth_arrays``). .blend files are opened,
+smoothed the same way and saved as a copy.
 """
 
+import contextlib
 import os
+import signal
 import sys
+import threading
 import time
 import traceback
 import warnings
 from dataclasses import dataclass, field
 
 import bpy
+import numpy as np
 
-from .. import core, settings_spec
-from ..console_capture import captured
-from ..core.pointcloud.sdg import reach_gap_problem
+from .. import core
 from ..operators import jobs as jobs_module
 from ..operators import point_cloud
 from ..operators.objects import InputError, unique_data
 from . import arguments, files
+from .console_capture import captured
 from .files import FileError
+from .formats.normals import corner_neighbours
+
+INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl+C
+
+
+def plural(count, word, words=None):
+    return f"{count} {word if count == 1 else words or word + 's'}"
 
 
 @dataclass
@@ -40,6 +52,7 @@ class Outcome:
     warnings: list = field(default_factory=list)
     error: str = ""
     blender_lines: list = field(default_factory=list)  # what Blender printed while a failed file ran
+    stage: str = "reading"  # reading, smoothing, writing, done: where an interrupt found it
 
     def change_text(self):
         """core.Change.brief of the mesh that moved furthest (relative to its size)."""
@@ -52,86 +65,147 @@ class Outcome:
     def amount_text(self):
         """How much smoothing ran: '10 iterations', or for point clouds '3 rounds of 15 steps (45 steps)'."""
         if not self.rounds:
-            return f"{self.iterations} iterations"
+            return plural(self.iterations, "iteration")
         kinds = sorted(set(self.rounds))
         if len(kinds) == 1:
             ((rounds, steps),) = kinds
-            return f"{rounds} rounds of {steps} steps ({rounds * steps} steps)"
+            return f"{plural(rounds, 'round')} of {plural(steps, 'step')} ({plural(rounds * steps, 'step')})"
         totals = [rounds * steps for rounds, steps in kinds]
         return f"{min(totals)} to {max(totals)} steps in {' / '.join(f'{r}x{s}' for r, s in kinds)}"
 
     def size_text(self):
-        return f"{self.vertices} {'points' if self.rounds else 'vertices'}"
+        return plural(self.vertices, "point") if self.rounds else plural(self.vertices, "vertex", "vertices")
 
 
-def main(argv):
-    """Run the command on ``argv`` (the arguments after `-c hc_smooth`); returns the exit status."""
+class Console:
+    """Prints the command's lines; once nobody reads them (`hc_smooth ... | head -1`), drops them quietly
+    and goes on with the files."""
+
+    def __init__(self, verbose=False):
+        self.verbose = verbose
+
+    def say(self, text, stream=None):
+        stream = stream or sys.stdout
+        try:
+            print(text, file=stream, flush=True)
+        except BrokenPipeError:
+            # Python would complain again at exit while flushing: point the descriptor at nothing.
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, stream.fileno())
+            os.close(devnull)
+
+    def stage(self, outcome, stage, path):
+        outcome.stage = stage
+        if self.verbose:
+            self.say(f"hc_smooth: {stage} {path}")
+
+
+def main(argv, prog=arguments.PROG):
+    """Run the command on ``argv`` (the arguments after `-c hc_smooth`); returns the exit status.
+
+    ``prog`` names the command in usage messages (the bpy route gives its own)."""
+    console = Console()
     try:
-        plan = arguments.parse(argv)
+        plan = arguments.parse(argv, prog=prog)
         settings = point_settings(plan) if plan.points else plan.settings
     except SystemExit as done:  # --help printed; argparse exits
         return done.code or 0
     except arguments.UsageError as error:
-        print(error, file=sys.stderr)
+        console.say(error, sys.stderr)
         return 2
     except OSError as error:  # an input that cannot be looked at (an unreadable folder): no traceback
-        print(f"{error.filename}: {error.strerror}" if error.filename else str(error), file=sys.stderr)
+        console.say(f"{error.filename}: {error.strerror}" if error.filename else str(error), sys.stderr)
         return 2
+    console.verbose = plan.verbose
+    with interruptible():
+        outcomes = []
+        try:
+            return run(plan, settings, console, outcomes)
+        except KeyboardInterrupt:
+            return interrupted(plan, outcomes, console)
+
+
+def run(plan, settings, console, outcomes):
     for note in plan.notes:
-        print(f"hc_smooth: note: {note}")
+        console.say(f"hc_smooth: note: {note}")
     if plan.points:
         message = point_cloud.convergence_note(settings)
     else:
         message = core.convergence_message(settings.alpha, settings.beta) if settings.method == "HC" else None
     if message:
-        print(f"hc_smooth: warning: {message}")
-    outcomes, cleaned = [], set()
+        console.say(f"hc_smooth: warning: {message}")
+    cleaned = set()
     total = len(plan.files)
     for number, (source, target) in enumerate(plan.files, 1):
         folder = os.path.dirname(target)
         if folder not in cleaned and os.path.isdir(folder):
             cleaned.add(folder)
             for name in files.remove_stale_temporaries(folder):
-                print(f"hc_smooth: note: removed {os.path.join(folder, name)}, left by an interrupted run")
-        outcome = process(source, target, plan, settings)
+                console.say(f"hc_smooth: note: removed {os.path.join(folder, name)}, left by an interrupted run")
+        outcome = Outcome(source=source, target=target)
         outcomes.append(outcome)
-        print(f"[{number}/{total}] {progress_line(outcome)}", flush=True)
+        process(outcome, plan, settings, console)
+        console.say(f"[{number}/{total}] {progress_line(outcome)}")
         for text in outcome.warnings:
-            print(f"  warning: {text}", flush=True)
+            console.say(f"  warning: {text}")
         for line in outcome.blender_lines:
-            print(f"  blender: {line}", flush=True)
-    print(summary_table(outcomes), flush=True)
+            console.say(f"  blender: {line}")
+    console.say(summary_table(outcomes))
     failed = [outcome for outcome in outcomes if outcome.error]
     if failed:
-        print(f"hc_smooth: {len(failed)} of {total} files failed", file=sys.stderr, flush=True)
+        console.say(f"hc_smooth: {len(failed)} of {total} files failed", sys.stderr)
         return 1
     return 0
 
 
+@contextlib.contextmanager
+def interruptible():
+    """Ctrl+C (SIGINT) raises KeyboardInterrupt while the command runs, whatever Python handler the host
+    installed, which comes back afterwards (a handler set from C cannot be put back from Python: Python's
+    stays, and the host exits after the command anyway)."""
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+
+
+def interrupted(plan, outcomes, console):
+    """What an interrupt left: the files done, the one it stopped (as it was), the ones not started."""
+    done = [outcome for outcome in outcomes if outcome.stage == "done" and not outcome.error]
+    current = outcomes[-1] if outcomes and outcomes[-1].stage != "done" else None
+    untouched = len(plan.files) - len(outcomes) + (current is not None)
+    where = f" while {current.stage} {current.source}" if current else ""
+    console.say(
+        f"hc_smooth: interrupted{where}: {plural(len(done), 'file')} of {len(plan.files)} smoothed; "
+        f"{plural(untouched, 'file')} left as {'it was' if untouched == 1 else 'they were'} "
+        "(no partial output written)",
+        sys.stderr,
+    )
+    return INTERRUPTED
+
+
 def point_settings(plan):
-    """The point operator's settings with what the command line gave; refuses an inconsistent set."""
-    settings = point_cloud.PointSettings(**plan.point_options)
-    options = tuple("--" + s.flag for s in (settings_spec.SPACING_FACTOR, settings_spec.GAP_FACTOR))
-    problem = reach_gap_problem(settings.spacing_factor, settings.gap_factor, options)
-    if problem:
-        raise arguments.UsageError(problem)
-    return settings
+    """The point operator's settings with what the command line gave."""
+    return point_cloud.PointSettings(**plan.point_options)
 
 
-def process(source, target, plan, settings):
-    """Smooth one input file into ``target``; every failure becomes ``Outcome.error`` (no output written).
+def process(outcome, plan, settings, console):
+    """Smooth one input file into its target; every failure becomes ``Outcome.error`` (no output written).
 
-    What Blender prints meanwhile (its importers' and exporters' reports) is kept off the console and
-    handed to the caller only when the file failed (``Outcome.blender_lines``)."""
-    outcome = Outcome(source=source, target=target)
+    What Blender prints meanwhile is kept off the console and handed to the caller only when the file
+    failed (``Outcome.blender_lines``)."""
     start = time.perf_counter()
     bug = None
-    with captured() as printed, warnings.catch_warnings(record=True) as caught:
+    with warnings.catch_warnings(record=True) as caught:
         try:
-            if os.path.splitext(source)[1].lower() == arguments.BLEND:
-                smooth_blend_file(source, target, plan, settings, outcome)
+            if os.path.splitext(outcome.source)[1].lower() == arguments.BLEND:
+                smooth_blend_file(outcome, plan, settings, console)
             else:
-                smooth_mesh_file(source, target, plan, settings, outcome)
+                smooth_mesh_file(outcome, plan, settings, console)
         except (FileError, InputError, ValueError, OSError) as error:
             outcome.error = str(error)
         except MemoryError:
@@ -139,40 +213,103 @@ def process(source, target, plan, settings):
         except Exception as error:  # a bug: report it with its traceback and go on with the other files
             bug = traceback.format_exc()
             outcome.error = f"internal error: {type(error).__name__}: {error}"
+    outcome.stage = "done"
     if bug:
-        print(bug, end="", file=sys.stderr, flush=True)
+        console.say(bug.rstrip("\n"), sys.stderr)
     # Python's warnings would have gone to the collected stderr: they are the file's warnings.
     outcome.warnings.extend(
         str(warning.message) for warning in caught if not issubclass(warning.category, core.ConvergenceWarning)
     )  # said at the start
     if outcome.error:
-        outcome.blender_lines = [line for line in printed if line.strip() not in outcome.error]
+        outcome.blender_lines = [line for line in outcome.blender_lines if line.strip() not in outcome.error]
+    else:
+        outcome.blender_lines = []
     outcome.seconds = time.perf_counter() - start
-    return outcome
 
 
-def smooth_mesh_file(source, target, plan, settings, outcome):
-    bpy.ops.wm.read_homefile(use_empty=True)  # each file starts from an empty scene
-    objects = files.import_file(source, result_ext=os.path.splitext(target)[1].lower())
-    meshes = [obj for obj in objects if obj.type == "MESH"]
-    if not meshes:
-        raise FileError("no mesh in this file")
-    layout = files.read_layout(source)  # what the result keeps of the input: encoding, normals, materials
-    smooth_objects(meshes, plan, settings, outcome)
-    files.export_file(meshes, target, layout)
+@contextlib.contextmanager
+def in_blender(outcome):
+    """Blender's part of a file, with what it prints collected into the outcome (shown if the file fails)."""
+    lines = []
+    try:
+        with captured() as lines:
+            yield
+    finally:
+        outcome.blender_lines.extend(lines)
+
+
+def smooth_mesh_file(outcome, plan, settings, console):
+    console.stage(outcome, "reading", outcome.source)
+    mesh = files.read_mesh(outcome.source)
+    console.stage(outcome, "smoothing", outcome.source)
+    name = os.path.splitext(os.path.basename(outcome.source))[0]
+    wanted = {plan.settings.vertex_group, plan.settings.influence_group} - {""}
+    groups = mesh.groups(wanted) if wanted and hasattr(mesh, "groups") else {}
+    result = smooth_arrays(name, mesh.positions, mesh.corners, mesh.sizes, plan, settings, outcome, groups)
+    console.stage(outcome, "writing", outcome.target)
+    files.write_bytes(outcome.target, files.result_bytes(mesh, result, outcome.target))
+
+
+def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome, groups=None):
+    """The smoothed positions ((n, 3) float32) of a file's mesh: vertex ``positions`` and faces given as
+    ``corners`` (vertex indices, face after face) with ``sizes`` (corners per face; faces of fewer than
+    three corners take no part). No faces: a point cloud (--points). ``groups``: {name: vertex
+    indices} for --fixed-group and --influence-group (an OBJ's groups, weight 1).
+
+    The one place that hands a file's arrays to the smoothing: a Blender mesh named ``name`` (so that
+    messages name it as the operators would) smoothed by the operators' own job code."""
+    with in_blender(outcome):
+        bpy.ops.wm.read_homefile(use_empty=True)  # each file starts from an empty scene
+        obj = blender_object(name, positions, corners, sizes)
+        for group, members in (groups or {}).items():
+            obj.vertex_groups.new(name=group).add(members.tolist(), 1.0, "REPLACE")
+        smooth_objects([obj], plan, settings, outcome)
+        result = np.empty(3 * len(positions), dtype=np.float32)
+        obj.data.vertices.foreach_get("co", result)
+    return result.reshape(-1, 3)
+
+
+def blender_object(name, positions, corners, sizes):
+    """A mesh object in the current scene with these vertices and the faces Blender can hold (at least
+    three corners, no corner repeating the one before it)."""
+    following, _ = corner_neighbours(np.cumsum(sizes) - sizes, sizes)
+    degenerate = np.repeat(np.arange(len(sizes)), sizes)[corners == corners[following]]
+    keep = sizes >= 3
+    keep[degenerate] = False
+    mask = np.repeat(keep, sizes)
+    loops = corners[mask].astype(np.int32)
+    counts = sizes[keep].astype(np.int32)
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(len(positions))
+    mesh.vertices.foreach_set("co", np.ascontiguousarray(positions, dtype=np.float32).ravel())
+    mesh.loops.add(len(loops))
+    mesh.loops.foreach_set("vertex_index", loops)
+    mesh.polygons.add(len(counts))
+    mesh.polygons.foreach_set("loop_start", (np.cumsum(counts) - counts).astype(np.int32))
+    mesh.polygons.foreach_set("loop_total", counts)
+    mesh.update(calc_edges=True)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
 
 
 def is_point_cloud(obj):
     return obj.type == "POINTCLOUD" or (obj.type == "MESH" and bool(len(obj.data.vertices)) and not len(obj.data.edges))
 
 
-def smooth_blend_file(source, target, plan, settings, outcome):
+def smooth_blend_file(outcome, plan, settings, console):
+    source = outcome.source
+    console.stage(outcome, "reading", source)
     if not os.path.isfile(source):
         raise FileError("no such file")
-    try:
-        bpy.ops.wm.open_mainfile(filepath=os.path.abspath(source), load_ui=False)
-    except RuntimeError as error:
-        raise FileError(f"could not open the .blend file: {str(error).strip()}") from None
+    files.check_blend_version(files.blend_version(source), bpy.app.version)
+    with in_blender(outcome):
+        try:
+            bpy.ops.wm.open_mainfile(filepath=os.path.abspath(source), load_ui=False)
+        except RuntimeError as error:
+            raise FileError(f"could not open the .blend file: {str(error).strip()}") from None
+    files.check_blend_version(bpy.data.version, bpy.app.version)  # a header this could not read
+    console.stage(outcome, "smoothing", source)
     if plan.objects:
         objects = []
         for name in plan.objects:
@@ -200,8 +337,11 @@ def smooth_blend_file(source, target, plan, settings, outcome):
                     else "point clouds: smooth them with --points)"
                 )
             )
-    smooth_objects(objects, plan, settings, outcome)
-    files.save_blend_copy(target)
+    with in_blender(outcome):
+        smooth_objects(objects, plan, settings, outcome)
+    console.stage(outcome, "writing", outcome.target)
+    with in_blender(outcome):
+        files.save_blend_copy(outcome.target)
 
 
 def smooth_objects(objects, plan, settings, outcome):

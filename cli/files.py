@@ -1,139 +1,62 @@
-"""Reading and writing scan files with Blender's own importers/exporters, and writing atomically.
+"""The command's files: scan files read and written with our own readers (cli/formats), .blend files
+checked and saved, and every result written atomically.
 
 A result is first written to a hidden temporary file in the target folder and moved over the target
-with os.replace only once it is complete, so a failure never leaves a half-written (or no longer
-valid) output, and the target folder's relative paths (OBJ materials, .blend textures) stay right.
-
-A result keeps its input's layout (see ``Layout``): the encoding, whether it has normals (recomputed
-from the smoothed surface) and, for OBJ, whether it has a material library.
+with os.replace only once it is complete, so a failure or an interrupt never leaves a half-written
+(or no longer valid) output. A scan file's result is its input with the smoothed positions (and the
+normals it carries) written in; nothing else changes, and nothing is written beside it (an OBJ's
+.mtl and textures stay as they are).
 """
 
 import contextlib
+import gzip
 import os
 import re
-import struct
-from dataclasses import dataclass
 
-import bpy
-import numpy as np
+from . import formats
 
-# Blender's C++ importers/exporters (4.2+): operator name and the options that differ from defaults.
-# The exporters' options that depend on the input are chosen by export_options().
-IMPORTERS = {
-    ".ply": ("ply_import", {}),
-    ".obj": ("obj_import", {"import_vertex_groups": True}),  # OBJ groups can serve as --fixed-group
-    ".stl": ("stl_import", {}),
-}
-EXPORTERS = {
-    ".ply": ("ply_export", {"export_selected_objects": True}),
-    ".obj": ("obj_export", {"export_selected_objects": True}),
-    ".stl": ("stl_export", {"export_selected_objects": True}),
-}
+BLEND_MAGIC = b"BLENDER"
+ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"
+GZIP_MAGIC = b"\x1f\x8b"
 
 
 class FileError(Exception):
     """A message for the user about one file; its output was not written."""
 
 
-@dataclass(frozen=True)
-class Layout:
-    """What a result takes over from its input file: read from the file's text, not from Blender."""
-
-    ext: str
-    ascii: bool = False  # PLY/STL in text rather than binary
-    normals: bool = False  # PLY `nx ny nz` vertex properties, OBJ `vn` lines
-    materials: bool = False  # OBJ `mtllib` lines
-
-
-def read_layout(path):
-    """The layout of the input file at ``path`` (raises OSError when it cannot be read)."""
+def read_mesh(path):
+    """The PLY/OBJ/STL file at ``path`` parsed and checked (cli/formats); raises FileError."""
     ext = os.path.splitext(path)[1].lower()
-    if ext == ".ply":
-        formats, properties = _ply_header(path)
-        return Layout(ext, ascii="ascii" in formats, normals={"nx", "ny", "nz"} <= properties)
-    if ext == ".stl":
-        return Layout(ext, ascii=_stl_is_ascii(path))
-    if ext == ".obj":
-        found = _obj_statements(path, (b"vn", b"mtllib"))
-        return Layout(ext, normals=b"vn" in found, materials=b"mtllib" in found)
-    return Layout(ext)
-
-
-def _ply_header(path, limit=1 << 20):
-    """The PLY header's format words (`ascii`, `binary_little_endian`, ...) and its vertex properties' names."""
-    with open(path, "rb") as file:
-        header = file.read(limit).split(b"end_header", 1)[0].decode("ascii", "replace")
-    formats, properties, element = set(), set(), None
-    for line in header.splitlines():
-        words = line.split()
-        if len(words) >= 2 and words[0] == "format":
-            formats.add(words[1])
-        elif len(words) >= 2 and words[0] == "element":
-            element = words[1]
-        elif len(words) >= 3 and words[0] == "property" and element == "vertex":
-            properties.add(words[-1])
-    return formats, properties
-
-
-def _stl_is_ascii(path):
-    """A binary STL is 84 bytes plus 50 per triangle (its 80-byte header may itself start with `solid`)."""
-    with open(path, "rb") as file:
-        start = file.read(84)
-        size = os.fstat(file.fileno()).st_size
-    if len(start) == 84 and size == 84 + 50 * struct.unpack("<I", start[80:84])[0]:
-        return False
-    return start.lstrip().startswith(b"solid")
-
-
-def _obj_statements(path, keywords, chunk=1 << 24):
-    """Which of ``keywords`` start a line of the OBJ file: a plain byte search, the file is not parsed."""
-    needles = {keyword: [b"\n" + keyword + space for space in (b" ", b"\t")] for keyword in keywords}
-    overlap = max(len(needle) for group in needles.values() for needle in group) - 1
-    found = set()
-    with open(path, "rb") as file:
-        data = b"\n"  # the first line starts after a newline too
-        while len(found) < len(needles):
-            block = file.read(chunk)
-            if not block:
-                break
-            data = data[-overlap:] + block  # a statement cut by the chunk boundary is found whole
-            found.update(keyword for keyword, group in needles.items() if any(needle in data for needle in group))
-    return found
-
-
-def import_file(path, result_ext=None):
-    """Import a PLY/OBJ/STL file into the current (empty) scene; returns the new objects.
-
-    ``result_ext`` is the format the result will be written in: PLY colours go to a PLY result as
-    stored (Blender's sRGB conversion there and back darkens them by a step in 255 each run)."""
-    ext = os.path.splitext(path)[1].lower()
-    if ext not in IMPORTERS:
+    if ext not in formats.READERS:
         raise FileError(f"unsupported file type '{ext}' (PLY, OBJ, STL or .blend)")
     if not os.path.isfile(path):
         raise FileError("no such file")
-    name, options = IMPORTERS[ext]
-    if ext == ".ply" and result_ext == ".ply":
-        options = {**options, "import_colors": "LINEAR"}
-    before = set(bpy.data.objects)
     try:
-        result = getattr(bpy.ops.wm, name)(filepath=os.path.abspath(path), **options)
-    except RuntimeError as error:  # the importer's own error report
-        raise FileError(f"could not read the file: {str(error).strip()}") from None
-    objects = [obj for obj in bpy.data.objects if obj not in before]
-    if result != {"FINISHED"} or not objects:
-        raise FileError("the importer read nothing from this file")
-    return objects
+        return formats.read(path)
+    except formats.FormatError as error:
+        raise FileError(str(error)) from None
+    except OSError as error:
+        raise FileError(f"could not read the file: {error.strerror or error}") from None
+
+
+def result_bytes(mesh, result, target):
+    """The bytes of the result file: the input with ``result`` written in, or in another format (--format)."""
+    ext = os.path.splitext(target)[1].lower()
+    try:
+        return formats.updated(mesh, result) if ext == mesh.ext else formats.converted(mesh, result, ext)
+    except formats.FormatError as error:
+        raise FileError(str(error)) from None
 
 
 def temporary_path(target):
-    """A hidden sibling of ``target`` with the same extension (exporters may insist on it)."""
+    """A hidden sibling of ``target`` with the same extension."""
     folder, base = os.path.split(target)
     stem, ext = os.path.splitext(base)
     return os.path.join(folder, f".{stem}.hc_smooth-{os.getpid()}{ext}")
 
 
-# temporary_path's names, with the exporter's .mtl, the .tmp of _rename_material_library and Blender's
-# own save temporary (name@); the pid is what tells whether the run that wrote it is still going.
+# temporary_path's names (with the .mtl and .tmp of earlier versions, and Blender's own save temporary,
+# name@); the pid is what tells whether the run that wrote it is still going.
 TEMPORARY = re.compile(r"^\..+\.hc_smooth-([1-9][0-9]*)\.(?:ply|obj|stl|mtl|blend)(?:\.tmp|@)?$", re.IGNORECASE)
 
 
@@ -173,62 +96,6 @@ def remove_stale_temporaries(folder):
     return sorted(removed)
 
 
-def export_options(ext, layout, objects):
-    """The exporter's options for a result in format ``ext`` of an input with ``layout``.
-
-    The encoding carries over when the format stays (--format gives the exporter's default, binary);
-    normals and the material library go out only when the input had them; OBJ colours whenever the
-    meshes have colours (PLY writes them by default). UVs and other attributes: the exporters' defaults."""
-    meshes = [obj.data for obj in objects if obj.type == "MESH"]
-    same = layout.ext == ext
-    if ext == ".ply":
-        # Vertices without faces have no surface normal: Blender would write made-up ones (see _point_normals).
-        surface = any(len(mesh.polygons) for mesh in meshes)
-        return {
-            "ascii_format": same and layout.ascii,
-            "export_normals": layout.normals and surface,
-            "export_colors": "LINEAR" if same else "SRGB",
-        }  # LINEAR: as import_file read them
-    if ext == ".obj":
-        return {
-            "export_normals": layout.normals,
-            "export_materials": layout.materials,
-            "export_colors": any(len(mesh.color_attributes) for mesh in meshes),
-        }
-    return {"ascii_format": same and layout.ascii}
-
-
-def _recompute_normals(objects):
-    """Drop the normals the importer stored (custom normals, the input's): the exporter then writes the
-    normals of the smoothed surface."""
-    for obj in objects:
-        if obj.type == "MESH" and obj.data.has_custom_normals:
-            with bpy.context.temp_override(object=obj, active_object=obj):
-                bpy.ops.mesh.customdata_custom_splitnormals_clear()
-
-
-def _point_normals(objects):
-    """A PLY point cloud's normals (the importer's `normal` attribute) back under their PLY names nx, ny, nz.
-
-    Points have no surface to recompute normals from, so the input's are kept; the exporter would
-    write the attribute as normal_x, normal_y, normal_z."""
-    for obj in objects:
-        mesh = obj.data
-        normal = mesh.attributes.get("normal") if obj.type == "MESH" and not len(mesh.polygons) else None
-        if (
-            normal is None
-            or normal.data_type != "FLOAT_VECTOR"
-            or normal.domain != "POINT"
-            or any(name in mesh.attributes for name in ("nx", "ny", "nz"))
-        ):
-            continue
-        values = np.empty(3 * len(mesh.vertices), dtype=np.float32)
-        normal.data.foreach_get("vector", values)
-        for axis, name in enumerate(("nx", "ny", "nz")):
-            mesh.attributes.new(name, "FLOAT", "POINT").data.foreach_set("value", values[axis::3])
-        mesh.attributes.remove(mesh.attributes["normal"])
-
-
 @contextlib.contextmanager
 def _target_folder(target):
     """Create the folder of ``target`` (and missing parents) for a write; if the write fails, remove the
@@ -253,79 +120,85 @@ def _target_folder(target):
         raise
 
 
-def export_file(objects, target, layout):
-    """Export ``objects`` to ``target`` (format from its extension) in the ``layout`` of the input, atomically."""
-    ext = os.path.splitext(target)[1].lower()
-    name, options = EXPORTERS[ext]
-    options = {**options, **export_options(ext, layout, objects)}
-    _recompute_normals(objects)
-    if ext == ".ply":
-        _point_normals(objects)
-    for obj in bpy.context.scene.objects:
-        obj.select_set(obj in objects)
-    bpy.context.view_layer.objects.active = objects[0]
-    with _target_folder(target):
-        _export(name, options, target, ext)
-
-
-def _export(name, options, target, ext):
-    temporary = temporary_path(target)
-    companions = {temporary[: -len(ext)] + ".mtl": target[: -len(ext)] + ".mtl"} if ext == ".obj" else {}
-    try:
-        try:
-            result = getattr(bpy.ops.wm, name)(filepath=temporary, **options)
-        except RuntimeError as error:
-            raise FileError(f"could not write {target}: {str(error).strip()}") from None
-        if result != {"FINISHED"} or not os.path.isfile(temporary):
-            raise FileError(f"the exporter wrote nothing to {target}")
-        if ext == ".obj":
-            _rename_material_library(temporary, companions)
-        for temp, final in companions.items():
-            if os.path.exists(temp):
-                os.replace(temp, final)
-        os.replace(temporary, target)  # last: the main file appears only when everything is in place
-    finally:
-        for leftover in (temporary, *companions):
-            if os.path.exists(leftover):
-                os.remove(leftover)
-
-
-def _rename_material_library(obj_path, companions):
-    """The OBJ exporter names its .mtl after the temporary file: point `mtllib` at the final name."""
-    ((temp_mtl, final_mtl),) = companions.items()
-    if not os.path.exists(temp_mtl):
-        return
-    old = f"mtllib {os.path.basename(temp_mtl)}".encode()
-    new = f"mtllib {os.path.basename(final_mtl)}".encode()
-    fixed = obj_path + ".tmp"
-    try:
-        with open(obj_path, "rb") as source, open(fixed, "wb") as out:
-            for line in source:  # the mtllib line is in the header; the rest is copied as is
-                if line.startswith(old):
-                    out.write(new + line[len(old) :])
-                    out.write(source.read())
-                    break
-                out.write(line)
-        os.replace(fixed, obj_path)
-    finally:
-        if os.path.exists(fixed):
-            os.remove(fixed)
-
-
-def save_blend_copy(target):
-    """Save the open .blend as a copy at ``target``, atomically (relative paths remapped to its folder)."""
-    with _target_folder(target):
-        _save_blend_copy(target)
-
-
-def _save_blend_copy(target):
+@contextlib.contextmanager
+def _replacing(target):
+    """Yield a temporary path to write; on success it replaces ``target`` (keeping the permission bits
+    of the file it replaces), on any failure or interrupt it is removed."""
     temporary = temporary_path(target)
     try:
-        try:
-            bpy.ops.wm.save_as_mainfile(filepath=temporary, copy=True, relative_remap=True, check_existing=False)
-        except RuntimeError as error:
-            raise FileError(f"could not save {target}: {str(error).strip()}") from None
+        yield temporary
+        if os.path.exists(target):
+            with contextlib.suppress(OSError):
+                os.chmod(temporary, os.stat(target).st_mode & 0o7777)
         os.replace(temporary, target)
     finally:
         if os.path.exists(temporary):
             os.remove(temporary)
+
+
+def write_bytes(target, data):
+    """Write ``data`` to ``target`` atomically (created folders removed again if it fails)."""
+    with _target_folder(target), _replacing(target) as temporary:
+        try:
+            with open(temporary, "wb") as file:
+                file.write(data)
+        except OSError as error:
+            raise FileError(f"could not write {target}: {error.strerror or error}") from None
+
+
+# --- .blend files ---------------------------------------------------------------------------------
+
+
+def blend_version(path):
+    """The version of Blender that saved the .blend at ``path`` as (major, minor), from its header; None
+    when the header cannot be read here (zstd compression without the zstandard module)."""
+    with open(path, "rb") as file:
+        start = file.read(64)
+        if start.startswith(GZIP_MAGIC):
+            file.seek(0)
+            with gzip.open(file) as unpacked:
+                start = unpacked.read(64)
+        elif start.startswith(ZSTD_MAGIC):
+            try:
+                import zstandard  # bundled with Blender
+            except ImportError:
+                return None
+            file.seek(0)
+            with zstandard.ZstdDecompressor().stream_reader(file) as unpacked:
+                start = unpacked.read(64)
+    return header_version(start)
+
+
+def header_version(start):
+    """(major, minor) from a .blend header: `BLENDER_v405` (three digits, before Blender 5.0) or
+    `BLENDER17-01v0502` (a header size and format, then four digits); None if it is not a .blend."""
+    if not start.startswith(BLEND_MAGIC):
+        return None
+    old = re.match(rb"BLENDER[_-][vV](\d)(\d\d)", start)
+    if old:
+        return int(old.group(1)), int(old.group(2))
+    new = re.match(rb"BLENDER\d\d-\d\d[vV](\d\d)(\d\d)", start)
+    if new:
+        return int(new.group(1)), int(new.group(2))
+    return None
+
+
+def check_blend_version(saved, running):
+    """Refuse a .blend saved by a newer Blender: writing it back would drop what this one does not know."""
+    if saved is not None and tuple(saved[:2]) > tuple(running[:2]):
+        raise FileError(
+            f"saved by Blender {saved[0]}.{saved[1]}, newer than this Blender "
+            f"({running[0]}.{running[1]}): saving it here could lose data; smooth it with Blender "
+            f"{saved[0]}.{saved[1]} or newer"
+        )
+
+
+def save_blend_copy(target):
+    """Save the open .blend as a copy at ``target``, atomically (relative paths remapped to its folder)."""
+    import bpy
+
+    with _target_folder(target), _replacing(target) as temporary:
+        try:
+            bpy.ops.wm.save_as_mainfile(filepath=temporary, copy=True, relative_remap=True, check_existing=False)
+        except RuntimeError as error:
+            raise FileError(f"could not save {target}: {str(error).strip()}") from None

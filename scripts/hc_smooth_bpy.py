@@ -24,6 +24,7 @@ Exit status: the command's (0 all smoothed, 1 a file failed, 2 usage), the scrip
 This file needs only `bpy`: copy it wherever a pipeline needs it.
 """
 
+import contextlib
 import os
 import pathlib
 import sys
@@ -84,8 +85,32 @@ def enable(bpy):
             f"  python {SELF} install hc_smooth-<version>.zip"
         )
     if module not in bpy.context.preferences.addons:
-        bpy.ops.preferences.addon_enable(module=module)
+        try:
+            with silenced():  # Blender prints a failed add-on's traceback; its cause is said below
+                bpy.ops.preferences.addon_enable(module=module)
+        except RuntimeError as error:
+            text = str(error)
+            reason = text.rsplit("cause: ", 1)[-1] if "cause: " in text else text.strip().splitlines()[-1]
+            raise SystemExit(f"hc_smooth_bpy: HC Smooth could not be enabled: {reason.strip()}") from None
     return module
+
+
+@contextlib.contextmanager
+def silenced():
+    """Descriptors 1 and 2 (where Blender's C code prints) to nothing while the block runs."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 1)
+        os.dup2(devnull, 2)
+        yield
+    finally:
+        for fd, copy in zip((1, 2), saved):
+            os.dup2(copy, fd)
+            os.close(copy)
+        os.close(devnull)
 
 
 def install(bpy, args):
@@ -103,7 +128,7 @@ def install(bpy, args):
 
 
 def command(bpy, args):
-    return sys.modules[enable(bpy) + ".cli"].main(args)
+    return sys.modules[enable(bpy) + ".cli"].main(args, prog=f"{os.path.basename(SELF)} hc_smooth")
 
 
 def run(bpy, args):

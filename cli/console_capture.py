@@ -1,8 +1,9 @@
 """Collect what Blender prints while a block runs, so a person's console shows only the lines meant
 for them (the command line's per-file progress, the demo's table).
 
-Plain Python, no imports from the rest of the package: the add-on uses it (cli/files.py) and so do
-scripts that run before the add-on is installed (demo/demo.py), with the repository root on sys.path.
+Plain Python, no imports from the rest of the package: the command line uses it (cli/command.py) and
+so do scripts that run before the add-on is installed (demo/demo.py imports ``cli.console_capture``
+with the repository root on sys.path).
 """
 
 import contextlib

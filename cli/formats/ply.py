@@ -1,0 +1,268 @@
+"""PLY (ASCII, binary little and big endian) read into arrays and written back with only the vertex
+positions (and the vertex normals nx, ny, nz, where the file has them and faces) changed.
+
+Every element, property, comment and obj_info line is kept: the header as it was, binary records byte
+for byte outside the rewritten values, ASCII lines as they were except the rewritten tokens.
+"""
+
+import numpy as np
+
+from .tokens import FormatError, Tokens, integers, number_texts, splice
+
+TYPES = {
+    "char": "i1",
+    "int8": "i1",
+    "uchar": "u1",
+    "uint8": "u1",
+    "short": "i2",
+    "int16": "i2",
+    "ushort": "u2",
+    "uint16": "u2",
+    "int": "i4",
+    "int32": "i4",
+    "uint": "u4",
+    "uint32": "u4",
+    "float": "f4",
+    "float32": "f4",
+    "double": "f8",
+    "float64": "f8",
+}
+FORMATS = {"ascii": None, "binary_little_endian": "<", "binary_big_endian": ">"}
+FACE_LISTS = ("vertex_indices", "vertex_index")
+NORMALS = ("nx", "ny", "nz")
+
+
+class Property:
+    def __init__(self, words):
+        if words[1] == "list":
+            if len(words) != 5 or words[2] not in TYPES or words[3] not in TYPES:
+                raise FormatError(f"PLY header: bad list property '{' '.join(words)}'")
+            self.count_type, self.type, self.name = TYPES[words[2]], TYPES[words[3]], words[4]
+        else:
+            if len(words) != 3 or words[1] not in TYPES:
+                raise FormatError(f"PLY header: bad property '{' '.join(words)}'")
+            self.count_type, self.type, self.name = None, TYPES[words[1]], words[2]
+
+
+class Element:
+    def __init__(self, name, count):
+        self.name, self.count, self.properties = name, count, []
+        self.where = {}  # property name -> (count,) byte offsets (binary) or token indices (ASCII)
+        self.counts = {}  # list property name -> (count,) list lengths
+
+    def property(self, name):
+        return next((p for p in self.properties if p.name == name), None)
+
+
+def parse_header(data):
+    """(format word, [Element], offset of the body)."""
+    if not data.startswith(b"ply") or data[3:4] not in (b"\n", b"\r"):
+        raise FormatError("not a PLY file (it does not start with 'ply')")
+    end = data.find(b"end_header")
+    if end < 0:
+        raise FormatError("PLY header without end_header")
+    newline = data.find(b"\n", end)
+    body = len(data) if newline < 0 else newline + 1
+    fmt, elements = None, []
+    for line in data[:end].decode("ascii", "replace").splitlines()[1:]:
+        words = line.split()
+        if not words or words[0] in ("comment", "obj_info"):
+            continue
+        if words[0] == "format":
+            if len(words) < 2 or words[1] not in FORMATS:
+                raise FormatError(f"PLY header: unknown format '{line.strip()}'")
+            fmt = words[1]
+        elif words[0] == "element":
+            if len(words) != 3 or not words[2].isdigit():
+                raise FormatError(f"PLY header: bad element line '{line.strip()}'")
+            elements.append(Element(words[1], int(words[2])))
+        elif words[0] == "property":
+            if not elements:
+                raise FormatError("PLY header: a property before any element")
+            elements[-1].properties.append(Property(words))
+        else:
+            raise FormatError(f"PLY header: unknown line '{line.strip()}'")
+    if fmt is None:
+        raise FormatError("PLY header without a format line")
+    return fmt, elements, body
+
+
+class PlyFile:
+    """A PLY file: ``positions`` (n, 3) float64 and faces as ``corners`` with ``sizes`` (corners per face)."""
+
+    ext = ".ply"
+
+    def __init__(self, data):
+        self.data = data
+        self.format, self.elements, body = parse_header(data)
+        vertex = next((e for e in self.elements if e.name == "vertex"), None)
+        if vertex is None or not all(vertex.property(axis) for axis in "xyz"):
+            raise FormatError("PLY file without vertex positions (element vertex with x, y, z)")
+        for axis in "xyz":
+            prop = vertex.property(axis)
+            if prop.count_type is not None or prop.type[0] != "f":
+                raise FormatError(
+                    f"PLY vertex property {axis} is not a float or double: it cannot take smoothed values"
+                )
+        self.vertex = vertex
+        if self.format == "ascii":
+            self._locate_ascii(body)
+        else:
+            self._locate_binary(body)
+        self.positions = np.stack([self._read(vertex, axis) for axis in "xyz"], axis=1)
+        self.face = next(
+            (e for e in self.elements if e.name == "face" and any(e.property(n) for n in FACE_LISTS)), None
+        )
+        if self.face is not None:
+            name = next(n for n in FACE_LISTS if self.face.property(n))
+            corners, self.sizes = self._read_list(self.face, name)
+            self.corners = integers(np.asarray(corners, dtype=np.float64), f"PLY face {name}")
+        else:
+            self.corners, self.sizes = np.zeros(0, np.int64), np.zeros(0, np.int64)
+        props = [vertex.property(n) for n in NORMALS]
+        self.has_normals = all(p is not None and p.count_type is None and p.type[0] == "f" for p in props)
+        self.normals = np.stack([self._read(vertex, n) for n in NORMALS], axis=1) if self.has_normals else None
+
+    # --- where the values are ---------------------------------------------------------------------
+
+    def _locate_ascii(self, body):
+        self.tokens = tokens = Tokens(self.data, body)
+        # One record per line (as every PLY writer puts them): the records are the lines with tokens.
+        lines, first = np.unique(tokens.lines, return_index=True)
+        per_record = np.diff(np.append(first, len(tokens)))
+        record = 0
+        for element in self.elements:
+            if record + element.count > len(first):
+                raise FormatError(f"PLY file ends before its {element.count} {element.name} records")
+            start = first[record : record + element.count]
+            offset = np.zeros(element.count, dtype=np.int64)
+            for prop in element.properties:
+                element.where[prop.name] = start + offset
+                if prop.count_type is None:
+                    offset += 1
+                else:
+                    counts = tokens.numbers(start + offset, f"PLY {element.name} {prop.name}")
+                    element.counts[prop.name] = integers(counts, f"PLY {element.name} {prop.name} count")
+                    offset += 1 + element.counts[prop.name]
+            if not np.array_equal(offset, per_record[record : record + element.count]):
+                bad = int(np.flatnonzero(offset != per_record[record : record + element.count])[0])
+                raise FormatError(
+                    f"PLY {element.name} record {bad} has {per_record[record + bad]} values where the header "
+                    f"says {offset[bad]}"
+                )
+            record += element.count
+
+    def _locate_binary(self, body):
+        order = FORMATS[self.format]
+        raw = np.frombuffer(self.data, dtype=np.uint8)
+        position = body
+        for element in self.elements:
+            starts = _record_starts(raw, position, element, order)
+            offset = starts.copy()
+            for prop in element.properties:
+                element.where[prop.name] = offset.copy()
+                if prop.count_type is None:
+                    offset += np.dtype(prop.type).itemsize
+                else:
+                    counts = _gather(raw, offset, order + prop.count_type)
+                    element.counts[prop.name] = counts.astype(np.int64)
+                    offset += (
+                        np.dtype(prop.count_type).itemsize + counts.astype(np.int64) * np.dtype(prop.type).itemsize
+                    )
+            position = int(offset[-1]) if element.count else position
+            if position > len(self.data):
+                raise FormatError(f"PLY file ends inside its {element.name} records")
+
+    # --- reading and writing values ----------------------------------------------------------------
+
+    def _read(self, element, name):
+        where = element.where[name]
+        if self.format == "ascii":
+            return self.tokens.numbers(where, f"PLY {element.name} {name}")
+        prop = element.property(name)
+        raw = np.frombuffer(self.data, dtype=np.uint8)
+        return _gather(raw, where, FORMATS[self.format] + prop.type).astype(np.float64)
+
+    def _read_list(self, element, name):
+        prop, counts, where = element.property(name), element.counts[name], element.where[name]
+        total = int(counts.sum())
+        first = np.repeat(np.cumsum(counts) - counts, counts)
+        step = np.arange(total) - first  # item number within its list
+        if self.format == "ascii":
+            items = np.repeat(where + 1, counts) + step
+            values = self.tokens.numbers(items, f"PLY {element.name} {name}")
+        else:
+            size = np.dtype(prop.type).itemsize
+            items = np.repeat(where + np.dtype(prop.count_type).itemsize, counts) + step * size
+            raw = np.frombuffer(self.data, dtype=np.uint8)
+            values = _gather(raw, items, FORMATS[self.format] + prop.type)
+        return values, counts
+
+    def write(self, updates):
+        """The file's bytes with ``updates`` ({vertex property name: (rows, values)}) written in."""
+        if self.format == "ascii":
+            starts, ends, texts = [], [], []
+            for name, (rows, values) in updates.items():
+                where = self.vertex.where[name][rows]
+                starts.append(self.tokens.starts[where])
+                ends.append(self.tokens.ends[where])
+                texts += number_texts(values, self.vertex.property(name).type)
+            if not starts:
+                return bytes(self.data)
+            return splice(self.data, np.concatenate(starts), np.concatenate(ends), texts)
+        out = bytearray(self.data)
+        raw = np.frombuffer(out, dtype=np.uint8)
+        for name, (rows, values) in updates.items():
+            dtype = np.dtype(FORMATS[self.format] + self.vertex.property(name).type)
+            offsets = self.vertex.where[name][rows]
+            raw[offsets[:, None] + np.arange(dtype.itemsize)] = (
+                np.asarray(values, dtype=dtype).view(np.uint8).reshape(-1, dtype.itemsize)
+            )
+        return bytes(out)
+
+
+def _gather(raw, offsets, dtype):
+    """The values of ``dtype`` at byte ``offsets`` of ``raw``."""
+    dtype = np.dtype(dtype)
+    return raw[offsets[:, None] + np.arange(dtype.itemsize)].view(dtype).ravel()
+
+
+def _record_starts(raw, position, element, order):
+    """Byte offset of each record of ``element`` starting at ``position``.
+
+    Records without list properties have one size. With lists, the records are taken in runs of equal
+    list lengths (a mesh's faces are mostly one size): a run's records are checked in bulk, in windows
+    that double while the run lasts."""
+    sizes = [
+        (np.dtype(p.type).itemsize, None if p.count_type is None else np.dtype(order + p.count_type))
+        for p in element.properties
+    ]
+    if all(count is None for _, count in sizes):
+        return position + np.arange(element.count, dtype=np.int64) * sum(size for size, _ in sizes)
+    starts = np.empty(element.count, dtype=np.int64)
+    done, window = 0, 16
+    while done < element.count:
+        # The list lengths of the record at ``position`` give its layout and size.
+        layout, offset = [], 0
+        for size, count in sizes:
+            if count is None:
+                offset += size
+                continue
+            if position + offset + count.itemsize > len(raw):
+                raise FormatError(f"PLY file ends inside its {element.name} records")
+            length = int(raw[position + offset : position + offset + count.itemsize].view(count)[0])
+            layout.append((offset, count, length))
+            offset += count.itemsize + length * size
+        record = offset
+        # How many records from here have the same list lengths (and so the same size).
+        limit = min(window, element.count - done, max(1, (len(raw) - position) // max(record, 1)))
+        candidates = position + np.arange(limit, dtype=np.int64) * record
+        same = np.ones(limit, dtype=bool)
+        for at, count, length in layout:
+            same &= _gather(raw, candidates + at, count) == length
+        run = limit if same.all() else max(1, int(np.argmin(same)))
+        starts[done : done + run] = candidates[:run]
+        done += run
+        position += run * record
+        window = window * 2 if run == limit else 16
+    return starts
