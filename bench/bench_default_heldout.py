@@ -105,31 +105,7 @@ def make_case(mesh, kind, sigma, seed, reference="scan"):
 def hc_grid(case):
     """RMS at every (alpha, beta, checkpoint) of the grid (NaN past a path's end). Returns (grid, best
     {params, rms})."""
-    operator = core.umbrella_operator(case.edges, len(case.noisy))
-    grid = np.full((len(ALPHAS), len(BETAS), len(CHECKPOINTS)), np.nan)
-    for ia, alpha in enumerate(ALPHAS):
-        for ib, beta in enumerate(BETAS):
-            run = quality.quiet(
-                core.Smoothing,
-                case.noisy,
-                None,
-                method="hc",
-                alpha=alpha,
-                beta=beta,
-                iterations=CHECKPOINTS[-1],
-                operator=operator,
-            )
-            done = 0
-            for ic, checkpoint in enumerate(CHECKPOINTS):
-                try:
-                    run.advance(checkpoint - done)
-                except core.DivergenceError:
-                    break
-                done = checkpoint
-                grid[ia, ib, ic] = case.rms(run.result().positions)
-                path = grid[ia, ib, : ic + 1]
-                if ic >= 3 and path[-1] > quality.GRID_GIVE_UP * path.min() and path[-1] > path[-2]:
-                    break  # past this path's minimum: the error only grows from here
+    grid = quality.walk_grid(case, ALPHAS, BETAS, CHECKPOINTS)
     ia, ib, ic = np.unravel_index(np.nanargmin(grid), grid.shape)
     params = {"alpha": ALPHAS[ia], "beta": BETAS[ib], "iterations": CHECKPOINTS[ic]}
     return grid, {"params": params, "rms": float(grid[ia, ib, ic])}

@@ -151,15 +151,13 @@ def hc_fixed(case, params):
     )
 
 
-def hc_grid(case, seed):
-    """RMS of HC at every (alpha, beta, checkpoint) of the grid on a vertex subset, then the best few
-    re-measured on all vertices. Returns (grid (a, b, c) array, best {params, rms, max, dv})."""
-    n = len(case.noisy)
-    rows = np.sort(np.random.default_rng(seed).choice(n, min(n, GRID_SUBSET), replace=False))
-    operator = core.umbrella_operator(case.edges, n)
-    grid = np.full((len(HC_ALPHAS), len(HC_BETAS), len(HC_CHECKPOINTS)), np.nan)
-    for ia, alpha in enumerate(HC_ALPHAS):
-        for ib, beta in enumerate(HC_BETAS):
+def walk_grid(case, alphas, betas, checkpoints, rows=None):
+    """RMS of HC (on ``rows``, all vertices if None) at every (alpha, beta, checkpoint), NaN past the end
+    of a path: each path runs once, read at its checkpoints, and stops past its minimum."""
+    operator = core.umbrella_operator(case.edges, len(case.noisy))
+    grid = np.full((len(alphas), len(betas), len(checkpoints)), np.nan)
+    for ia, alpha in enumerate(alphas):
+        for ib, beta in enumerate(betas):
             run = quiet(
                 core.Smoothing,
                 case.noisy,
@@ -167,11 +165,11 @@ def hc_grid(case, seed):
                 method="hc",
                 alpha=alpha,
                 beta=beta,
-                iterations=HC_CHECKPOINTS[-1],
+                iterations=checkpoints[-1],
                 operator=operator,
             )
             done = 0
-            for ic, checkpoint in enumerate(HC_CHECKPOINTS):
+            for ic, checkpoint in enumerate(checkpoints):
                 try:
                     run.advance(checkpoint - done)
                 except core.DivergenceError:
@@ -181,6 +179,15 @@ def hc_grid(case, seed):
                 path = grid[ia, ib, : ic + 1]
                 if ic >= 3 and path[-1] > GRID_GIVE_UP * path.min() and path[-1] > path[-2]:
                     break  # past this path's minimum: the error only grows from here
+    return grid
+
+
+def hc_grid(case, seed):
+    """RMS of HC at every (alpha, beta, checkpoint) of the grid on a vertex subset, then the best few
+    re-measured on all vertices. Returns (grid (a, b, c) array, best {params, rms, max, dv})."""
+    n = len(case.noisy)
+    rows = np.sort(np.random.default_rng(seed).choice(n, min(n, GRID_SUBSET), replace=False))
+    grid = walk_grid(case, HC_ALPHAS, HC_BETAS, HC_CHECKPOINTS, rows)
     order = np.argsort(np.nan_to_num(grid, nan=np.inf), axis=None)[:6]
     best = None
     for flat in order:
