@@ -27,8 +27,7 @@ from extension_session import ADDON, install_extension, run_and_exit  # noqa: E4
 # isort: split
 
 import bpy  # noqa: E402
-import meshes  # noqa: E402
-import numpy as np  # noqa: E402
+from bench_blender import closed_torus  # noqa: E402
 
 METHODS = ("HC", "LAPLACIAN", "LAPLACIAN_CENTRAL", "LAPLACIAN_ORIGINAL")
 
@@ -37,25 +36,6 @@ def count(text):
     text = text.strip().lower()
     scale = {"k": 1_000, "m": 1_000_000}.get(text[-1], 1)
     return int(float(text.rstrip("km")) * scale)
-
-
-def noisy_torus(n_vertices, seed=0):
-    vertices, faces = meshes.torus(n_vertices)
-    vertices = meshes.add_noise(vertices, 0.002, seed=seed)
-    mesh = bpy.data.meshes.new("Torus")
-    mesh.vertices.add(len(vertices))
-    mesh.vertices.foreach_set("co", vertices.astype(np.float32).ravel())
-    mesh.loops.add(faces.size)
-    mesh.loops.foreach_set("vertex_index", faces.astype(np.int32).ravel())
-    mesh.polygons.add(len(faces))
-    mesh.polygons.foreach_set("loop_start", np.arange(0, faces.size, 3, dtype=np.int32))
-    mesh.update(calc_edges=True)
-    obj = bpy.data.objects.new("Torus", mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    for other in bpy.context.scene.objects:
-        other.select_set(other == obj)
-    bpy.context.view_layer.objects.active = obj
-    return obj
 
 
 def evaluation_seconds(obj, repeats):
@@ -91,7 +71,7 @@ def main():
     print("|---:|---|---:|---:|")
     for size in (count(text) for text in args.sizes.split(",")):
         bpy.ops.wm.read_homefile(use_empty=True)
-        obj = noisy_torus(size)
+        obj = closed_torus(size, shuffle=False)[0]  # as bench_blender.py times the operator
         assert bpy.ops.object.hc_smooth_modifier_add(iterations=args.iterations) == {"FINISHED"}
         modifier = obj.modifiers[-1]
         n = len(obj.data.vertices)
