@@ -8,7 +8,7 @@ Automatic Amount was tuned on) and ``heldout`` (real scans, open range scans amo
 coordinate ("iso"), one seed per cell (as bench_quality.py makes them). Measured: RMS distance of all
 vertices (open borders included) to the clean surface, % of the diagonal, of
 
-* the default: ``core.smooth_mesh(noisy, edges, faces=faces, weld=True, border="curve")``, as the
+* the default: ``core.smooth_mesh(noisy, edges, faces=faces, weld=True, border="free")``, as the
   add-on runs it with nothing set;
 * the best HC setting of the grid α {0, 0.05, 0.1, 0.2} × β {0.6, 0.75, 0.9} × iterations {1, 2, 3,
   5, 8, 12, 20, 30, 50, 80, 120, 200} (one run per (α, β), read at each count; a run stops once its

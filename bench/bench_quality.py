@@ -124,9 +124,9 @@ def hc_default_settings():
 def hc_default(case):
     """HC Smooth's default result: what the operator and the command line give with nothing changed
     (core.smooth_mesh, the pipeline they all run, with the options the add-on passes: split vertices
-    welded, open borders smoothed as curves)."""
+    welded)."""
     result, report = core.smooth_mesh(
-        case.noisy, case.edges, faces=case.faces, weld=True, border="curve", return_report=True
+        case.noisy, case.edges, faces=case.faces, weld=True, border="free", return_report=True
     )
     settings = {"alpha": report.alpha, "beta": report.beta, "iterations": report.iterations}
     if report.amount is not None:

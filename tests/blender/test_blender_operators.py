@@ -44,10 +44,10 @@ def test_object_mode_equals_core_on_the_same_arrays(scene):
 
 def add_on_default(before, obj, **given):
     """What the add-on runs with nothing set but ``given``: core.smooth_mesh with the Automatic Amount,
-    split vertices welded and open borders as curves."""
+    split vertices welded."""
     triangles = core.metrics.fan_triangles(np.array(faces_of(obj.data)))
     return core.smooth_mesh(
-        before, edges_of(obj.data), faces=triangles, weld=True, border="curve", return_report=True, **given
+        before, edges_of(obj.data), faces=triangles, weld=True, border="free", return_report=True, **given
     )
 
 
