@@ -173,6 +173,15 @@ def interruptible():
             signal.signal(signal.SIGINT, previous)
 
 
+def ctrl_c_interrupts():
+    """Make Ctrl+C raise KeyboardInterrupt again (after Blender loaded a file, which may set its own
+    handler); only inside the command's ``interruptible`` span, on the main thread."""
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is not (
+        signal.default_int_handler
+    ):
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 def interrupted(plan, outcomes, console):
     """What an interrupt left: the files done, the one it stopped (as it was), the ones not started."""
     done = [outcome for outcome in outcomes if outcome.stage == "done" and not outcome.error]
@@ -260,6 +269,7 @@ def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome, grou
     messages name it as the operators would) smoothed by the operators' own job code."""
     with in_blender(outcome):
         bpy.ops.wm.read_homefile(use_empty=True)  # each file starts from an empty scene
+        ctrl_c_interrupts()  # loading a file may hand SIGINT back to Blender (5.x)
         obj = blender_object(name, positions, corners, sizes)
         for group, members in (groups or {}).items():
             obj.vertex_groups.new(name=group).add(members.tolist(), 1.0, "REPLACE")
@@ -306,6 +316,7 @@ def smooth_blend_file(outcome, plan, settings, console):
     with in_blender(outcome):
         try:
             bpy.ops.wm.open_mainfile(filepath=os.path.abspath(source), load_ui=False)
+            ctrl_c_interrupts()
         except RuntimeError as error:
             raise FileError(f"could not open the .blend file: {str(error).strip()}") from None
     files.check_blend_version(bpy.data.version, bpy.app.version)  # a header this could not read
