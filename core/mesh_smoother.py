@@ -28,8 +28,9 @@ from . import volume, welding
 from .adjacency import Umbrella, umbrella_operator
 from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
-from .mesh_amount import AmountChooser, MeshAmount
+from .mesh_amount import PATCH_FROM, AmountChooser, MeshAmount
 from .metrics import fan_triangles
+from .slices import as_fraction
 from .smoothing import METHODS, Cancelled, Smoothing
 from .validation import check_choice, check_fixed, check_influence, check_positions
 
@@ -41,8 +42,12 @@ DEFAULT_ITERATIONS = 10
 # farthest a vertex may move when the caller set no limit.
 DEVIATION_IN_NOISE = 4.0
 # Of a run with the Automatic Amount, the part of its progress the choice takes: its runs (the data and
-# the probes) go about twice as far as the smoothing that follows.
+# the probes) go about twice as far as the smoothing that follows; on big meshes they go on patches
+# (core.mesh_amount), which cost a few iterations of the whole mesh.
 CHOOSING_SHARE = 2 / 3
+PATCH_CHOOSING_SHARE = 1 / 5
+RESTORE_SHARE = 1 / 10  # ... and the volume restore, at the end
+_ROWS = 1 << 19  # vertices per block of the final projection onto the deviation limit
 
 
 @dataclass(frozen=True)
@@ -190,50 +195,58 @@ class MeshSmoother:
             )
 
     def steps(self, chunk: int | None = None) -> Iterator[float]:
-        """Run in slices of ``chunk`` iterations (all at once if None), yielding the fraction done."""
+        """Run in slices of ``chunk`` iterations (all at once if None), yielding the fraction done; the
+        Automatic Amount's choice and volume restore yield between their passes too."""
         start = time.perf_counter()
-        alpha, beta, iterations, share, amount, done = self.alpha, self.beta, self.iterations, 0.0, None, None
+        alpha, beta, iterations, amount, done = self.alpha, self.beta, self.iterations, None, None
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
+        fixed, share, restoring = self.fixed, 0.0, self.automatic and self.faces is not None
         if self.automatic:
             chooser = AmountChooser(self.positions, operator=self.operator, beta=self.beta, fixed=self.fixed)
             if self.beta_given:
                 chooser.fine_beta = None  # the caller's beta is used as given
-            share = CHOOSING_SHARE
+            share = CHOOSING_SHARE if self.operator.n_vertices < PATCH_FROM else PATCH_CHOOSING_SHARE
             for fraction in chooser.steps():
                 if fraction < 1.0:
                     yield share * fraction
-            amount = chooser.amount
+            amount, fixed = chooser.amount, chooser.fixed  # the Automatic Amount holds parts without noise
             alpha, beta, iterations = amount.alpha, amount.beta, amount.iterations
             if self.max_deviation == AUTO:
                 limit = DEVIATION_IN_NOISE * amount.sigma
             if self.influence is None and self.mode == "simultaneous" and not self.tolerance and not limit:
                 done = chooser.result()  # the choice ran exactly these iterations on its way: not again
-        fixed = self.fixed if amount is None else chooser.fixed  # the Automatic Amount holds parts without noise
+            del chooser  # its runs' buffers go before the smoothing's come
+        end = 1.0 - RESTORE_SHARE if restoring else 1.0  # where the smoothing's share of the progress ends
         if done is not None:
             result, ran = done, iterations
         else:
             smoothing = self._smoothing(alpha, beta, iterations, limit, fixed)
             for fraction in smoothing.steps(chunk):
                 if fraction < 1.0:
-                    yield share + (1.0 - share) * fraction
+                    yield share + (end - share) * fraction
             smoothed = smoothing.result()
+            del smoothing
             result, ran = smoothed.positions, smoothed.iterations
         offset = 0.0
-        if self.automatic and ran > 0 and self.faces is not None:
-            result, offset = self._keep_volume(result, fixed, volume.NOISE_OFFSETS * amount.sigma)
+        if restoring and ran > 0:
+            result, offset = yield from self._keep_volume(result, fixed, volume.NOISE_OFFSETS * amount.sigma, end)
             if limit:  # the offset keeps to the limit too
-                result = _within(result, self.positions, limit)
+                _within(result, self.positions, limit)
         self.result = result if self.welding is None else self.welding.scatter(result)
         self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, limit, time.perf_counter() - start)
         yield 1.0
 
-    def _keep_volume(self, result, fixed, limit):
+    def _keep_volume(self, result, fixed, limit, progress):
         """Each closed part's volume given back by a bounded uniform offset of its moving vertices along
-        their normals (core.volume). Fixed vertices and those of influence 0 stay bit for bit."""
+        their normals (core.volume), in slices (yielding ``progress``); returns (positions, largest offset).
+        Fixed vertices and those of influence 0 stay bit for bit."""
         movable = ~fixed if self.influence is None else ~fixed & (self.influence > 0.0)
-        restored, offsets = volume.restore_volume(self.positions, result, self.faces, movable=movable, limit=limit)
-        restored = restored.astype(result.dtype)
-        restored[~movable] = result[~movable]
+        restored, offsets = yield from as_fraction(
+            volume.restore_steps(self.positions, result, self.faces, movable=movable, limit=limit, dtype=result.dtype),
+            progress,
+        )
+        still = ~movable
+        restored[still] = result[still]
         return restored, float(np.abs(offsets).max()) if offsets.size else 0.0
 
     def run(self, progress: Callable[[float], bool | None] | None = None) -> np.ndarray:
@@ -245,14 +258,14 @@ class MeshSmoother:
 
 
 def _within(points, start, radius):
-    """``points`` projected onto the balls of ``radius`` around ``start`` (rows beyond it only)."""
-    away = points - start
-    lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
-    over = lengths > radius
-    if over.any():
-        points = points.copy()
-        points[over] = start[over] + away[over] * (radius / lengths[over])[:, None].astype(points.dtype)
-    return points
+    """``points`` projected, in place, onto the balls of ``radius`` around ``start`` (rows beyond it only)."""
+    for low in range(0, len(points), _ROWS):
+        rows = slice(low, low + _ROWS)
+        away = points[rows] - start[rows]
+        lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
+        over = np.flatnonzero(lengths > radius)
+        if over.size:
+            points[rows][over] = start[rows][over] + away[over] * (radius / lengths[over])[:, None].astype(points.dtype)
 
 
 def smooth_mesh(

@@ -21,7 +21,10 @@ it further (the mesh pipeline passes NOISE_OFFSETS times the estimated noise).
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
+
+from .adjacency import grouped_pairs
+from .parts import parts as connected_parts
+from .slices import to_end
 
 _NEWTON_STEPS = 6  # at most; the volume is a cubic in the offset, Newton from 0 needs two or three
 _RELATIVE_ACCURACY = 1e-12
@@ -34,6 +37,8 @@ KEPT = 0.5  # a part that kept less than this share of its volume collapsed: it 
 # noise deviations on dense meshes, up to 0.75 on a coarse tube (noise 0.2-1 edge lengths).
 NOISE_OFFSETS = 1.0
 _BLOCK = 1 << 18  # triangles per block: bounds the temporaries
+_VERTEX_BLOCK = 1 << 19  # vertices per block
+_ROW_BLOCK = 1 << 16  # vertices per block where each of their half-edges is compared (several int64 each)
 
 
 def vertex_normals(positions, triangles):
@@ -48,14 +53,35 @@ def vertex_normals(positions, triangles):
     >>> volume.vertex_normals(positions, triangles).round(3).tolist()
     [[-0.577, -0.577, -0.577], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
     """
+    return to_end(_normal_steps(positions, np.asarray(triangles)))
+
+
+def _normal_steps(positions, triangles):
+    """vertex_normals in slices (yields between blocks of triangles): float64 (n, 3), whatever the
+    positions' dtype, the face normals summed in float64 block by block."""
     n = positions.shape[0]
-    a, b, c = (positions[triangles[:, k]] for k in range(3))
-    face = _cross(b - a, c - a)
-    normals = np.stack(
-        [sum(np.bincount(triangles[:, k], weights=face[j], minlength=n) for k in range(3)) for j in range(3)], axis=1
-    )
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    return normals / np.where(length > 0.0, length, 1.0)
+    normals = np.zeros((n, 3))
+    for start in range(0, len(triangles), _BLOCK):
+        block = triangles[start : start + _BLOCK]
+        a, b, c = (_corner(positions, block, k) for k in range(3))
+        face = _cross(b - a, c - a)
+        del a, b, c
+        for j in range(3):
+            normals[:, j] += sum(np.bincount(block[:, k], weights=face[j], minlength=n) for k in range(3))
+        yield
+    for start in range(0, n, _VERTEX_BLOCK):
+        rows = normals[start : start + _VERTEX_BLOCK]
+        length = np.linalg.norm(rows, axis=1, keepdims=True)
+        rows /= np.where(length > 0.0, length, 1.0)
+    return normals
+
+
+def _corner(positions, triangles, k, centre=None):
+    """The float64 positions of corner k of each triangle (less ``centre``)."""
+    corner = np.asarray(positions[triangles[:, k]], dtype=np.float64)
+    if centre is not None:
+        corner -= centre
+    return corner
 
 
 def _cross(b, c):
@@ -72,18 +98,19 @@ def _det(a, b, c):
     return a[:, 0] * x + a[:, 1] * y + a[:, 2] * z
 
 
-def _volume_cubics(positions, normals, triangles, part_of_triangle, parts, centre):
-    """Per part, the coefficients (c0, c1, c2, c3) of its volume after an offset d along the normals:
-    V(d) = c0 + c1 d + c2 d^2 + c3 d^3 (each triangle's signed tetrahedron volume is a cubic in d).
-    ``normals`` None: the volume alone, (c0,)."""
-    cubics = np.zeros((4 if normals is not None else 1, parts))
+def _cubic_steps(before, after, normals, triangles, part_of_vertex, parts, centre):
+    """(target, cubics) in slices: per part its volume in ``before``, (parts,), and the coefficients
+    (c0, c1, c2, c3), (4, parts), of its volume after an offset d along ``normals`` from ``after``:
+    V(d) = c0 + c1 d + c2 d^2 + c3 d^3 (each triangle's signed tetrahedron volume is a cubic in d)."""
+    target = np.zeros(parts)
+    cubics = np.zeros((4, parts))
     for start in range(0, len(triangles), _BLOCK):
         block = triangles[start : start + _BLOCK]
-        a, b, c = (positions[block[:, k]] - centre for k in range(3))
-        owner = part_of_triangle[start : start + _BLOCK]
-        if normals is None:
-            cubics[0] += np.bincount(owner, weights=_det(a, b, c) / 6.0, minlength=parts)
-            continue
+        owner = part_of_vertex[block[:, 0]]
+        target += np.bincount(
+            owner, weights=_det(*(_corner(before, block, k, centre) for k in range(3))) / 6.0, minlength=parts
+        )
+        a, b, c = (_corner(after, block, k, centre) for k in range(3))
         na, nb, nc = (normals[block[:, k]] for k in range(3))
         terms = (
             _det(a, b, c),
@@ -93,28 +120,66 @@ def _volume_cubics(positions, normals, triangles, part_of_triangle, parts, centr
         )
         for degree, term in enumerate(terms):
             cubics[degree] += np.bincount(owner, weights=term / 6.0, minlength=parts)
-    return cubics
+        yield
+    return target, cubics
 
 
-def closed_parts(triangles, part_of_triangle, parts):
-    """(parts,) bool: whether each part's triangles close a consistently oriented surface (every directed
-    edge once, and its reverse once)."""
-    heads = triangles.ravel().astype(np.int64)
-    tails = np.roll(triangles, -1, axis=1).ravel().astype(np.int64)
-    n = int(triangles.max()) + 1
-    keys, counts = np.unique(heads * n + tails, return_counts=True)
-    reverse = np.searchsorted(keys, tails * n + heads)
-    found = keys[np.minimum(reverse, keys.size - 1)] == tails * n + heads
-    good = found & (counts[np.searchsorted(keys, heads * n + tails)] == 1)
-    good &= counts[np.minimum(reverse, keys.size - 1)] == 1
-    bad = np.bincount(np.repeat(part_of_triangle, 3)[~good], minlength=parts)
-    return bad == 0
+def _half_edges(triangles, n):
+    """(indptr, tails): the triangles' half-edges h -> t (each corner to the next) as a CSR pattern, row
+    h listing its tails increasing, duplicates kept."""
+    index = np.int32 if n < np.iinfo(np.int32).max else np.int64
+    heads = np.ascontiguousarray(triangles, dtype=index).ravel()
+    tails = np.empty_like(heads)
+    corners, nexts = heads.reshape(-1, 3), tails.reshape(-1, 3)
+    nexts[:, :2], nexts[:, 2] = corners[:, 1:], corners[:, 0]
+    del corners, nexts
+    return grouped_pairs(heads, tails, n)
+
+
+def _topology(triangles, n):
+    """(parts, part_of_vertex, used, closed) of a triangle mesh: its connected parts (vertices linked
+    through triangles; a vertex on no triangle is a part of its own), numbered by lowest vertex; the
+    vertices on a triangle; per part whether its triangles close a consistently oriented surface
+    (every directed edge once, and its reverse once). One counting sort of the half-edges: a vertex's
+    outgoing half-edges, sorted, must equal its incoming ones and hold no pair twice."""
+    indptr, tails = _half_edges(triangles, n)
+    degree = np.diff(indptr)
+    twice = np.zeros(tails.size, dtype=bool)  # a pair a row already has (sorted rows: the one before)
+    np.equal(tails[1:], tails[:-1], out=twice[1:])
+    twice[indptr[:-1][degree > 0]] = False  # a row's first entry follows another row's
+    bad = np.zeros(n, dtype=bool)
+    if twice.any():
+        bad[np.searchsorted(indptr, np.flatnonzero(twice), side="right") - 1] = True
+        pattern = sp.csr_matrix((np.ones(tails.size, np.int8), tails, indptr), shape=(n, n))
+        pattern.sum_duplicates()  # SciPy's strong components do not finish on a pattern with a pair twice
+        parts, part_of_vertex = connected_parts(pattern.indptr, pattern.indices, n, cyclic=True)
+        del pattern
+    else:  # every triangle is a cycle h -> t: the half-edges' strong components are the parts
+        parts, part_of_vertex = connected_parts(indptr, tails, n, cyclic=True)
+    del twice
+    used = degree > 0
+    transposed = sp.csr_matrix((np.ones(tails.size, np.int8), tails, indptr), shape=(n, n), copy=False).tocsc()
+    incoming, heads = np.diff(transposed.indptr), transposed.indices  # row t: its heads, increasing
+    bad |= degree != incoming
+    for low in range(0, n, _ROW_BLOCK):
+        high = min(n, low + _ROW_BLOCK)
+        rows = np.arange(low, high)[~bad[low:high]]
+        counts = degree[rows]
+        offset = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+        wrong = (
+            tails[np.repeat(indptr[rows], counts) + offset]
+            != heads[np.repeat(transposed.indptr[rows], counts) + offset]
+        )
+        bad[np.repeat(rows, counts)[wrong]] = True
+    closed = np.bincount(part_of_vertex[bad], minlength=parts) == 0
+    return parts, part_of_vertex, used, closed
 
 
 def restore_volume(before, after, triangles, movable=None, limit=None):
     """``after`` with each closed part's enclosed volume set back to its volume in ``before``, by a
     uniform offset of that part's movable vertices along their normals, within bounds. Returns
-    (positions, offsets) with offsets the distance per part (same units as the positions).
+    (positions, offsets) with positions float64 and offsets the distance per part (same units as the
+    positions).
 
     ``triangles`` (t, 3), consistently oriented; ``movable`` a boolean mask (default: every vertex);
     ``limit`` the largest offset allowed (None: no limit but the bounding box's). A part is left as it
@@ -139,27 +204,30 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     >>> offsets.round(4).tolist()  # one part, moved this far along its normals
     [0.05]
     """
-    before = np.asarray(before, dtype=np.float64)
-    result = np.array(after, dtype=np.float64)
-    triangles = np.asarray(triangles)
-    n = result.shape[0]
+    return to_end(restore_steps(before, after, triangles, movable, limit))
+
+
+def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.float64):
+    """``restore_volume`` in slices, for callers that let the user cancel: a generator that yields (None)
+    between its passes and returns (positions in ``dtype``, offsets); the same numbers (float64 math,
+    cast to ``dtype`` at the end). Beside its result it holds the float64 normals and a few bytes a
+    vertex: the positions are read in blocks, never copied whole."""
+    before, after, triangles = np.asarray(before), np.asarray(after), np.asarray(triangles)
+    n = after.shape[0]
     if triangles.size == 0:
-        return result, np.zeros(0)
+        return np.array(after, dtype=dtype), np.zeros(0)
     movable = np.ones(n, bool) if movable is None else np.asarray(movable, bool)
-    pairs = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    graph = sp.coo_matrix((np.ones(len(pairs), np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    parts, part_of_vertex = connected_components(graph, directed=False)
-    part_of_triangle = part_of_vertex[triangles[:, 0]]
-    used = np.zeros(n, bool)
-    used[triangles.ravel()] = True
+    parts, part_of_vertex, used, closed = _topology(triangles, n)
+    yield
     sizes = np.bincount(part_of_vertex[used], minlength=parts)
     low_before, high_before = _boxes(before, part_of_vertex, used, parts)
-    low_after, high_after = _boxes(result, part_of_vertex, used, parts)
+    low_after, high_after = _boxes(after, part_of_vertex, used, parts)
     extent = high_before - low_before
-    centre = before.mean(axis=0)
-    target = _volume_cubics(before, None, triangles, part_of_triangle, parts, centre)[0]
-    normals = vertex_normals(result, triangles) * movable[:, None]
-    c0, c1, c2, c3 = _volume_cubics(result, normals, triangles, part_of_triangle, parts, centre)
+    centre = _centre(before)
+    yield
+    normals = yield from _normal_steps(after, triangles)
+    normals *= movable[:, None]
+    target, (c0, c1, c2, c3) = yield from _cubic_steps(before, after, normals, triangles, part_of_vertex, parts, centre)
     # An offset d moves every vertex by at most |d|: outwards, each side of the box grows by at most 2 d.
     # Inwards the box does not grow; there half the part's thinnest side bounds d (it would turn inside out).
     outward = np.maximum(((1.0 + GROWTH) * extent - (high_after - low_after)).min(axis=1), 0.0) / 2.0
@@ -167,7 +235,7 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     if limit is not None:
         outward, inward = np.minimum(outward, float(limit)), np.minimum(inward, float(limit))
     has_movable = np.bincount(part_of_vertex[movable & used], minlength=parts) > 0
-    eligible = closed_parts(triangles, part_of_triangle, parts) & (sizes > DEGENERATE) & has_movable
+    eligible = closed & (sizes > DEGENERATE) & has_movable
     eligible &= np.abs(target) > _FLAT * np.linalg.norm(extent, axis=1) ** 3
     eligible &= c1 > 0.0  # the volume grows as the surface moves along its normals
     # Smoothing that took more than half the volume collapsed the part (or turned it inside out): no
@@ -187,15 +255,39 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     # A root is sensible where Newton settled near it (the volume a cubic: from 0 it takes two or three steps).
     sensible = eligible & np.isfinite(offsets) & (np.abs(missing) <= _SETTLED * np.abs(target))
     offsets = np.where(sensible, np.clip(offsets, -inward, outward), 0.0)
-    return result + normals * offsets[part_of_vertex][:, None], offsets
+    result = np.empty((n, 3), dtype=dtype)
+    for start in range(0, n, _VERTEX_BLOCK):
+        rows = slice(start, start + _VERTEX_BLOCK)
+        moved = np.asarray(after[rows], dtype=np.float64) + normals[rows] * offsets[part_of_vertex[rows]][:, None]
+        result[rows] = moved
+    return result, offsets
+
+
+def _centre(points):
+    """The mean of (n, 3) points, in float64."""
+    if points.shape[0] <= _VERTEX_BLOCK:
+        return np.asarray(points, dtype=np.float64).mean(axis=0)
+    total = sum(
+        np.asarray(points[start : start + _VERTEX_BLOCK], dtype=np.float64).sum(axis=0)
+        for start in range(0, points.shape[0], _VERTEX_BLOCK)
+    )
+    return total / points.shape[0]
 
 
 def _boxes(points, part_of_vertex, used, parts):
-    """(low, high) corners of each part's bounding box, (parts, 3) each."""
+    """(low, high) corners of each part's bounding box, float64 (parts, 3) each."""
     low = np.full((parts, 3), np.inf)
     high = np.full((parts, 3), -np.inf)
-    np.minimum.at(low, part_of_vertex[used], points[used])
-    np.maximum.at(high, part_of_vertex[used], points[used])
+    for start in range(0, points.shape[0], _VERTEX_BLOCK):
+        rows = slice(start, start + _VERTEX_BLOCK)
+        inside = used[rows]
+        block, owner = np.asarray(points[rows][inside], dtype=np.float64), part_of_vertex[rows][inside]
+        if owner.size and owner[0] == owner[-1] and np.all(owner == owner[0]):  # one part: a plain min and max
+            low[owner[0]] = np.minimum(low[owner[0]], block.min(axis=0))
+            high[owner[0]] = np.maximum(high[owner[0]], block.max(axis=0))
+        elif owner.size:
+            np.minimum.at(low, owner, block)
+            np.maximum.at(high, owner, block)
     empty = ~np.isfinite(low[:, 0])  # a part without triangles (a loose vertex) has no box
     low[empty] = high[empty] = 0.0
     return low, high

@@ -44,6 +44,7 @@ CELL_EDGES = 1 / 8  # cell side in median edge lengths: distinct vertices rarely
 _EDGE_SAMPLE = 65_536  # edges the median edge length is measured on (evenly spaced)
 _FINEST_CELL = 2.0**-40  # cell side at least this times the bounding-box diagonal (keys fit in int64)
 _PACKED_BITS = 21  # cell coordinates below 2**21 per axis are packed into a key exactly
+_ROWS = 1 << 18  # vertices per block of the cell keys (float64 and int64 temporaries)
 
 
 @dataclass(frozen=True)
@@ -121,12 +122,22 @@ def weld(positions, operator: Umbrella, tolerance: float = TOLERANCE) -> Welding
 
 def median_edge_length(points, operator):
     """The median length of (an even sample of) the operator's edges, 0 without edges."""
-    rows = operator.rows()
-    upper = np.flatnonzero(operator.indices > rows)
-    if upper.size == 0:
+    # Row i's edges (i, j), j > i, are the last entries of its (increasing) row: ``above`` counts them,
+    # so the k-th such entry of the mesh is found without listing them all.
+    above = np.zeros(operator.n_vertices + 1, dtype=np.int64)
+    for low in range(0, operator.n_vertices, _ROWS):
+        high = min(low + _ROWS, operator.n_vertices)
+        first, last = operator.indptr[low], operator.indptr[high]
+        rows = np.repeat(np.arange(low, high, dtype=operator.indices.dtype), operator.degree[low:high])
+        above[low + 1 : high + 1] = np.bincount(rows[operator.indices[first:last] > rows] - low, minlength=high - low)
+    np.cumsum(above, out=above)
+    total = int(above[-1])
+    if total == 0:
         return 0.0
-    pick = upper[np.unique(np.linspace(0, upper.size - 1, min(upper.size, _EDGE_SAMPLE)).astype(np.int64))]
-    difference = np.asarray(points[rows[pick]], np.float64) - points[operator.indices[pick]]
+    pick = np.unique(np.linspace(0, total - 1, min(total, _EDGE_SAMPLE)).astype(np.int64))
+    rows = np.searchsorted(above, pick, side="right") - 1
+    entries = operator.indptr[rows + 1] - (above[rows + 1] - pick)
+    difference = np.asarray(points[rows], np.float64) - points[operator.indices[entries]]
     return float(np.median(np.sqrt(np.einsum("ij,ij->i", difference, difference))))
 
 
@@ -143,12 +154,26 @@ def _coincident(points, edge, tolerance):
         return np.zeros(n, dtype=np.int64)  # every vertex in one place
     radius = tolerance * edge
     side = max((edge or diagonal * 2.0**-20) * CELL_EDGES, diagonal * _FINEST_CELL, 2.0 * radius)
-    scaled = (points - low) / side
-    cells = np.floor(scaled).astype(np.int64)
-    key = _cell_keys(cells)
+    # Each point's cell key, and whether it lies within the radius of its cell's side, in blocks of rows.
+    packed = np.floor((points.max(axis=0) - low) / side).max() < 1 << _PACKED_BITS
+    key = np.empty(n, dtype=np.int64)
+    near = np.zeros(n, dtype=bool)
+    margin = 2.0 * radius / side
+    for start in range(0, n, _ROWS):
+        rows = slice(start, start + _ROWS)
+        scaled = (points[rows] - low) / side
+        cells = np.floor(scaled).astype(np.int64)
+        key[rows] = _cell_keys(cells, packed)
+        if radius > 0.0:
+            fraction = scaled - cells
+            near[rows] = np.any((fraction < margin) | (fraction > 1.0 - margin), axis=1)
+    del scaled, cells
     order = np.argsort(key, kind="stable")
-    sorted_key, sorted_points = key[order], points[order]
+    sorted_key = key[order]
+    del key
     same_cell = sorted_key[1:] == sorted_key[:-1]
+    del sorted_key
+    sorted_points = points[order]
     equal = same_cell & np.all(sorted_points[1:] == sorted_points[:-1], axis=1)
     run = np.concatenate(([0], np.cumsum(~same_cell)))  # cell run of each sorted vertex
     # Points in a run with a different point, and points within the radius of a side of their cell, are
@@ -156,10 +181,10 @@ def _coincident(points, edge, tolerance):
     mixed_run = np.zeros(run[-1] + 1, dtype=bool)
     mixed_run[run[1:][same_cell & ~equal]] = True
     candidate = mixed_run[run]
+    del run, same_cell
     if radius > 0.0:
-        margin = 2.0 * radius / side
-        fraction = scaled - cells
-        candidate |= np.any((fraction < margin) | (fraction > 1.0 - margin), axis=1)[order]
+        candidate |= near[order]
+    del near
     candidate = np.flatnonzero(candidate)
     pairs = np.empty((0, 2), dtype=np.int64)
     if candidate.size > 1:
@@ -179,10 +204,10 @@ def _coincident(points, edge, tolerance):
     return labels
 
 
-def _cell_keys(cells):
-    """One int64 per cell: packed exactly when the cell coordinates are small, else a hash (cells that
+def _cell_keys(cells, packed):
+    """One int64 per cell: ``packed`` exactly (every cell coordinate below 2**21), else a hash (cells that
     share a hash only make more candidates for the tree, never a wrong weld)."""
-    if cells.max() < 1 << _PACKED_BITS:
+    if packed:
         return (cells[:, 0] << (2 * _PACKED_BITS)) | (cells[:, 1] << _PACKED_BITS) | cells[:, 2]
     with np.errstate(over="ignore"):
         return (
