@@ -55,10 +55,10 @@ def border_edges(triangles, n_vertices):
     return np.stack([rows[once], columns[once]], axis=1)
 
 
-def apply_border(border, operator, triangles, fixed):
+def apply_border(border, operator, triangles, fixed, edges=None):
     """(operator, fixed) for the ``border`` rule: the umbrella (core.adjacency.Umbrella) with the border
     rows of ``"curve"``, and the fixed mask with the vertices the rule holds. ``triangles``: (t, 3) or
-    None (then only ``"free"`` is possible)."""
+    None (then only ``"free"`` is possible); ``edges``: their ``border_edges``, if the caller has them."""
     if border == "free":
         return operator, fixed
     if triangles is None:
@@ -67,7 +67,7 @@ def apply_border(border, operator, triangles, fixed):
             "or border='free'"
         )
     n = operator.n_vertices
-    edges = border_edges(triangles, n)
+    edges = border_edges(triangles, n) if edges is None else edges
     if edges.size == 0:  # closed: no border to hold
         return operator, fixed
     count = np.bincount(edges.ravel(), minlength=n)

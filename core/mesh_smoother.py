@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import volume, welding
+from . import topology, volume, welding
 from .adjacency import Umbrella, umbrella_operator
 from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
@@ -164,7 +164,12 @@ class MeshSmoother:
             self.fixed, self.influence = self.welding.fixed(self.fixed), self.welding.influence(self.influence)
             if self.faces is not None:
                 self.faces = self.welding.triangles(self.faces)
-        self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed)
+        # What the faces make (parts, closed ones, border edges): for the border rule and the volume restore.
+        self.surface = None
+        if self.faces is not None and (self.border != "free" or self.automatic):
+            self.surface = topology.surface(self.faces, operator.n_vertices)
+        edges = None if self.surface is None else self.surface.border
+        self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed, edges)
         # Checks every number now (a Smoothing is cheap to make: the heavy parts are built on first use).
         self._smoothing(self.alpha, self.beta, self.iterations, 0.0 if self.max_deviation == AUTO else max_deviation)
         self.result = None
@@ -242,7 +247,9 @@ class MeshSmoother:
         Fixed vertices and those of influence 0 stay bit for bit."""
         movable = ~fixed if self.influence is None else ~fixed & (self.influence > 0.0)
         restored, offsets = yield from as_fraction(
-            volume.restore_steps(self.positions, result, self.faces, movable=movable, limit=limit, dtype=result.dtype),
+            volume.restore_steps(
+                self.positions, result, self.faces, movable, limit, dtype=result.dtype, surface=self.surface
+            ),
             progress,
         )
         still = ~movable

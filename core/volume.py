@@ -20,10 +20,8 @@ it further (the mesh pipeline passes NOISE_OFFSETS times the estimated noise).
 """
 
 import numpy as np
-import scipy.sparse as sp
 
-from .adjacency import grouped_pairs
-from .parts import parts as connected_parts
+from . import parallel, topology
 from .slices import to_end
 
 _NEWTON_STEPS = 6  # at most; the volume is a cubic in the offset, Newton from 0 needs two or three
@@ -36,9 +34,8 @@ KEPT = 0.5  # a part that kept less than this share of its volume collapsed: it 
 # The mesh pipeline's limit, in noise deviations: the offsets that give back what HC took measure 0.01-0.3
 # noise deviations on dense meshes, up to 0.75 on a coarse tube (noise 0.2-1 edge lengths).
 NOISE_OFFSETS = 1.0
-_BLOCK = 1 << 18  # triangles per block: bounds the temporaries
+_BLOCK = 1 << 16  # triangles per block: bounds the temporaries (a few MB each, one block per thread)
 _VERTEX_BLOCK = 1 << 19  # vertices per block
-_ROW_BLOCK = 1 << 16  # vertices per block where each of their half-edges is compared (several int64 each)
 
 
 def vertex_normals(positions, triangles):
@@ -53,126 +50,117 @@ def vertex_normals(positions, triangles):
     >>> volume.vertex_normals(positions, triangles).round(3).tolist()
     [[-0.577, -0.577, -0.577], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
     """
-    return to_end(_normal_steps(positions, np.asarray(triangles)))
+    return to_end(_normal_steps(_planar(np.asarray(positions)), np.asarray(triangles))).T.copy()
 
 
-def _normal_steps(positions, triangles):
-    """vertex_normals in slices (yields between blocks of triangles): float64 (n, 3), whatever the
-    positions' dtype, the face normals summed in float64 block by block."""
-    n = positions.shape[0]
-    normals = np.zeros((n, 3))
-    for start in range(0, len(triangles), _BLOCK):
-        block = triangles[start : start + _BLOCK]
-        a, b, c = (_corner(positions, block, k) for k in range(3))
-        face = _cross(b - a, c - a)
-        del a, b, c
-        for j in range(3):
-            normals[:, j] += sum(np.bincount(block[:, k], weights=face[j], minlength=n) for k in range(3))
+def _normal_steps(planar, triangles):
+    """vertex_normals in slices (yields between rounds of blocks), of (3, n) ``planar`` positions: the
+    unit normals as float64 (3, n). Each block's triangle normals (twice their areas) are computed on
+    the threads, then added at their corners block by block: the same numbers whatever the thread count."""
+    normals = np.zeros((3, planar.shape[1]))
+
+    def face_normals(start, stop):
+        corners = np.ascontiguousarray(triangles[start:stop].T)
+        a, b, c = _corners(planar, corners)
+        b -= a
+        c -= a
+        return corners, _cross(b, c)
+
+    for blocks in _in_rounds(face_normals, len(triangles)):
+        for corners, faces in blocks:
+            _add_at_corners(normals, corners, faces)
         yield
-    for start in range(0, n, _VERTEX_BLOCK):
-        rows = normals[start : start + _VERTEX_BLOCK]
-        length = np.linalg.norm(rows, axis=1, keepdims=True)
+    for start in range(0, normals.shape[1], _VERTEX_BLOCK):
+        rows = normals[:, start : start + _VERTEX_BLOCK]
+        length = np.sqrt(_dot(rows, rows))
         rows /= np.where(length > 0.0, length, 1.0)
     return normals
 
 
-def _corner(positions, triangles, k, centre=None):
-    """The float64 positions of corner k of each triangle (less ``centre``)."""
-    corner = np.asarray(positions[triangles[:, k]], dtype=np.float64)
-    if centre is not None:
-        corner -= centre
-    return corner
+def _add_at_corners(sums, corners, values):
+    """sums[:, v] += values[:, i] for each corner v of triangle i (``corners``: (3, t) columns): by a
+    count over the block's span of vertices where it is short (meshes numbered with some locality),
+    else one at a time."""
+    low, high = int(corners.min()), int(corners.max()) + 1
+    for at in corners:
+        if high - low <= 4 * corners.shape[1]:
+            at = at - low
+            for j in range(3):
+                sums[j, low:high] += np.bincount(at, weights=values[j], minlength=high - low)
+        else:
+            for j in range(3):
+                np.add.at(sums[j], at, values[j])
+
+
+def _planar(points):
+    """A (3, n) C-contiguous copy of (n, 3) ``points``, in their dtype."""
+    return np.ascontiguousarray(points.T)
+
+
+def _corners(planar, columns, centre=None):
+    """(a, b, c): the corners of the triangles (``columns``: their (3, t) corner columns) in (3, n)
+    ``planar`` points, as float64 (3, t) rows (less ``centre``)."""
+    corners = np.empty((3, 3, columns.shape[1]))
+    for k, at in enumerate(columns):
+        for j in range(3):
+            corners[k, j] = planar[j].take(at)
+            if centre is not None:
+                corners[k, j] -= centre[j]
+    return corners
 
 
 def _cross(b, c):
-    """Row-wise b x c of (k, 3) arrays, as three columns."""
-    return (
-        b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1],
-        b[:, 2] * c[:, 0] - b[:, 0] * c[:, 2],
-        b[:, 0] * c[:, 1] - b[:, 1] * c[:, 0],
-    )
+    """Column-wise b x c of (3, t) rows, (3, t)."""
+    return np.stack((b[1] * c[2] - b[2] * c[1], b[2] * c[0] - b[0] * c[2], b[0] * c[1] - b[1] * c[0]))
 
 
-def _det(a, b, c):
-    x, y, z = _cross(b, c)
-    return a[:, 0] * x + a[:, 1] * y + a[:, 2] * z
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _in_rounds(function, size):
+    """Generator of rounds: function(start, stop) for consecutive blocks of _BLOCK elements of
+    range(size), one block per thread at a time; yields each round's results in block order. The
+    blocks are the same whatever the thread count."""
+    starts = range(0, size, _BLOCK)
+    per_round = parallel.thread_count()
+    for first in range(0, len(starts), per_round):
+        tasks = [
+            lambda start=start: function(start, min(start + _BLOCK, size))
+            for start in starts[first : first + per_round]
+        ]
+        yield parallel.run_all(tasks)
 
 
 def _cubic_steps(before, after, normals, triangles, part_of_vertex, parts, centre):
-    """(target, cubics) in slices: per part its volume in ``before``, (parts,), and the coefficients
-    (c0, c1, c2, c3), (4, parts), of its volume after an offset d along ``normals`` from ``after``:
-    V(d) = c0 + c1 d + c2 d^2 + c3 d^3 (each triangle's signed tetrahedron volume is a cubic in d)."""
-    target = np.zeros(parts)
-    cubics = np.zeros((4, parts))
-    for start in range(0, len(triangles), _BLOCK):
-        block = triangles[start : start + _BLOCK]
-        owner = part_of_vertex[block[:, 0]]
-        target += np.bincount(
-            owner, weights=_det(*(_corner(before, block, k, centre) for k in range(3))) / 6.0, minlength=parts
-        )
-        a, b, c = (_corner(after, block, k, centre) for k in range(3))
-        na, nb, nc = (normals[block[:, k]] for k in range(3))
-        terms = (
-            _det(a, b, c),
-            _det(na, b, c) + _det(a, nb, c) + _det(a, b, nc),
-            _det(na, nb, c) + _det(na, b, nc) + _det(a, nb, nc),
-            _det(na, nb, nc),
-        )
-        for degree, term in enumerate(terms):
-            cubics[degree] += np.bincount(owner, weights=term / 6.0, minlength=parts)
+    """(target, cubics) in slices, of (3, n) planar positions and normals: per part its volume in
+    ``before``, (parts,), and the coefficients (c0, c1, c2, c3), (4, parts), of its volume after an
+    offset d along ``normals`` from ``after``: V(d) = c0 + c1 d + c2 d^2 + c3 d^3. Each triangle's signed
+    tetrahedron volume det(a, b, c) / 6 is a cubic in d: with b x c, n_b x c + b x n_c and n_b x n_c,
+    its coefficients are a . (b x c), n_a . (b x c) + a . (n_b x c + b x n_c),
+    n_a . (n_b x c + b x n_c) + a . (n_b x n_c) and n_a . (n_b x n_c), over 6."""
+
+    def block_sums(start, stop):
+        block = np.ascontiguousarray(triangles[start:stop].T)
+        a, b, c = _corners(after, block, centre)
+        na, nb, nc = _corners(normals, block)
+        first, second, third = _cross(b, c), _cross(nb, c), _cross(nb, nc)
+        second += _cross(b, nc)
+        terms = [_dot(a, first), _dot(na, first) + _dot(a, second), _dot(na, second) + _dot(a, third), _dot(na, third)]
+        a, b, c = _corners(before, block, centre)
+        terms.insert(0, _dot(a, _cross(b, c)))
+        if parts == 1:
+            return np.array([[term.sum()] for term in terms])
+        owner = part_of_vertex[block[0]]
+        return np.array([np.bincount(owner, weights=term, minlength=parts) for term in terms])
+
+    total = np.zeros((5, parts))
+    for sums in _in_rounds(block_sums, len(triangles)):
+        for block in sums:
+            total += block
         yield
-    return target, cubics
-
-
-def _half_edges(triangles, n):
-    """(indptr, tails): the triangles' half-edges h -> t (each corner to the next) as a CSR pattern, row
-    h listing its tails increasing, duplicates kept."""
-    index = np.int32 if n < np.iinfo(np.int32).max else np.int64
-    heads = np.ascontiguousarray(triangles, dtype=index).ravel()
-    tails = np.empty_like(heads)
-    corners, nexts = heads.reshape(-1, 3), tails.reshape(-1, 3)
-    nexts[:, :2], nexts[:, 2] = corners[:, 1:], corners[:, 0]
-    del corners, nexts
-    return grouped_pairs(heads, tails, n)
-
-
-def _topology(triangles, n):
-    """(parts, part_of_vertex, used, closed) of a triangle mesh: its connected parts (vertices linked
-    through triangles; a vertex on no triangle is a part of its own), numbered by lowest vertex; the
-    vertices on a triangle; per part whether its triangles close a consistently oriented surface
-    (every directed edge once, and its reverse once). One counting sort of the half-edges: a vertex's
-    outgoing half-edges, sorted, must equal its incoming ones and hold no pair twice."""
-    indptr, tails = _half_edges(triangles, n)
-    degree = np.diff(indptr)
-    twice = np.zeros(tails.size, dtype=bool)  # a pair a row already has (sorted rows: the one before)
-    np.equal(tails[1:], tails[:-1], out=twice[1:])
-    twice[indptr[:-1][degree > 0]] = False  # a row's first entry follows another row's
-    bad = np.zeros(n, dtype=bool)
-    if twice.any():
-        bad[np.searchsorted(indptr, np.flatnonzero(twice), side="right") - 1] = True
-        pattern = sp.csr_matrix((np.ones(tails.size, np.int8), tails, indptr), shape=(n, n))
-        pattern.sum_duplicates()  # SciPy's strong components do not finish on a pattern with a pair twice
-        parts, part_of_vertex = connected_parts(pattern.indptr, pattern.indices, n, cyclic=True)
-        del pattern
-    else:  # every triangle is a cycle h -> t: the half-edges' strong components are the parts
-        parts, part_of_vertex = connected_parts(indptr, tails, n, cyclic=True)
-    del twice
-    used = degree > 0
-    transposed = sp.csr_matrix((np.ones(tails.size, np.int8), tails, indptr), shape=(n, n), copy=False).tocsc()
-    incoming, heads = np.diff(transposed.indptr), transposed.indices  # row t: its heads, increasing
-    bad |= degree != incoming
-    for low in range(0, n, _ROW_BLOCK):
-        high = min(n, low + _ROW_BLOCK)
-        rows = np.arange(low, high)[~bad[low:high]]
-        counts = degree[rows]
-        offset = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-        wrong = (
-            tails[np.repeat(indptr[rows], counts) + offset]
-            != heads[np.repeat(transposed.indptr[rows], counts) + offset]
-        )
-        bad[np.repeat(rows, counts)[wrong]] = True
-    closed = np.bincount(part_of_vertex[bad], minlength=parts) == 0
-    return parts, part_of_vertex, used, closed
+    total /= 6.0
+    return total[0], total[1:]
 
 
 def restore_volume(before, after, triangles, movable=None, limit=None):
@@ -207,27 +195,34 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     return to_end(restore_steps(before, after, triangles, movable, limit))
 
 
-def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.float64):
+def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.float64, surface=None):
     """``restore_volume`` in slices, for callers that let the user cancel: a generator that yields (None)
     between its passes and returns (positions in ``dtype``, offsets); the same numbers (float64 math,
-    cast to ``dtype`` at the end). Beside its result it holds the float64 normals and a few bytes a
-    vertex: the positions are read in blocks, never copied whole."""
+    cast to ``dtype`` at the end). ``surface``: the triangles' core.topology.surface, if the caller has
+    it. Beside its result it holds the float64 normals, a planar copy of
+    the positions before and after (in their dtype) and a few bytes a vertex; the rest works in blocks."""
     before, after, triangles = np.asarray(before), np.asarray(after), np.asarray(triangles)
     n = after.shape[0]
     if triangles.size == 0:
         return np.array(after, dtype=dtype), np.zeros(0)
     movable = np.ones(n, bool) if movable is None else np.asarray(movable, bool)
-    parts, part_of_vertex, used, closed = _topology(triangles, n)
-    yield
+    if surface is None:
+        surface = topology.surface(triangles, n)
+        yield
+    parts, part_of_vertex, used, closed = surface.parts, surface.part_of_vertex, surface.used, surface.closed
     sizes = np.bincount(part_of_vertex[used], minlength=parts)
-    low_before, high_before = _boxes(before, part_of_vertex, used, parts)
-    low_after, high_after = _boxes(after, part_of_vertex, used, parts)
+    planar_before, planar_after = _planar(before), _planar(after)
+    low_before, high_before = _boxes(planar_before, part_of_vertex, used, parts)
+    low_after, high_after = _boxes(planar_after, part_of_vertex, used, parts)
     extent = high_before - low_before
     centre = _centre(before)
     yield
-    normals = yield from _normal_steps(after, triangles)
-    normals *= movable[:, None]
-    target, (c0, c1, c2, c3) = yield from _cubic_steps(before, after, normals, triangles, part_of_vertex, parts, centre)
+    normals = yield from _normal_steps(planar_after, triangles)
+    normals *= movable
+    target, (c0, c1, c2, c3) = yield from _cubic_steps(
+        planar_before, planar_after, normals, triangles, part_of_vertex, parts, centre
+    )
+    del planar_before, planar_after
     # An offset d moves every vertex by at most |d|: outwards, each side of the box grows by at most 2 d.
     # Inwards the box does not grow; there half the part's thinnest side bounds d (it would turn inside out).
     outward = np.maximum(((1.0 + GROWTH) * extent - (high_after - low_after)).min(axis=1), 0.0) / 2.0
@@ -258,7 +253,7 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
     result = np.empty((n, 3), dtype=dtype)
     for start in range(0, n, _VERTEX_BLOCK):
         rows = slice(start, start + _VERTEX_BLOCK)
-        moved = np.asarray(after[rows], dtype=np.float64) + normals[rows] * offsets[part_of_vertex[rows]][:, None]
+        moved = np.asarray(after[rows], dtype=np.float64) + normals[:, rows].T * offsets[part_of_vertex[rows]][:, None]
         result[rows] = moved
     return result, offsets
 
@@ -274,20 +269,22 @@ def _centre(points):
     return total / points.shape[0]
 
 
-def _boxes(points, part_of_vertex, used, parts):
-    """(low, high) corners of each part's bounding box, float64 (parts, 3) each."""
+def _boxes(planar, part_of_vertex, used, parts):
+    """(low, high) corners of each part's bounding box, float64 (parts, 3) each, of (3, n) points."""
     low = np.full((parts, 3), np.inf)
     high = np.full((parts, 3), -np.inf)
-    for start in range(0, points.shape[0], _VERTEX_BLOCK):
+    for start in range(0, planar.shape[1], _VERTEX_BLOCK):
         rows = slice(start, start + _VERTEX_BLOCK)
-        inside = used[rows]
-        block, owner = np.asarray(points[rows][inside], dtype=np.float64), part_of_vertex[rows][inside]
+        block, owner, inside = planar[:, rows], part_of_vertex[rows], used[rows]
+        if not inside.all():
+            block, owner = block[:, inside], owner[inside]
         if owner.size and owner[0] == owner[-1] and np.all(owner == owner[0]):  # one part: a plain min and max
-            low[owner[0]] = np.minimum(low[owner[0]], block.min(axis=0))
-            high[owner[0]] = np.maximum(high[owner[0]], block.max(axis=0))
+            low[owner[0]] = np.minimum(low[owner[0]], block.min(axis=1))
+            high[owner[0]] = np.maximum(high[owner[0]], block.max(axis=1))
         elif owner.size:
-            np.minimum.at(low, owner, block)
-            np.maximum.at(high, owner, block)
+            for j in range(3):
+                np.minimum.at(low[:, j], owner, block[j])
+                np.maximum.at(high[:, j], owner, block[j])
     empty = ~np.isfinite(low[:, 0])  # a part without triangles (a loose vertex) has no box
     low[empty] = high[empty] = 0.0
     return low, high
