@@ -44,7 +44,6 @@ The run stops once it is well past the chosen amount. Everything is deterministi
 evenly spaced sample vertices), independent of the coordinates' scale, position and orientation.
 """
 
-import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
@@ -81,7 +80,7 @@ FINE_BETA = 0.75  # ... of this beta
 ROBUST_SIGMAS = 2.0
 # The most work the chosen run may do, in vertex-iterations: on big meshes the iterations are cut to
 # WORK_BUDGET / vertices (see the module docstring).
-WORK_BUDGET = 100_000_000
+WORK_BUDGET = 75_000_000
 
 
 @dataclass(frozen=True)
@@ -100,8 +99,8 @@ class MeshAmount:
         Iterations the estimate ran.
     noise_found : bool
         False: no part has noise to remove, and nothing is smoothed (0 iterations).
-    wanted : int or None
-        The iterations GCV chose where the work budget cut them to ``iterations`` (None: not cut).
+    capped : bool
+        The work budget cut the iterations: GCV wanted more (see the module docstring).
     ratio : float
         sigma / edge_length.
 
@@ -126,7 +125,7 @@ class MeshAmount:
     edge_length: float  # median edge length of the input
     explored: int  # iterations the estimate ran
     noise_found: bool  # False: no part has noise to remove, and nothing is smoothed (iterations 0)
-    wanted: int | None = None  # what GCV chose, where the work budget cut it to ``iterations`` (None: not cut)
+    capped: bool = False  # the work budget cut the iterations: GCV wanted more
 
     @property
     def ratio(self):
@@ -319,6 +318,7 @@ class AmountChooser:
             for block, run in zip(ground.probe_blocks, self.runs)
         ]
         rows, runs, operator = ground.rows, self.runs, ground.operator
+        most = most_iterations(self.operator.n_vertices)
         use_normals, probe_count = ground.use_normals, ground.probe_count
         ring = _ring_of(rows, operator) if use_normals else None
         points = np.zeros((operator.n_vertices, 3)) if use_normals else None  # the state at ``ring``, for the normals
@@ -351,12 +351,15 @@ class AmountChooser:
                 self._kept = data.snapshot()
             if k >= 12 and k >= 1.5 * chosen and k >= 1.25 * steps[int(np.argmin(_scores(residuals, traces, None)))]:
                 break  # well past the amount chosen
+            if k >= 12 and k >= 1.5 * most and chosen >= most:
+                break  # well past the most the work budget allows, and GCV wants more
             yield k / MAX_ITERATIONS
         if ground.whole:
             self.data = data
-        self.amount = self._amount(steps, traces, residuals, normals, done)
+        self.amount = self._amount(steps, traces, residuals, normals, done, most)
         self.traces = dict(zip(steps, traces))  # t(k) at each checkpoint, for inspection
-        if self.fine_beta is not None and self.beta < self.fine_beta and 1 <= self.amount.iterations <= FINE_MAX:
+        light = 1 <= self.amount.iterations <= FINE_MAX and not self.amount.capped
+        if self.fine_beta is not None and self.beta < self.fine_beta and light:
             fine = AmountChooser(self._start, beta=self.fine_beta, fixed=self._given, operator=self.operator)
             fine._ground = ground  # the same noise, fixed vertices and samples
             for fraction in fine.steps():
@@ -364,7 +367,6 @@ class AmountChooser:
             smooths = fine.amount.iterations * (1.0 - self.fine_beta)  # a low frequency's share, as above
             if smooths > self.amount.iterations * (1.0 - self.beta):
                 self._fine, self.amount = fine, fine.amount
-        self.amount = _within_budget(self.amount, self.operator.n_vertices)
         yield 1.0
 
     def result(self):
@@ -379,7 +381,7 @@ class AmountChooser:
             return None
         return self.data.positions(self._kept[1])
 
-    def _amount(self, steps, traces, residuals, normals, done):
+    def _amount(self, steps, traces, residuals, normals, done, most):
         ground = self._ground
         if not steps:  # diverged at once (beta far below 0.5): no amount is safe
             return MeshAmount(0.0, self.beta, 0, 0.0, ground.edge_length, 0, True)
@@ -388,7 +390,8 @@ class AmountChooser:
         minimum = max(float(score.min()), 0.0)
         sigma = math.sqrt(minimum) if ground.use_normals else math.sqrt(minimum / 3)
         sigma = min(sigma, ROBUST_SIGMAS * ground.noise.level())
-        return MeshAmount(0.0, self.beta, int(chosen), sigma, ground.edge_length, int(done), True)
+        iterations = min(int(chosen), most)
+        return MeshAmount(0.0, self.beta, iterations, sigma, ground.edge_length, int(done), True, chosen > most)
 
 
 class _Ground:
@@ -443,12 +446,9 @@ class _Ground:
         return ground
 
 
-def _within_budget(amount, vertices):
-    """``amount`` with at most WORK_BUDGET / ``vertices`` iterations (at least one): see the module docstring."""
-    most = max(1, int(WORK_BUDGET // max(vertices, 1)))
-    if amount.iterations <= most:
-        return amount
-    return dataclasses.replace(amount, iterations=most, wanted=amount.iterations)
+def most_iterations(vertices):
+    """The most iterations the work budget allows on a mesh of ``vertices`` vertices (at least one)."""
+    return int(max(1, min(MAX_ITERATIONS, WORK_BUDGET // max(vertices, 1))))
 
 
 def _patches(operator, fixed_mask, movable):

@@ -8,8 +8,10 @@ normals gives that back without changing the shape's detail (unlike a scaling ab
 moves far-away vertices most).
 
 The volume of a part after an offset d along the (area-weighted, unit) vertex normals is a cubic in
-d: its four coefficients per part come from one pass over the triangles, and Newton steps from d = 0
-solve it.
+d: a first pass over the triangles makes the normals, the volumes before and after and the areas, a
+second the cubic's other coefficients, and Newton steps from d = 0 solve it. A part whose volume
+barely changed (the offset would stay under NEGLIGIBLE times the caller's ``limit``) needs no second
+pass: on big dense meshes that is the rule.
 
 The offset gives back what smoothing took, a little, and nothing else: it is bounded. A part that
 smoothing collapsed (too small to smooth, flattened: it kept less than KEPT of its volume) has a cubic
@@ -34,6 +36,9 @@ KEPT = 0.5  # a part that kept less than this share of its volume collapsed: it 
 # The mesh pipeline's limit, in noise deviations: the offsets that give back what HC took measure 0.01-0.3
 # noise deviations on dense meshes, up to 0.75 on a coarse tube (noise 0.2-1 edge lengths).
 NOISE_OFFSETS = 1.0
+# A part whose volume changed so little that the offset giving it back would stay under this share of
+# ``limit`` keeps its smoothed shape: the offset would not matter, and finding it takes a pass.
+NEGLIGIBLE = 1e-3
 _BLOCK = 1 << 16  # triangles per block: bounds the temporaries (a few MB each, one block per thread)
 _VERTEX_BLOCK = 1 << 19  # vertices per block
 
@@ -55,26 +60,53 @@ def vertex_normals(positions, triangles):
 
 def _normal_steps(planar, triangles):
     """vertex_normals in slices (yields between rounds of blocks), of (3, n) ``planar`` positions: the
-    unit normals as float64 (3, n). Each block's triangle normals (twice their areas) are computed on
-    the threads, then added at their corners block by block: the same numbers whatever the thread count."""
-    normals = np.zeros((3, planar.shape[1]))
+    unit normals as float64 (3, n)."""
+    return (yield from _first_pass(planar, planar, triangles, None, 1, np.zeros(3)))[0]
 
-    def face_normals(start, stop):
-        corners = np.ascontiguousarray(triangles[start:stop].T)
-        a, b, c = _corners(planar, corners)
+
+def _first_pass(before, after, triangles, part_of_vertex, parts, centre):
+    """(normals, volumes) in slices, of (3, n) planar positions: the unit vertex normals of ``after``
+    (area-weighted, float64 (3, n)) and per part (3, parts) its volume before and after and its area
+    after (volumes less the ``centre``, times 6; areas times 2). Each block's triangles are measured on
+    the threads, then their normals added at their corners block by block: the same numbers whatever
+    the thread count."""
+    normals = np.zeros((3, after.shape[1]))
+
+    def measured(start, stop):
+        block = np.ascontiguousarray(triangles[start:stop].T, dtype=_index(after.shape[1]))
+        a, b, c = _corners(after, block, centre)
+        terms = [None, _dot(a, _cross(b, c))]
         b -= a
         c -= a
-        return corners, _cross(b, c)
+        faces = _cross(b, c)
+        terms.append(np.sqrt(_dot(faces, faces)))
+        a, b, c = _corners(before, block, centre)
+        terms[0] = _dot(a, _cross(b, c))
+        return block, faces, _part_sums(terms, part_of_vertex, block, parts)
 
-    for blocks in _in_rounds(face_normals, len(triangles)):
-        for corners, faces in blocks:
-            _add_at_corners(normals, corners, faces)
+    volumes = np.zeros((3, parts))
+    for blocks in _in_rounds(measured, len(triangles)):
+        for block, faces, sums in blocks:
+            _add_at_corners(normals, block, faces)
+            volumes += sums
         yield
     for start in range(0, normals.shape[1], _VERTEX_BLOCK):
         rows = normals[:, start : start + _VERTEX_BLOCK]
         length = np.sqrt(_dot(rows, rows))
         rows /= np.where(length > 0.0, length, 1.0)
-    return normals
+    return normals, volumes
+
+
+def _part_sums(terms, part_of_vertex, block, parts):
+    """(len(terms), parts): each per-triangle term summed over each part's triangles."""
+    if parts == 1:
+        return np.array([[term.sum()] for term in terms])
+    owner = part_of_vertex[block[0]]
+    return np.array([np.bincount(owner, weights=term, minlength=parts) for term in terms])
+
+
+def _index(n):
+    return np.int32 if n < np.iinfo(np.int32).max else np.int64
 
 
 def _add_at_corners(sums, corners, values):
@@ -132,35 +164,29 @@ def _in_rounds(function, size):
         yield parallel.run_all(tasks)
 
 
-def _cubic_steps(before, after, normals, triangles, part_of_vertex, parts, centre):
-    """(target, cubics) in slices, of (3, n) planar positions and normals: per part its volume in
-    ``before``, (parts,), and the coefficients (c0, c1, c2, c3), (4, parts), of its volume after an
-    offset d along ``normals`` from ``after``: V(d) = c0 + c1 d + c2 d^2 + c3 d^3. Each triangle's signed
-    tetrahedron volume det(a, b, c) / 6 is a cubic in d: with b x c, n_b x c + b x n_c and n_b x n_c,
-    its coefficients are a . (b x c), n_a . (b x c) + a . (n_b x c + b x n_c),
-    n_a . (n_b x c + b x n_c) + a . (n_b x n_c) and n_a . (n_b x n_c), over 6."""
+def _cubic_steps(after, normals, triangles, part_of_vertex, parts, centre):
+    """(c1, c2, c3) in slices, of (3, n) planar positions and normals: per part, (3, parts), the
+    coefficients beyond c0 (the volume, from _first_pass) of its volume after an offset d along
+    ``normals``: V(d) = c0 + c1 d + c2 d^2 + c3 d^3 (times 6). Each triangle's signed tetrahedron volume
+    det(a, b, c) / 6 is a cubic in d: with b x c, n_b x c + b x n_c and n_b x n_c, its coefficients
+    are a . (b x c), n_a . (b x c) + a . (n_b x c + b x n_c), n_a . (n_b x c + b x n_c) + a . (n_b x n_c)
+    and n_a . (n_b x n_c)."""
 
     def block_sums(start, stop):
-        block = np.ascontiguousarray(triangles[start:stop].T)
+        block = np.ascontiguousarray(triangles[start:stop].T, dtype=_index(after.shape[1]))
         a, b, c = _corners(after, block, centre)
         na, nb, nc = _corners(normals, block)
         first, second, third = _cross(b, c), _cross(nb, c), _cross(nb, nc)
         second += _cross(b, nc)
-        terms = [_dot(a, first), _dot(na, first) + _dot(a, second), _dot(na, second) + _dot(a, third), _dot(na, third)]
-        a, b, c = _corners(before, block, centre)
-        terms.insert(0, _dot(a, _cross(b, c)))
-        if parts == 1:
-            return np.array([[term.sum()] for term in terms])
-        owner = part_of_vertex[block[0]]
-        return np.array([np.bincount(owner, weights=term, minlength=parts) for term in terms])
+        terms = [_dot(na, first) + _dot(a, second), _dot(na, second) + _dot(a, third), _dot(na, third)]
+        return _part_sums(terms, part_of_vertex, block, parts)
 
-    total = np.zeros((5, parts))
+    total = np.zeros((3, parts))
     for sums in _in_rounds(block_sums, len(triangles)):
         for block in sums:
             total += block
         yield
-    total /= 6.0
-    return total[0], total[1:]
+    return total
 
 
 def restore_volume(before, after, triangles, movable=None, limit=None):
@@ -173,11 +199,12 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     ``limit`` the largest offset allowed (None: no limit but the bounding box's). A part is left as it
     is where it is open (not every edge in two faces, in opposite directions), has at most
     ``DEGENERATE`` vertices or no volume (nothing to give back), has no movable vertex, kept less than
-    ``KEPT`` of its volume (collapsed), or where the volume has no root within reach (an offset that
-    does not grow the volume, Newton that does not settle). An offset outwards never makes the part's
-    bounding box more than ``GROWTH`` larger than its box in ``before`` along any axis; inwards it is
-    at most half the part's thinnest side; either way at most ``limit``: a root beyond that is clipped
-    to it.
+    ``KEPT`` of its volume (collapsed), where the offset would be negligible (under ``NEGLIGIBLE`` times
+    ``limit``: the volume change over the area says so before the cubic is made), or where the volume
+    has no root within reach (an offset that does not grow the volume, Newton that does not settle).
+    An offset outwards never makes the part's bounding box more than ``GROWTH`` larger than its box in
+    ``before`` along any axis; inwards it is at most half the part's thinnest side; either way at most
+    ``limit``: a root beyond that is clipped to it.
 
     Examples
     --------
@@ -199,8 +226,8 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
     """``restore_volume`` in slices, for callers that let the user cancel: a generator that yields (None)
     between its passes and returns (positions in ``dtype``, offsets); the same numbers (float64 math,
     cast to ``dtype`` at the end). ``surface``: the triangles' core.topology.surface, if the caller has
-    it. Beside its result it holds the float64 normals, a planar copy of
-    the positions before and after (in their dtype) and a few bytes a vertex; the rest works in blocks."""
+    it. Beside its result it holds the float64 normals, planar copies of the positions before and after
+    (in their dtype) and a few bytes a vertex; the rest works in blocks of triangles."""
     before, after, triangles = np.asarray(before), np.asarray(after), np.asarray(triangles)
     n = after.shape[0]
     if triangles.size == 0:
@@ -217,12 +244,11 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
     extent = high_before - low_before
     centre = _centre(before)
     yield
-    normals = yield from _normal_steps(planar_after, triangles)
-    normals *= movable
-    target, (c0, c1, c2, c3) = yield from _cubic_steps(
-        planar_before, planar_after, normals, triangles, part_of_vertex, parts, centre
+    normals, (target, c0, area) = yield from _first_pass(
+        planar_before, planar_after, triangles, part_of_vertex, parts, centre
     )
-    del planar_before, planar_after
+    normals *= movable
+    del planar_before
     # An offset d moves every vertex by at most |d|: outwards, each side of the box grows by at most 2 d.
     # Inwards the box does not grow; there half the part's thinnest side bounds d (it would turn inside out).
     outward = np.maximum(((1.0 + GROWTH) * extent - (high_after - low_after)).min(axis=1), 0.0) / 2.0
@@ -231,11 +257,17 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
         outward, inward = np.minimum(outward, float(limit)), np.minimum(inward, float(limit))
     has_movable = np.bincount(part_of_vertex[movable & used], minlength=parts) > 0
     eligible = closed & (sizes > DEGENERATE) & has_movable
-    eligible &= np.abs(target) > _FLAT * np.linalg.norm(extent, axis=1) ** 3
-    eligible &= c1 > 0.0  # the volume grows as the surface moves along its normals
+    eligible &= np.abs(target) > 6.0 * _FLAT * np.linalg.norm(extent, axis=1) ** 3
     # Smoothing that took more than half the volume collapsed the part (or turned it inside out): no
     # uniform offset mends that, and one that tried would balloon it. (Same sign as target: c0 / target.)
     eligible &= c0 * np.sign(target) > KEPT * np.abs(target)
+    if limit is not None:  # the offset that gives the volume back, about its change over the area, is negligible
+        eligible &= np.abs(target - c0) > NEGLIGIBLE * float(limit) * 3.0 * area
+    if not eligible.any():
+        return np.array(after, dtype=dtype), np.zeros(parts)
+    c1, c2, c3 = yield from _cubic_steps(planar_after, normals, triangles, part_of_vertex, parts, centre)
+    del planar_after
+    eligible &= c1 > 0.0  # the volume grows as the surface moves along its normals
     offsets = np.zeros(parts)
     for _ in range(_NEWTON_STEPS):
         d = offsets

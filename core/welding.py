@@ -166,7 +166,8 @@ def _coincident(points, edge, tolerance):
         key[rows] = _cell_keys(cells, packed)
         if radius > 0.0:
             fraction = scaled - cells
-            near[rows] = np.any((fraction < margin) | (fraction > 1.0 - margin), axis=1)
+            off = (fraction < margin) | (fraction > 1.0 - margin)  # within the margin of a side
+            near[rows] = off[:, 0] | off[:, 1] | off[:, 2]
     del scaled, cells
     order = np.argsort(key, kind="stable")
     sorted_key = key[order]
@@ -174,7 +175,9 @@ def _coincident(points, edge, tolerance):
     same_cell = sorted_key[1:] == sorted_key[:-1]
     del sorted_key
     sorted_points = points[order]
-    equal = same_cell & np.all(sorted_points[1:] == sorted_points[:-1], axis=1)
+    same = sorted_points[1:] == sorted_points[:-1]
+    equal = same_cell & same[:, 0] & same[:, 1] & same[:, 2]
+    del same
     run = np.concatenate(([0], np.cumsum(~same_cell)))  # cell run of each sorted vertex
     # Points in a run with a different point, and points within the radius of a side of their cell, are
     # the only ones that may coincide with more than their equal neighbours in the sorted order.
