@@ -2,10 +2,11 @@
 defaults and as the add-on runs it (``weld=True, border="curve"``), against the fixed 10-iteration HC
 run (alpha 0.1, beta 0.6), on the same noisy mesh, in the same process.
 
-Time: median wall time of ``--repeat`` runs each. Memory: the peak of what NumPy and SciPy allocate
-during the call (tracemalloc, which NumPy reports its buffers to), above what was allocated before it.
-Gap: the longest wall time between two slices of ``core.MeshSmoother.steps`` (what a cancel waits for),
-run in chunks of iterations as the operator's modal run takes them (5M vertex-iterations a chunk). The
+Time: median wall time of ``--repeat`` runs each, alternating. Memory: the peak of what NumPy and SciPy
+allocate during one more run of each (tracemalloc, which NumPy reports its buffers to, and which slows
+the run: so not timed), above what was allocated before it. Gap: the longest wall time between the
+start and a slice of ``core.MeshSmoother.steps``, or between two slices (what a cancel waits for), run
+in chunks of iterations as the operator's modal run takes them (5M vertex-iterations a chunk). The
 input is float32, as Blender hands it over.
 
 Meshes: a noisy torus (``--mesh torus``, isotropic noise of ``--noise`` times the bounding-box
@@ -14,12 +15,14 @@ midpoints ``--subdivisions`` times (3: 1.8M vertices; the surface is the scan's)
 
 ``--error``: the RMS distance of every result to the clean surface in % of the diagonal (the torus's
 own; the bunny's along the clean vertex normals), with the Automatic Amount as it runs and with its
-work budget (core.mesh_amount.WORK_BUDGET) lifted, which is what the budget costs.
+work budget (core.mesh_amount.WORK_BUDGET) lifted, which is what the budget costs. ``--choice``: the
+iterations GCV chooses on patches (big meshes) and on the whole mesh (core.mesh_amount.PATCH_FROM
+lifted), both without the work budget, and the time each choice takes.
 
     python bench/bench_default_cost.py                 # 5M vertices, 3 runs each
     python bench/bench_default_cost.py --vertices 1M --repeat 5
-    python bench/bench_default_cost.py --vertices 5M --repeat 1 --error
-    python bench/bench_default_cost.py --mesh bunny --subdivisions 3 --repeat 1 --error   # needs pymeshlab
+    python bench/bench_default_cost.py --vertices 5M --repeat 1 --error --choice
+    python bench/bench_default_cost.py --mesh bunny --subdivisions 3 --repeat 1 --error --choice   # pymeshlab
 """
 
 import argparse
@@ -50,41 +53,48 @@ def count(text):
     return int(float(text[:-1] if scale > 1 else text) * scale)
 
 
-def measured(function):
-    """(seconds, peak bytes above the start, result) of one call."""
+def peak_of(function):
+    """(peak bytes above the start, result) of one call, traced by tracemalloc."""
     tracemalloc.start()
     tracemalloc.reset_peak()
     base = tracemalloc.get_traced_memory()[0]
-    start = time.perf_counter()
     result = function()
-    seconds = time.perf_counter() - start
     peak = tracemalloc.get_traced_memory()[1] - base
     tracemalloc.stop()
-    return seconds, peak, result
+    return peak, result
 
 
 def smoothed(noisy, edges, faces, options, budget=None):
-    """(positions, report, longest gap between slices) of one core.MeshSmoother run."""
-    with lifted(budget):
+    """(seconds, positions, report, longest gap) of one core.MeshSmoother run, construction included."""
+    with lifted(mesh_amount, "WORK_BUDGET", budget):
+        start = last = time.perf_counter()
         run = core.MeshSmoother(noisy, edges, faces=faces, **options)
-        chunk = max(1, CHUNK_WORK // len(noisy))
-        gap, last = 0.0, time.perf_counter()
-        for _ in run.steps(chunk):
+        gap = 0.0
+        for _ in run.steps(max(1, CHUNK_WORK // len(noisy))):
             now = time.perf_counter()
             gap, last = max(gap, now - last), now
-    return run.result, run.report, gap
+    return last - start, run.result, run.report, gap
 
 
 @contextlib.contextmanager
-def lifted(budget):
-    """core.mesh_amount.WORK_BUDGET set to ``budget`` meanwhile (None: as it is)."""
-    kept = mesh_amount.WORK_BUDGET
-    if budget is not None:
-        mesh_amount.WORK_BUDGET = budget
+def lifted(module, name, value):
+    """``module.name`` set to ``value`` meanwhile (None: as it is)."""
+    kept = getattr(module, name)
+    if value is not None:
+        setattr(module, name, value)
     try:
         yield
     finally:
-        mesh_amount.WORK_BUDGET = kept
+        setattr(module, name, kept)
+
+
+def chosen(noisy, edges, patch_from):
+    """(iterations, sigma, seconds) GCV chooses without the work budget, PATCH_FROM at ``patch_from``."""
+    operator = core.umbrella_operator(edges, len(noisy))
+    with lifted(mesh_amount, "WORK_BUDGET", math.inf), lifted(mesh_amount, "PATCH_FROM", patch_from):
+        start = time.perf_counter()
+        amount = core.choose_amount(noisy, operator=operator)
+    return amount.iterations, amount.sigma, time.perf_counter() - start
 
 
 def torus_distance(points, ratio=2.5, minor_radius=0.4):
@@ -135,6 +145,7 @@ def main():
     parser.add_argument("--noise", type=float, default=0.001, help="noise, a fraction of the diagonal (0.001)")
     parser.add_argument("--repeat", type=int, default=3, help="runs of each (median reported; default 3)")
     parser.add_argument("--error", action="store_true", help="also the error, with and without the budget")
+    parser.add_argument("--choice", action="store_true", help="also GCV's choice on patches and on the whole mesh")
     args = parser.parse_args()
     if args.mesh == "torus":
         clean, faces = meshes.torus(count(args.vertices))
@@ -159,36 +170,41 @@ def main():
         "default: Automatic Amount": {},
         "add-on default: weld, border curve": dict(ADDON),
     }
-    figures = {name: [] for name in runs}
+    figures = {label: [] for label in runs}
     for _ in range(args.repeat):
         for label, options in runs.items():  # alternating, so all see the same machine
-            seconds, peak, (result, report, gap) = measured(
-                lambda options=options: smoothed(noisy, edges, faces, options)
-            )
-            figures[label].append((seconds, peak, report, gap, result))
+            figures[label].append(smoothed(noisy, edges, faces, options))
+    peaks = {
+        label: peak_of(lambda options=options: smoothed(noisy, edges, faces, options))[0]
+        for label, options in runs.items()
+    }
     errors = {}
     if args.error:
         errors["noisy input"] = (None, noisy)
         for label, rows in figures.items():
-            errors[label] = (rows[-1][2], rows[-1][4])
-        result, report, _ = smoothed(noisy, edges, faces, ADDON, budget=math.inf)
+            errors[label] = (rows[-1][2], rows[-1][1])
+        _, result, report, _ = smoothed(noisy, edges, faces, ADDON, budget=math.inf)
         errors["add-on default, no work budget"] = (report, result)
+    choices = {}
+    if args.choice:
+        choices["on patches"] = chosen(noisy, edges, mesh_amount.PATCH_FROM)
+        choices["on the whole mesh"] = chosen(noisy, edges, math.inf)
     with Report("bench_default_cost") as out:
         out(f"# The default's cost on {len(noisy):,} vertices ({name}, noise {args.noise:.2%} of the diagonal)")
         out()
-        out(f"`python bench/bench_default_cost.py {command} --noise {args.noise} --repeat {args.repeat}`")
+        flags = " --error" * args.error + " --choice" * args.choice
+        out(f"`python bench/bench_default_cost.py {command} --noise {args.noise} --repeat {args.repeat}{flags}`")
         out()
         out("| run | iterations | median time | peak memory | time / fixed | memory / fixed | longest gap |")
         out("|---|---|---|---|---|---|---|")
-        fixed_time = statistics.median(row[0] for row in figures[next(iter(runs))])
-        fixed_peak = statistics.median(row[1] for row in figures[next(iter(runs))])
+        fixed_label = next(iter(runs))
+        fixed_time = statistics.median(row[0] for row in figures[fixed_label])
         for label, rows in figures.items():
             seconds = statistics.median(row[0] for row in rows)
-            peak = statistics.median(row[1] for row in rows)
             report, gap = rows[-1][2], max(row[3] for row in rows)
             out(
-                f"| {label} | {report.iterations} | {seconds:.2f} s | {peak / 2**30:.2f} GiB | "
-                f"{seconds / fixed_time:.2f}x | {peak / fixed_peak:.2f}x | {gap:.2f} s |"
+                f"| {label} | {report.iterations} | {seconds:.2f} s | {peaks[label] / 2**30:.2f} GiB | "
+                f"{seconds / fixed_time:.2f}x | {peaks[label] / peaks[fixed_label]:.2f}x | {gap:.2f} s |"
             )
         if errors:
             out()
@@ -199,6 +215,14 @@ def main():
             for label, (report, points) in errors.items():
                 rms = math.sqrt(float(np.mean(distance(points) ** 2))) / diagonal
                 out(f"| {label} | {'' if report is None else report.iterations} | {rms:.4%} |")
+        if choices:
+            out()
+            out("Iterations GCV chooses without the work budget:")
+            out()
+            out("| chosen | iterations | noise (sigma), % of the diagonal | time |")
+            out("|---|---|---|---|")
+            for label, (iterations, sigma, seconds) in choices.items():
+                out(f"| {label} | {iterations} | {sigma / diagonal:.4%} | {seconds:.2f} s |")
 
 
 if __name__ == "__main__":

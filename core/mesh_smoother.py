@@ -24,15 +24,24 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import topology, volume, welding
+from . import parallel, topology, volume, welding
 from .adjacency import Umbrella, umbrella_operator
 from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
 from .mesh_amount import PATCH_FROM, AmountChooser, MeshAmount
 from .metrics import fan_triangles
-from .slices import as_fraction
-from .smoothing import METHODS, Cancelled, Smoothing
-from .validation import check_choice, check_fixed, check_influence, check_positions
+from .slices import as_fraction, to_end
+from .smoothing import METHODS, MODES, Cancelled, Smoothing
+from .validation import (
+    check_choice,
+    check_fixed,
+    check_influence,
+    check_iterations,
+    check_max_deviation,
+    check_positions,
+    check_tolerance,
+    check_unit_interval,
+)
 
 AUTO = "auto"
 DEFAULT_ALPHA = 0.1
@@ -157,27 +166,49 @@ class MeshSmoother:
         self.influence = check_influence(influence, n)
         self.faces = None if faces is None else fan_triangles(faces)
         self.border = check_choice(border, "border", BORDERS)
-        # Coincident vertices run as one welded vertex (core.welding); the result is scattered back.
-        self.welding = welding.weld(start, operator) if weld else None
-        if self.welding is not None:
-            self.positions, operator = self.welding.positions(), self.welding.operator(operator)
-            self.fixed, self.influence = self.welding.fixed(self.fixed), self.welding.influence(self.influence)
-            if self.faces is not None:
-                self.faces = self.welding.triangles(self.faces)
-        # What the faces make (parts, closed ones, border edges): for the border rule and the volume restore.
-        self.surface = None
-        if self.faces is not None and (self.border != "free" or self.automatic):
-            self.surface = topology.surface(self.faces, operator.n_vertices)
-        edges = None if self.surface is None else self.surface.border
-        self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed, edges)
-        # Checks every number now (a Smoothing is cheap to make: the heavy parts are built on first use).
-        self._smoothing(self.alpha, self.beta, self.iterations, 0.0 if self.max_deviation == AUTO else max_deviation)
+        if self.border != "free" and self.faces is None:
+            raise ValueError(
+                f"border={border!r} needs the faces (a border edge is an edge of exactly one face): pass faces=, "
+                "or border='free'"
+            )
+        self.operator, self.weld = operator, bool(weld)
+        # Every number checked now, as core.Smoothing checks them.
+        check_choice(mode, "mode", MODES)
+        check_unit_interval(self.alpha, "alpha")
+        check_unit_interval(self.beta, "beta")
+        check_iterations(self.iterations)
+        check_tolerance(tolerance)
+        check_max_deviation(0.0 if self.max_deviation == AUTO else self.max_deviation)
+        self.welding = self.surface = None
+        self.prepared = False  # the welding, the faces' surface and the border rule: the first slices of steps()
         self.result = None
         self.report = None
+
+    def _prepare(self):
+        """Weld coincident vertices (core.welding: the result is scattered back), find what the faces
+        make (parts, closed ones, border edges: for the border rule and the volume restore) and apply the
+        border rule, yielding 0.0 between these passes."""
+        operator = self.operator
+        if self.weld:
+            self.welding = welding.weld(self.positions, operator)
+            if self.welding is not None:
+                self.positions, operator = self.welding.positions(), self.welding.operator(operator)
+                self.fixed, self.influence = self.welding.fixed(self.fixed), self.welding.influence(self.influence)
+                if self.faces is not None:
+                    self.faces = self.welding.triangles(self.faces)
+            yield 0.0
+        if self.faces is not None and (self.border != "free" or self.automatic):
+            self.surface = topology.surface(self.faces, operator.n_vertices)
+            yield 0.0
+        edges = None if self.surface is None else self.surface.border
+        self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed, edges)
+        self.prepared = True
 
     def still(self) -> np.ndarray:
         """(n,) bool: the vertices this run never moves (fixed, held by the border rule, without
         neighbours), in the caller's numbering."""
+        if not self.prepared:
+            to_end(self._prepare())
         still = self.fixed | self.operator.isolated
         return still if self.welding is None else still[self.welding.label]
 
@@ -203,9 +234,13 @@ class MeshSmoother:
         """Run in slices of ``chunk`` iterations (all at once if None), yielding the fraction done; the
         Automatic Amount's choice and volume restore yield between their passes too."""
         start = time.perf_counter()
+        if not self.prepared:
+            yield from self._prepare()
         alpha, beta, iterations, amount, done = self.alpha, self.beta, self.iterations, None, None
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
         fixed, share, restoring = self.fixed, 0.0, self.automatic and self.faces is not None
+        if restoring:  # what the restore needs of the input, on another thread while the choice runs on one
+            measuring = parallel.in_background(lambda: volume.measure_before(self.positions, self.faces, self.surface))
         if self.automatic:
             chooser = AmountChooser(self.positions, operator=self.operator, beta=self.beta, fixed=self.fixed)
             if self.beta_given:
@@ -234,21 +269,22 @@ class MeshSmoother:
             result, ran = smoothed.positions, smoothed.iterations
         offset = 0.0
         if restoring and ran > 0:
-            result, offset = yield from self._keep_volume(result, fixed, volume.NOISE_OFFSETS * amount.sigma, end)
+            limited = volume.NOISE_OFFSETS * amount.sigma
+            result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), end)
             if limit:  # the offset keeps to the limit too
                 _within(result, self.positions, limit)
         self.result = result if self.welding is None else self.welding.scatter(result)
         self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, limit, time.perf_counter() - start)
         yield 1.0
 
-    def _keep_volume(self, result, fixed, limit, progress):
+    def _keep_volume(self, result, fixed, limit, measured, progress):
         """Each closed part's volume given back by a bounded uniform offset of its moving vertices along
         their normals (core.volume), in slices (yielding ``progress``); returns (positions, largest offset).
         Fixed vertices and those of influence 0 stay bit for bit."""
         movable = ~fixed if self.influence is None else ~fixed & (self.influence > 0.0)
         restored, offsets = yield from as_fraction(
             volume.restore_steps(
-                self.positions, result, self.faces, movable, limit, dtype=result.dtype, surface=self.surface
+                self.positions, result, self.faces, movable, limit, result.dtype, self.surface, measured
             ),
             progress,
         )

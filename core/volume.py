@@ -21,6 +21,8 @@ on its own; no offset grows a part's bounding box by more than GROWTH, and a cal
 it further (the mesh pipeline passes NOISE_OFFSETS times the estimated noise).
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from . import parallel, topology
@@ -61,40 +63,66 @@ def vertex_normals(positions, triangles):
 def _normal_steps(planar, triangles):
     """vertex_normals in slices (yields between rounds of blocks), of (3, n) ``planar`` positions: the
     unit normals as float64 (3, n)."""
-    return (yield from _first_pass(planar, planar, triangles, None, 1, np.zeros(3)))[0]
+    return (yield from _first_pass(planar, triangles, None, 1, np.zeros(3)))[0]
 
 
-def _first_pass(before, after, triangles, part_of_vertex, parts, centre):
-    """(normals, volumes) in slices, of (3, n) planar positions: the unit vertex normals of ``after``
-    (area-weighted, float64 (3, n)) and per part (3, parts) its volume before and after and its area
-    after (volumes less the ``centre``, times 6; areas times 2). Each block's triangles are measured on
-    the threads, then their normals added at their corners block by block: the same numbers whatever
-    the thread count."""
+def _first_pass(after, triangles, part_of_vertex, parts, centre):
+    """(normals, measures) in slices, of (3, n) planar positions: the unit vertex normals (area-weighted,
+    float64 (3, n)) and per part, (2, parts), its volume less the ``centre`` (times 6) and its area
+    (times 2). Each block's triangles are measured on the threads, then their normals added at their
+    corners block by block: the same numbers whatever the thread count."""
     normals = np.zeros((3, after.shape[1]))
 
     def measured(start, stop):
         block = np.ascontiguousarray(triangles[start:stop].T, dtype=_index(after.shape[1]))
         a, b, c = _corners(after, block, centre)
-        terms = [None, _dot(a, _cross(b, c))]
+        volume = _dot(a, _cross(b, c))
         b -= a
         c -= a
         faces = _cross(b, c)
-        terms.append(np.sqrt(_dot(faces, faces)))
-        a, b, c = _corners(before, block, centre)
-        terms[0] = _dot(a, _cross(b, c))
-        return block, faces, _part_sums(terms, part_of_vertex, block, parts)
+        return block, faces, _part_sums([volume, np.sqrt(_dot(faces, faces))], part_of_vertex, block, parts)
 
-    volumes = np.zeros((3, parts))
+    measures = np.zeros((2, parts))
     for blocks in _in_rounds(measured, len(triangles)):
         for block, faces, sums in blocks:
             _add_at_corners(normals, block, faces)
-            volumes += sums
+            measures += sums
         yield
     for start in range(0, normals.shape[1], _VERTEX_BLOCK):
         rows = normals[:, start : start + _VERTEX_BLOCK]
         length = np.sqrt(_dot(rows, rows))
         rows /= np.where(length > 0.0, length, 1.0)
-    return normals, volumes
+    return normals, measures
+
+
+@dataclass(frozen=True)
+class Before:
+    """What the volume restore needs of the positions before smoothing (``measure_before``)."""
+
+    centre: np.ndarray  # (3,) the point the volumes are taken about
+    volumes: np.ndarray  # (parts,) each part's enclosed volume, times 6
+    low: np.ndarray  # (parts, 3) each part's bounding box
+    high: np.ndarray
+
+
+def measure_before(before, triangles, surface):
+    """The Before of (n, 3) positions with the (t, 3) ``triangles`` and their core.topology.surface: one
+    thread's work, which the mesh pipeline does in the background while it chooses the amount."""
+    return to_end(_before_steps(np.asarray(before), np.asarray(triangles), surface))
+
+
+def _before_steps(before, triangles, surface):
+    """measure_before in slices (yields between blocks of triangles)."""
+    planar = _planar(before)
+    low, high = _boxes(planar, surface.part_of_vertex, surface.used, surface.parts)
+    centre = _centre(before)
+    volumes = np.zeros(surface.parts)
+    for start in range(0, len(triangles), _BLOCK):
+        block = np.ascontiguousarray(triangles[start : start + _BLOCK].T, dtype=_index(planar.shape[1]))
+        a, b, c = _corners(planar, block, centre)
+        volumes += _part_sums([_dot(a, _cross(b, c))], surface.part_of_vertex, block, surface.parts)[0]
+        yield
+    return Before(centre, volumes, low, high)
 
 
 def _part_sums(terms, part_of_vertex, block, parts):
@@ -222,12 +250,13 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     return to_end(restore_steps(before, after, triangles, movable, limit))
 
 
-def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.float64, surface=None):
+def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.float64, surface=None, measured=None):
     """``restore_volume`` in slices, for callers that let the user cancel: a generator that yields (None)
     between its passes and returns (positions in ``dtype``, offsets); the same numbers (float64 math,
-    cast to ``dtype`` at the end). ``surface``: the triangles' core.topology.surface, if the caller has
-    it. Beside its result it holds the float64 normals, planar copies of the positions before and after
-    (in their dtype) and a few bytes a vertex; the rest works in blocks of triangles."""
+    cast to ``dtype`` at the end). ``surface``: the triangles' core.topology.surface, and ``measured``:
+    ``measure_before(before, triangles, surface)``, if the caller has them. Beside its result it holds
+    the float64 normals, a planar copy of the positions after (in their dtype) and a few bytes a vertex;
+    the rest works in blocks of triangles."""
     before, after, triangles = np.asarray(before), np.asarray(after), np.asarray(triangles)
     n = after.shape[0]
     if triangles.size == 0:
@@ -236,19 +265,16 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
     if surface is None:
         surface = topology.surface(triangles, n)
         yield
+    if measured is None:
+        measured = yield from _before_steps(before, triangles, surface)
     parts, part_of_vertex, used, closed = surface.parts, surface.part_of_vertex, surface.used, surface.closed
     sizes = np.bincount(part_of_vertex[used], minlength=parts)
-    planar_before, planar_after = _planar(before), _planar(after)
-    low_before, high_before = _boxes(planar_before, part_of_vertex, used, parts)
+    planar_after = _planar(after)
     low_after, high_after = _boxes(planar_after, part_of_vertex, used, parts)
-    extent = high_before - low_before
-    centre = _centre(before)
+    extent, centre, target = measured.high - measured.low, measured.centre, measured.volumes
     yield
-    normals, (target, c0, area) = yield from _first_pass(
-        planar_before, planar_after, triangles, part_of_vertex, parts, centre
-    )
+    normals, (c0, area) = yield from _first_pass(planar_after, triangles, part_of_vertex, parts, centre)
     normals *= movable
-    del planar_before
     # An offset d moves every vertex by at most |d|: outwards, each side of the box grows by at most 2 d.
     # Inwards the box does not grow; there half the part's thinnest side bounds d (it would turn inside out).
     outward = np.maximum(((1.0 + GROWTH) * extent - (high_after - low_after)).min(axis=1), 0.0) / 2.0
