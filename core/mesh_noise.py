@@ -49,6 +49,7 @@ _MAD = 0.6745  # median |N(0, 1)|
 # The planes are fitted to the rings after this many umbrella averages of the positions: noise along the
 # normals as large as the edges would otherwise tilt them towards itself (a symmetric mesh stays symmetric).
 PLANE_STEPS = 2
+_FEW_PARTS = 1000  # parts in vertex order up to this many are sampled part by part
 
 
 @dataclass(frozen=True)
@@ -115,12 +116,15 @@ def _sample(part_of_vertex, sizes, operator):
     """Evenly spaced vertices with neighbours: SAMPLES over the mesh, at least PART_SAMPLES (or all) per part."""
     want = np.minimum(sizes, np.maximum(PART_SAMPLES, np.ceil(SAMPLES * sizes / max(1, sizes.sum()))))
     stride = np.ceil(sizes / np.maximum(want, 1)).astype(np.int64)
-    if np.any(part_of_vertex[1:] < part_of_vertex[:-1]):
+    starts = np.cumsum(sizes) - sizes
+    if sizes.size <= _FEW_PARTS and not np.any(part_of_vertex[1:] < part_of_vertex[:-1]):
+        # Parts in vertex order (one part, say): every stride-th vertex of each part's run.
+        runs = [np.arange(start, start + size, step) for start, size, step in zip(starts, sizes, stride)]
+        rows = np.concatenate(runs) if runs else np.zeros(0, dtype=np.int64)
+    else:
         order = np.argsort(part_of_vertex, kind="stable")
-    else:  # parts in vertex order (one part, say): the order is the vertices' own
-        order = np.arange(part_of_vertex.size)
-    rank = np.arange(order.size) - np.repeat(np.cumsum(sizes) - sizes, sizes)
-    rows = order[rank % stride[part_of_vertex[order]] == 0]
+        rank = np.arange(order.size) - np.repeat(starts, sizes)
+        rows = order[rank % stride[part_of_vertex[order]] == 0]
     return np.sort(rows[operator.degree[rows] > 0])
 
 

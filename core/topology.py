@@ -184,13 +184,16 @@ def surface(triangles, n_vertices):
     transposed = sp.csr_matrix((np.ones(tails.size, np.int8), tails, indptr), shape=(n, n), copy=False).tocsc()
     heads, into = transposed.indices, transposed.indptr
     bad |= degree != np.diff(into)
-    for low in range(0, n, _ROW_BLOCK):
-        high = min(n, low + _ROW_BLOCK)
-        rows = np.arange(low, high)[~bad[low:high]]
-        counts = degree[rows]
-        offset = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-        wrong = tails[np.repeat(indptr[rows], counts) + offset] != heads[np.repeat(into[rows], counts) + offset]
-        bad[np.repeat(rows, counts)[wrong]] = True
+    if np.array_equal(indptr, into):  # every row as long out as in (closed meshes): one comparison
+        bad[np.searchsorted(indptr, np.flatnonzero(tails != heads), side="right") - 1] = True
+    else:  # row by row, in blocks, where the lengths agree
+        for low in range(0, n, _ROW_BLOCK):
+            high = min(n, low + _ROW_BLOCK)
+            rows = np.arange(low, high)[~bad[low:high]]
+            counts = degree[rows]
+            offset = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+            wrong = tails[np.repeat(indptr[rows], counts) + offset] != heads[np.repeat(into[rows], counts) + offset]
+            bad[np.repeat(rows, counts)[wrong]] = True
     closed = np.bincount(part_of_vertex[bad], minlength=parts) == 0
     border = _border(np.flatnonzero(bad), indptr, tails, into, heads, n).astype(index)
     return Surface(parts, part_of_vertex, degree > 0, closed, border)

@@ -37,6 +37,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from . import parallel
 from .adjacency import Umbrella, umbrella_from_pairs
 
 TOLERANCE = 1e-6  # vertices closer than this times the median edge length are one (equal ones always)
@@ -147,31 +148,33 @@ def _coincident(points, edge, tolerance):
     n = points.shape[0]
     if n < 2:
         return None
-    low = points.min(axis=0).astype(np.float64)
-    extent = points.max(axis=0) - low
+    low = np.array([points[:, k].min() for k in range(3)], dtype=np.float64)  # per column: 3x an axis-0 min
+    high = np.array([points[:, k].max() for k in range(3)], dtype=points.dtype)
+    extent = high - low
     diagonal = float(np.sqrt(np.dot(extent, extent)))
     if diagonal == 0.0:
         return np.zeros(n, dtype=np.int64)  # every vertex in one place
     radius = tolerance * edge
     side = max((edge or diagonal * 2.0**-20) * CELL_EDGES, diagonal * _FINEST_CELL, 2.0 * radius)
     # Each point's cell key, and whether it lies within the radius of its cell's side, in blocks of rows.
-    packed = np.floor((points.max(axis=0) - low) / side).max() < 1 << _PACKED_BITS
+    packed = np.floor((high - low) / side).max() < 1 << _PACKED_BITS
     key = np.empty(n, dtype=np.int64)
     near = np.zeros(n, dtype=bool)
     margin = 2.0 * radius / side
-    for start in range(0, n, _ROWS):
-        rows = slice(start, start + _ROWS)
-        scaled = (points[rows] - low) / side
+
+    def keys(start, stop):  # element-wise: the blocks run on the threads
+        scaled = (points[start:stop] - low) / side
         cells = np.floor(scaled).astype(np.int64)
-        key[rows] = _cell_keys(cells, packed)
+        key[start:stop] = _cell_keys(cells, packed)
         if radius > 0.0:
             fraction = scaled - cells
             off = (fraction < margin) | (fraction > 1.0 - margin)  # within the margin of a side
-            near[rows] = off[:, 0] | off[:, 1] | off[:, 2]
-    del scaled, cells
+            near[start:stop] = off[:, 0] | off[:, 1] | off[:, 2]
+
+    parallel.run_chunks(keys, n, _ROWS)
     order = np.argsort(key, kind="stable")
     sorted_key = key[order]
-    del key
+    key = None
     same_cell = sorted_key[1:] == sorted_key[:-1]
     del sorted_key
     sorted_points = points[order]
@@ -187,7 +190,7 @@ def _coincident(points, edge, tolerance):
     del run, same_cell
     if radius > 0.0:
         candidate |= near[order]
-    del near
+    near = None
     candidate = np.flatnonzero(candidate)
     pairs = np.empty((0, 2), dtype=np.int64)
     if candidate.size > 1:
