@@ -189,16 +189,19 @@ class MeshSmoother:
         make (parts, closed ones, border edges: for the border rule and the volume restore) and apply the
         border rule, yielding 0.0 between these passes."""
         operator = self.operator
+        surfaced = self.faces is not None and (self.border != "free" or self.automatic)
+        if self.weld or surfaced:
+            yield 0.0  # the construction built the operator: a slice of its own before these passes
         if self.weld:
-            self.welding = welding.weld(self.positions, operator)
+            self.welding = yield from as_fraction(welding.weld_steps(self.positions, operator), 0.0)
             if self.welding is not None:
                 self.positions, operator = self.welding.positions(), self.welding.operator(operator)
                 self.fixed, self.influence = self.welding.fixed(self.fixed), self.welding.influence(self.influence)
                 if self.faces is not None:
                     self.faces = self.welding.triangles(self.faces)
             yield 0.0
-        if self.faces is not None and (self.border != "free" or self.automatic):
-            self.surface = topology.surface(self.faces, operator.n_vertices)
+        if surfaced:
+            self.surface = yield from as_fraction(topology.surface_steps(self.faces, operator.n_vertices), 0.0)
             yield 0.0
         edges = None if self.surface is None else self.surface.border
         self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed, edges)

@@ -13,6 +13,7 @@ import scipy.sparse as sp
 
 from .adjacency import grouped_pairs
 from .parts import parts as connected_parts
+from .slices import to_end
 
 _ROW_BLOCK = 1 << 16  # vertices per block where each of their half-edges is compared (several int64 each)
 
@@ -140,10 +141,15 @@ class Surface:
 
 
 def surface(triangles, n_vertices):
-    """The Surface of (t, 3) ``triangles`` on ``n_vertices`` vertices: one counting sort of their
-    half-edges (each corner to the next) and its transpose, a few bytes a half-edge. A vertex whose
-    outgoing half-edges (sorted) equal its incoming ones, none twice, lies inside a closed surface;
-    only the others can touch a border edge.
+    """The Surface of (t, 3) ``triangles`` on ``n_vertices`` vertices (see ``surface_steps``)."""
+    return to_end(surface_steps(triangles, n_vertices))
+
+
+def surface_steps(triangles, n_vertices):
+    """``surface`` in slices (a generator that yields between its passes and returns the Surface): one
+    counting sort of the half-edges (each corner to the next) and its transpose, a few bytes a
+    half-edge. A vertex whose outgoing half-edges (sorted) equal its incoming ones, none twice, lies
+    inside a closed surface; only the others can touch a border edge.
 
     Examples
     --------
@@ -166,6 +172,7 @@ def surface(triangles, n_vertices):
     del corners, nexts
     indptr, tails = grouped_pairs(heads, tails, n)  # row h: the tails of its half-edges, increasing
     del heads
+    yield
     degree = np.diff(indptr)
     twice = np.zeros(tails.size, dtype=bool)  # a pair the row already has (sorted rows: the one before)
     np.equal(tails[1:], tails[:-1], out=twice[1:])

@@ -39,6 +39,7 @@ from scipy.spatial import cKDTree
 
 from . import parallel
 from .adjacency import Umbrella, umbrella_from_pairs
+from .slices import to_end
 
 TOLERANCE = 1e-6  # vertices closer than this times the median edge length are one (equal ones always)
 CELL_EDGES = 1 / 8  # cell side in median edge lengths: distinct vertices rarely share a cell
@@ -105,8 +106,14 @@ class Welding:
 def weld(positions, operator: Umbrella, tolerance: float = TOLERANCE) -> Welding | None:
     """The Welding of the coincident vertices of a mesh (its (n, 3) ``positions`` and umbrella
     ``operator``), or None when no two vertices coincide. ``tolerance``: in median edge lengths."""
+    return to_end(weld_steps(positions, operator, tolerance))
+
+
+def weld_steps(positions, operator: Umbrella, tolerance: float = TOLERANCE):
+    """``weld`` in slices, for callers that let the user cancel: a generator that yields (None) between
+    its passes and returns the Welding (or None)."""
     points = np.asarray(positions)
-    labels = _coincident(points, median_edge_length(points, operator), tolerance)
+    labels = yield from _coincident(points, median_edge_length(points, operator), tolerance)
     if labels is None:
         return None
     count = int(labels.max()) + 1
@@ -143,8 +150,9 @@ def median_edge_length(points, operator):
 
 
 def _coincident(points, edge, tolerance):
-    """Per vertex a label shared by the coincident ones (equal, or within ``tolerance`` x ``edge`` through
-    a chain of such pairs), or None when every vertex stands alone."""
+    """A generator (yields once, between the cell keys and their sort) returning per vertex a label
+    shared by the coincident ones (equal, or within ``tolerance`` x ``edge`` through a chain of such
+    pairs), or None when every vertex stands alone."""
     n = points.shape[0]
     if n < 2:
         return None
@@ -172,6 +180,7 @@ def _coincident(points, edge, tolerance):
             near[start:stop] = off[:, 0] | off[:, 1] | off[:, 2]
 
     parallel.run_chunks(keys, n, _ROWS)
+    yield
     order = np.argsort(key, kind="stable")
     sorted_key = key[order]
     key = None
