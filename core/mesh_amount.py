@@ -17,10 +17,7 @@ iterations and says so (``noise_found``). On the noisy parts:
   axis of each sample vertex's 1-ring, taken on the state that minimizes the GCV of the whole
   residual (all three coordinates), so that they belong to a smoothed surface, not to the noise.
 * **Degrees of freedom**: t(k) = tr(S_k) / n, estimated without forming S_k (Hutchinson): random
-  +-1 vectors z go through the same HC iterations, and t = mean of z . S_k z / n. S_k's diagonal is
-  local (a vertex's entry depends on the few rings HC's steps reach), so on big meshes the probes
-  run on patches around evenly spaced seeds and t is read off the patches' inner vertices, far from
-  their cut edges: the same estimate for a fraction of the cost.
+  +-1 vectors z go through the same HC iterations, and t = mean of z . S_k z / n.
 * **GCV(k) = R(k) / (1 - t(k))^2** estimates the noise variance plus the error that is left, up to a
   constant, without knowing the noise; its minimum is the amount that leaves the least error. GCV
   is flat near its minimum, and flat in k where its resolution ends (a few iterations on lightly
@@ -39,6 +36,25 @@ iterations and says so (``noise_found``). On the noisy parts:
 
 Where the noise is large against a thin part (a tube a few edges around), the amount with the least
 error also shrinks that part by a few per cent; core.volume.restore_volume gives the volume back.
+
+Big meshes:
+
+* **Patches**: a sample vertex's residual and its entry of S_k's diagonal depend only on the rings
+  HC's steps reach, and S_k's weights fall off within a few rings. From ``PATCH_FROM`` movable
+  vertices up, the data run and the probes run on patches (every vertex within ``PATCH_RINGS`` rings
+  of ``PATCH_SEEDS`` evenly spaced seeds), the sample vertices and the trace read on their inner
+  vertices, at least ``PATCH_MARGIN`` rings from a cut: the choice costs about the same on any mesh,
+  and the whole mesh is smoothed once, with the k chosen. On noisy tori of 1M and 5M vertices and a
+  bunny scan subdivided to 1.8M vertices the patches choose the whole mesh's k
+  (``python bench/bench_default_cost.py --vertices 5M --repeat 1 --choice``).
+* **Work budget**: the smoothing costs k x vertices; k is at most ``WORK_BUDGET`` / vertices (12 at
+  5M vertices, 60 at 1M; meshes of up to 300k vertices are never cut), so that on a 5M-vertex scan
+  the default takes at most about three times the time of the fixed 10-iteration run. The cut costs
+  error where GCV wants many iterations: on a 5M-vertex torus with noise of 0.1 % of the diagonal, 12
+  iterations leave 0.029 % of the diagonal (RMS distance to the surface) where GCV's 198 leave 0.014 %
+  and the fixed run 0.036 % (``python bench/bench_default_cost.py --vertices 5M --error``; bench/README.md
+  has the 1M torus and a 1.8M-vertex scan). The amount says so (``capped``); the choice stops once it
+  is well past the cut.
 
 The run stops once it is well past the chosen amount. Everything is deterministic (fixed probes,
 evenly spaced sample vertices), independent of the coordinates' scale, position and orientation.
@@ -64,6 +80,7 @@ SAMPLE_VERTICES = 4096  # vertices the residual and normals are measured on
 PROBE_ENTRIES = 60_000  # +-1 probe entries (vertices x probes) for the trace: at least 3 probes, at most 24
 _MIN_NEIGHBOURS = 3  # a 1-ring needs three points to define a plane
 EDGE_SAMPLE = 1 << 20  # the median edge length of a mesh with more than twice this many row entries: of a sample
+_EDGE_ROWS = 1 << 16  # rows per block where every edge is measured
 # The runs go on patches from this many movable vertices up: PATCH_SEEDS balls of PATCH_RINGS rings, the
 # trace and the residual read on vertices at least PATCH_MARGIN rings inside (where S_k sees no cut).
 PATCH_FROM = 250_000
@@ -80,7 +97,7 @@ FINE_BETA = 0.75  # ... of this beta
 ROBUST_SIGMAS = 2.0
 # The most work the chosen run may do, in vertex-iterations: on big meshes the iterations are cut to
 # WORK_BUDGET / vertices (see the module docstring).
-WORK_BUDGET = 75_000_000
+WORK_BUDGET = 60_000_000
 
 
 @dataclass(frozen=True)
@@ -510,16 +527,24 @@ def _chosen(steps, score):
 
 def _median_edge_length(points, operator):
     """The median length of the edges (i, j), i < j, of the operator's rows; on big meshes of an even
-    sample of EDGE_SAMPLE of the rows' entries."""
+    sample of EDGE_SAMPLE of the rows' entries. The lengths are measured in blocks of rows."""
     entries = operator.indices.size
     if entries > 2 * EDGE_SAMPLE:
         picked = np.linspace(0, entries - 1, EDGE_SAMPLE).astype(np.int64)
         rows = np.searchsorted(operator.indptr, picked, side="right") - 1
-        columns = operator.indices[picked]
+        lengths = _lengths(points, rows, operator.indices[picked])
     else:
-        rows, columns = np.repeat(np.arange(operator.n_vertices), operator.degree), operator.indices
+        lengths = []
+        for low in range(0, operator.n_vertices, _EDGE_ROWS):
+            high = min(low + _EDGE_ROWS, operator.n_vertices)
+            rows = np.repeat(np.arange(low, high), operator.degree[low:high])
+            lengths.append(_lengths(points, rows, operator.indices[operator.indptr[low] : operator.indptr[high]]))
+        lengths = np.concatenate(lengths) if lengths else np.zeros(0)
+    return float(np.median(lengths)) if lengths.size else 0.0
+
+
+def _lengths(points, rows, columns):
+    """The lengths of the pairs (row, column) with row < column."""
     upper = columns > rows
-    if not upper.any():
-        return 0.0
     difference = np.asarray(points[rows[upper]], np.float64) - np.asarray(points[columns[upper]], np.float64)
-    return float(np.median(np.sqrt(np.einsum("ij,ij->i", difference, difference))))
+    return np.sqrt(np.einsum("ij,ij->i", difference, difference))
