@@ -79,7 +79,9 @@ MAX_ITERATIONS = 200  # the most the automatic amount chooses: bounds the cost o
 SAMPLE_VERTICES = 4096  # vertices the residual and normals are measured on
 PROBE_ENTRIES = 60_000  # +-1 probe entries (vertices x probes) for the trace: at least 3 probes, at most 24
 _MIN_NEIGHBOURS = 3  # a 1-ring needs three points to define a plane
-EDGE_SAMPLE = 1 << 20  # the median edge length of a mesh with more than twice this many row entries: of a sample
+# The median edge length of a mesh with more than EDGE_SAMPLE_FROM row entries: of an even sample of EDGE_SAMPLE.
+EDGE_SAMPLE_FROM = 1 << 21
+EDGE_SAMPLE = 1 << 16
 _EDGE_ROWS = 1 << 16  # rows per block where every edge is measured
 # The runs go on patches from this many movable vertices up: PATCH_SEEDS balls of PATCH_RINGS rings, the
 # trace and the residual read on vertices at least PATCH_MARGIN rings inside (where S_k sees no cut).
@@ -529,7 +531,7 @@ def _median_edge_length(points, operator):
     """The median length of the edges (i, j), i < j, of the operator's rows; on big meshes of an even
     sample of EDGE_SAMPLE of the rows' entries. The lengths are measured in blocks of rows."""
     entries = operator.indices.size
-    if entries > 2 * EDGE_SAMPLE:
+    if entries > EDGE_SAMPLE_FROM:
         picked = np.linspace(0, entries - 1, EDGE_SAMPLE).astype(np.int64)
         rows = np.searchsorted(operator.indptr, picked, side="right") - 1
         lengths = _lengths(points, rows, operator.indices[picked])

@@ -56,7 +56,7 @@ DEVIATION_IN_NOISE = 4.0
 CHOOSING_SHARE = 2 / 3
 PATCH_CHOOSING_SHARE = 1 / 5
 RESTORE_SHARE = 1 / 10  # ... and the volume restore, at the end
-_ROWS = 1 << 19  # vertices per block of the final projection onto the deviation limit
+_ROWS = 1 << 17  # vertices per block of the final projection onto the deviation limit
 
 
 @dataclass(frozen=True)

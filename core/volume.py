@@ -41,8 +41,8 @@ NOISE_OFFSETS = 1.0
 # A part whose volume changed so little that the offset giving it back would stay under this share of
 # ``limit`` keeps its smoothed shape: the offset would not matter, and finding it takes a pass.
 NEGLIGIBLE = 1e-3
-_BLOCK = 1 << 16  # triangles per block: bounds the temporaries (a few MB each, one block per thread)
-_VERTEX_BLOCK = 1 << 19  # vertices per block
+_BLOCK = 1 << 15  # triangles per block: bounds the temporaries (a few MB a block, one block per thread)
+_VERTEX_BLOCK = 1 << 17  # vertices per block
 
 
 def vertex_normals(positions, triangles):

@@ -46,7 +46,7 @@ CELL_EDGES = 1 / 8  # cell side in median edge lengths: distinct vertices rarely
 _EDGE_SAMPLE = 65_536  # edges the median edge length is measured on (evenly spaced)
 _FINEST_CELL = 2.0**-40  # cell side at least this times the bounding-box diagonal (keys fit in int64)
 _PACKED_BITS = 21  # cell coordinates below 2**21 per axis are packed into a key exactly
-_ROWS = 1 << 18  # vertices per block of the cell keys (float64 and int64 temporaries)
+_ROWS = 1 << 16  # vertices per block of the cell keys (float64 and int64 temporaries: a few MB a thread)
 
 
 @dataclass(frozen=True)
