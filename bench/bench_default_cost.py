@@ -1,15 +1,33 @@
-"""What the default costs on a big scan: core.smooth_mesh with the Automatic Amount against the fixed
-10-iteration HC run (alpha 0.1, beta 0.6), on the same noisy torus, in the same process.
+"""What the default costs on a big scan: core.smooth_mesh with the Automatic Amount, as the core's
+defaults and as the add-on runs it (``weld=True, border="curve"``), against the fixed 10-iteration HC
+run (alpha 0.1, beta 0.6), on the same noisy mesh, in the same process.
 
-Time: median wall time of ``--repeat`` runs each. Memory: the peak of what NumPy and SciPy allocate
-during the call (tracemalloc, which NumPy reports its buffers to), above what was allocated before it.
-The input is float32, as Blender hands it over.
+Time: median wall time of ``--repeat`` runs each, alternating. Memory: the peak of what NumPy and SciPy
+allocate during one more run of each (tracemalloc, which NumPy reports its buffers to, and which slows
+the run: so not timed), above what was allocated before it. Gap: the longest wall time between the
+start and a slice of ``core.MeshSmoother.steps``, or between two slices (what a cancel waits for), run
+in chunks of iterations as the operator's modal run takes them (5M vertex-iterations a chunk). The
+input is float32, as Blender hands it over.
+
+Meshes: a noisy torus (``--mesh torus``, isotropic noise of ``--noise`` times the bounding-box
+diagonal), or the pymeshlab wheel's bunny scan (closed, 28k vertices) subdivided at its edges'
+midpoints ``--subdivisions`` times (3: 1.8M vertices; the surface is the scan's) with the same noise.
+
+``--error``: the RMS distance of every result to the clean surface in % of the diagonal (the torus's
+own; the bunny's along the clean vertex normals), with the Automatic Amount as it runs and with its
+work budget (core.mesh_amount.WORK_BUDGET) lifted, which is what the budget costs. ``--choice``: the
+iterations GCV chooses on patches (big meshes) and on the whole mesh (core.mesh_amount.PATCH_FROM
+lifted), both without the work budget, and the time each choice takes.
 
     python bench/bench_default_cost.py                 # 5M vertices, 3 runs each
     python bench/bench_default_cost.py --vertices 1M --repeat 5
+    python bench/bench_default_cost.py --vertices 5M --repeat 1 --error --choice
+    python bench/bench_default_cost.py --mesh bunny --subdivisions 3 --repeat 1 --error --choice   # pymeshlab
 """
 
 import argparse
+import contextlib
+import math
 import pathlib
 import statistics
 import sys
@@ -22,6 +40,11 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 import core  # noqa: E402
 from bench import meshes  # noqa: E402
 from bench.report import Report  # noqa: E402
+from core import mesh_amount  # noqa: E402
+
+CHUNK_WORK = 5_000_000  # vertex-iterations a slice, as operators/mesh_smooth.py's MODAL_WORK
+FIXED = dict(alpha=0.1, beta=0.6, iterations=10)
+ADDON = dict(weld=True, border="curve")
 
 
 def count(text):
@@ -30,57 +53,176 @@ def count(text):
     return int(float(text[:-1] if scale > 1 else text) * scale)
 
 
-def measured(function):
-    """(seconds, peak bytes above the start, result) of one call."""
+def peak_of(function):
+    """(peak bytes above the start, result) of one call, traced by tracemalloc."""
     tracemalloc.start()
     tracemalloc.reset_peak()
     base = tracemalloc.get_traced_memory()[0]
-    start = time.perf_counter()
     result = function()
-    seconds = time.perf_counter() - start
     peak = tracemalloc.get_traced_memory()[1] - base
     tracemalloc.stop()
-    return seconds, peak, result
+    return peak, result
+
+
+def smoothed(noisy, edges, faces, options, budget=None):
+    """(seconds, positions, report, longest gap) of one core.MeshSmoother run, construction included."""
+    with lifted(mesh_amount, "WORK_BUDGET", budget):
+        start = last = time.perf_counter()
+        run = core.MeshSmoother(noisy, edges, faces=faces, **options)
+        gap = 0.0
+        for _ in run.steps(max(1, CHUNK_WORK // len(noisy))):
+            now = time.perf_counter()
+            gap, last = max(gap, now - last), now
+    return last - start, run.result, run.report, gap
+
+
+@contextlib.contextmanager
+def lifted(module, name, value):
+    """``module.name`` set to ``value`` meanwhile (None: as it is)."""
+    kept = getattr(module, name)
+    if value is not None:
+        setattr(module, name, value)
+    try:
+        yield
+    finally:
+        setattr(module, name, kept)
+
+
+def chosen(noisy, edges, patch_from):
+    """(iterations, sigma, seconds) GCV chooses without the work budget, PATCH_FROM at ``patch_from``."""
+    operator = core.umbrella_operator(edges, len(noisy))
+    with lifted(mesh_amount, "WORK_BUDGET", math.inf), lifted(mesh_amount, "PATCH_FROM", patch_from):
+        start = time.perf_counter()
+        amount = core.choose_amount(noisy, operator=operator)
+    return amount.iterations, amount.sigma, time.perf_counter() - start
+
+
+def torus_distance(points, ratio=2.5, minor_radius=0.4):
+    """Unsigned distance of (n, 3) points to the torus meshes.torus samples."""
+    points = np.asarray(points, np.float64)
+    ring = np.hypot(points[:, 0], points[:, 1]) - ratio * minor_radius
+    return np.abs(np.hypot(ring, points[:, 2]) - minor_radius)
+
+
+def subdivided(vertices, faces, times):
+    """Every triangle split into four at its edges' midpoints, ``times`` times (the surface stays)."""
+    for _ in range(times):
+        n = vertices.shape[0]
+        corners = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+        keys = np.minimum(corners[:, 0], corners[:, 1]) * n + np.maximum(corners[:, 0], corners[:, 1])
+        unique, inverse = np.unique(keys, return_inverse=True)
+        vertices = np.concatenate([vertices, (vertices[unique // n] + vertices[unique % n]) / 2.0])
+        ab, bc, ca = (n + inverse.reshape(-1, 3)).T
+        a, b, c = faces.T
+        faces = np.concatenate([np.stack(f, -1) for f in ([a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca])])
+    return vertices, faces
+
+
+def bunny(times):
+    """The pymeshlab wheel's bunny.obj (closed scan; coincident vertices merged), subdivided."""
+    import pymeshlab  # only for the path of its sample meshes
+
+    path = pathlib.Path(pymeshlab.__file__).resolve().parent / "tests" / "sample_meshes" / "bunny.obj"
+    lines = path.read_text().splitlines()
+    vertices = np.array([line.split()[1:4] for line in lines if line.startswith("v ")], np.float64)
+    faces = np.array(
+        [[int(corner.split("/")[0]) - 1 for corner in line.split()[1:4]] for line in lines if line.startswith("f ")]
+    )
+    vertices, inverse = np.unique(vertices, axis=0, return_inverse=True)
+    return subdivided(vertices, inverse.ravel()[faces], times)
+
+
+def normals_of(vertices, faces):
+    """Area-weighted unit vertex normals."""
+    return core.volume.vertex_normals(vertices, faces)
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--mesh", choices=("torus", "bunny"), default="torus", help="the noisy mesh (torus)")
     parser.add_argument("--vertices", default="5M", help="torus size, e.g. 5M, 1M, 250k (default 5M)")
+    parser.add_argument("--subdivisions", type=int, default=3, help="bunny: midpoint subdivisions (3: 1.8M)")
     parser.add_argument("--noise", type=float, default=0.001, help="noise, a fraction of the diagonal (0.001)")
     parser.add_argument("--repeat", type=int, default=3, help="runs of each (median reported; default 3)")
+    parser.add_argument("--error", action="store_true", help="also the error, with and without the budget")
+    parser.add_argument("--choice", action="store_true", help="also GCV's choice on patches and on the whole mesh")
     args = parser.parse_args()
-    vertices, faces = meshes.torus(count(args.vertices))
-    noisy = meshes.add_noise(vertices, args.noise, seed=1).astype(np.float32)
+    if args.mesh == "torus":
+        clean, faces = meshes.torus(count(args.vertices))
+        name, command = "noisy torus", f"--vertices {args.vertices}"
+        distance = torus_distance
+    else:
+        clean, faces = bunny(args.subdivisions)
+        name, command = (
+            f"bunny subdivided {args.subdivisions} times",
+            f"--mesh bunny --subdivisions {args.subdivisions}",
+        )
+        normals = normals_of(clean, faces)
+
+        def distance(points):
+            return np.abs(np.einsum("ij,ij->i", np.asarray(points, np.float64) - clean, normals))
+
+    diagonal = meshes.bbox_diagonal(clean)
+    noisy = meshes.add_noise(clean, args.noise, seed=1).astype(np.float32)
     edges = meshes.edges_from_faces(faces)
-    del vertices
     runs = {
-        "fixed: alpha 0.1, beta 0.6, 10 iterations": lambda: core.smooth_mesh(
-            noisy, edges, faces=faces, alpha=0.1, beta=0.6, iterations=10, return_report=True
-        ),
-        "default: Automatic Amount": lambda: core.smooth_mesh(noisy, edges, faces=faces, return_report=True),
+        "fixed: alpha 0.1, beta 0.6, 10 iterations": dict(FIXED),
+        "default: Automatic Amount": {},
+        "add-on default: weld, border curve": dict(ADDON),
     }
-    figures = {name: [] for name in runs}
+    figures = {label: [] for label in runs}
     for _ in range(args.repeat):
-        for name, run in runs.items():  # alternating, so both see the same machine
-            seconds, peak, (_, report) = measured(run)
-            figures[name].append((seconds, peak, report))
+        for label, options in runs.items():  # alternating, so all see the same machine
+            figures[label].append(smoothed(noisy, edges, faces, options))
+    peaks = {
+        label: peak_of(lambda options=options: smoothed(noisy, edges, faces, options))[0]
+        for label, options in runs.items()
+    }
+    errors = {}
+    if args.error:
+        errors["noisy input"] = (None, noisy)
+        for label, rows in figures.items():
+            errors[label] = (rows[-1][2], rows[-1][1])
+        _, result, report, _ = smoothed(noisy, edges, faces, ADDON, budget=math.inf)
+        errors["add-on default, no work budget"] = (report, result)
+    choices = {}
+    if args.choice:
+        choices["on patches"] = chosen(noisy, edges, mesh_amount.PATCH_FROM)
+        choices["on the whole mesh"] = chosen(noisy, edges, math.inf)
     with Report("bench_default_cost") as out:
-        out(f"# The default's cost on {len(noisy):,} vertices (noisy torus, noise {args.noise:.2%} of the diagonal)")
+        out(f"# The default's cost on {len(noisy):,} vertices ({name}, noise {args.noise:.2%} of the diagonal)")
         out()
-        out(f"`python bench/bench_default_cost.py --vertices {args.vertices} --repeat {args.repeat}`")
+        flags = " --error" * args.error + " --choice" * args.choice
+        out(f"`python bench/bench_default_cost.py {command} --noise {args.noise} --repeat {args.repeat}{flags}`")
         out()
-        out("| run | iterations | median time | peak memory | time / fixed | memory / fixed |")
-        out("|---|---|---|---|---|---|")
-        fixed_time = statistics.median(s for s, _, _ in figures[next(iter(runs))])
-        fixed_peak = statistics.median(p for _, p, _ in figures[next(iter(runs))])
-        for name, rows in figures.items():
-            seconds = statistics.median(s for s, _, _ in rows)
-            peak = statistics.median(p for _, p, _ in rows)
-            report = rows[-1][2]
+        out("| run | iterations | median time | peak memory | time / fixed | memory / fixed | longest gap |")
+        out("|---|---|---|---|---|---|---|")
+        fixed_label = next(iter(runs))
+        fixed_time = statistics.median(row[0] for row in figures[fixed_label])
+        for label, rows in figures.items():
+            seconds = statistics.median(row[0] for row in rows)
+            report, gap = rows[-1][2], max(row[3] for row in rows)
             out(
-                f"| {name} | {report.iterations} | {seconds:.2f} s | {peak / 2**30:.2f} GiB | "
-                f"{seconds / fixed_time:.2f}x | {peak / fixed_peak:.2f}x |"
+                f"| {label} | {report.iterations} | {seconds:.2f} s | {peaks[label] / 2**30:.2f} GiB | "
+                f"{seconds / fixed_time:.2f}x | {peaks[label] / peaks[fixed_label]:.2f}x | {gap:.2f} s |"
             )
+        if errors:
+            out()
+            out("RMS distance to the clean surface, % of the diagonal:")
+            out()
+            out("| run | iterations | RMS distance |")
+            out("|---|---|---|")
+            for label, (report, points) in errors.items():
+                rms = math.sqrt(float(np.mean(distance(points) ** 2))) / diagonal
+                out(f"| {label} | {'' if report is None else report.iterations} | {rms:.4%} |")
+        if choices:
+            out()
+            out("Iterations GCV chooses without the work budget:")
+            out()
+            out("| chosen | iterations | noise (sigma), % of the diagonal | time |")
+            out("|---|---|---|---|")
+            for label, (iterations, sigma, seconds) in choices.items():
+                out(f"| {label} | {iterations} | {sigma / diagonal:.4%} | {seconds:.2f} s |")
 
 
 if __name__ == "__main__":

@@ -23,9 +23,8 @@ Examples
 """
 
 import numpy as np
-import scipy.sparse as sp
 
-from .adjacency import pairs_in_order
+from .adjacency import grouped_pairs
 
 BORDERS = ("free", "curve", "fixed")
 
@@ -35,32 +34,31 @@ def border_edges(triangles, n_vertices):
     The diagonals of a fan-triangulated face lie in two of its triangles, so they never count."""
     triangles = np.asarray(triangles)
     index = np.int32 if n_vertices < np.iinfo(np.int32).max else np.int64
-    heads = np.concatenate([triangles[:, 0], triangles[:, 1], triangles[:, 2]]).astype(index, copy=False)
-    tails = np.concatenate([triangles[:, 1], triangles[:, 2], triangles[:, 0]]).astype(index, copy=False)
-    low, high = np.minimum(heads, tails), np.maximum(heads, tails)
-    del heads, tails
+    # Each triangle's sides (corner k to corner k + 1) as (low, high), written straight into place.
+    count = len(triangles)
+    low, high = np.empty(3 * count, dtype=index), np.empty(3 * count, dtype=index)
+    for k in range(3):
+        heads, tails, side = triangles[:, k], triangles[:, (k + 1) % 3], slice(k * count, (k + 1) * count)
+        np.minimum(heads, tails, out=low[side], casting="unsafe")
+        np.maximum(heads, tails, out=high[side], casting="unsafe")
     proper = low != high  # a degenerate triangle's collapsed side is no edge
     if not proper.all():
         low, high = low[proper], high[proper]
-    # Sides sorted by (low, high) in O(sides) (core.adjacency.pairs_in_order), or by SciPy's coo -> csr.
-    placed = pairs_in_order(low, high, n_vertices, np.ones(low.size, dtype=np.int8))
-    if placed is None:
-        counts = sp.coo_matrix((np.ones(low.size, np.int32), (low, high)), shape=(n_vertices,) * 2).tocsr()
-        counts.sum_duplicates()
-        once = counts.data == 1
-        rows = np.repeat(np.arange(n_vertices, dtype=counts.indices.dtype), np.diff(counts.indptr))
-        return np.stack([rows[once], counts.indices[once]], axis=1)
-    indptr, columns = placed[0], placed[1]
+    del proper
+    if low.size == 0:
+        return np.zeros((0, 2), dtype=index)
+    indptr, columns = grouped_pairs(low, high, n_vertices)
+    del low, high
     rows = np.repeat(np.arange(n_vertices, dtype=columns.dtype), np.diff(indptr))
     starts = np.flatnonzero(np.concatenate(([True], (columns[1:] != columns[:-1]) | (rows[1:] != rows[:-1]), [True])))
     once = starts[:-1][np.diff(starts) == 1]
     return np.stack([rows[once], columns[once]], axis=1)
 
 
-def apply_border(border, operator, triangles, fixed):
+def apply_border(border, operator, triangles, fixed, edges=None):
     """(operator, fixed) for the ``border`` rule: the umbrella (core.adjacency.Umbrella) with the border
     rows of ``"curve"``, and the fixed mask with the vertices the rule holds. ``triangles``: (t, 3) or
-    None (then only ``"free"`` is possible)."""
+    None (then only ``"free"`` is possible); ``edges``: their ``border_edges``, if the caller has them."""
     if border == "free":
         return operator, fixed
     if triangles is None:
@@ -69,7 +67,7 @@ def apply_border(border, operator, triangles, fixed):
             "or border='free'"
         )
     n = operator.n_vertices
-    edges = border_edges(triangles, n)
+    edges = border_edges(triangles, n) if edges is None else edges
     if edges.size == 0:  # closed: no border to hold
         return operator, fixed
     count = np.bincount(edges.ravel(), minlength=n)

@@ -20,10 +20,7 @@ and core.MeshSmoother keeps their vertices within a small radius (core.mesh_nois
   axis of each sample vertex's 1-ring, taken on the state that minimizes the GCV of the whole
   residual (all three coordinates), so that they belong to a smoothed surface, not to the noise.
 * **Degrees of freedom**: t(k) = tr(S_k) / n, estimated without forming S_k (Hutchinson): random
-  +-1 vectors z go through the same HC iterations, and t = mean of z . S_k z / n. S_k's diagonal is
-  local (a vertex's entry depends on the few rings HC's steps reach), so on big meshes the probes
-  run on patches around evenly spaced seeds and t is read off the patches' inner vertices, far from
-  their cut edges: the same estimate for a fraction of the cost.
+  +-1 vectors z go through the same HC iterations, and t = mean of z . S_k z / n.
 * **GCV(k) = R(k) / (1 - t(k))^2** estimates the noise variance plus the error that is left, up to a
   constant, without knowing the noise; its minimum is the amount that leaves the least error. GCV
   is flat near its minimum, and flat in k where its resolution ends (a few iterations on lightly
@@ -43,6 +40,25 @@ and core.MeshSmoother keeps their vertices within a small radius (core.mesh_nois
 Where the noise is large against a thin part (a tube a few edges around), the amount with the least
 error also shrinks that part by a few per cent; core.volume.restore_volume gives the volume back.
 
+Big meshes:
+
+* **Patches**: a sample vertex's residual and its entry of S_k's diagonal depend only on the rings
+  HC's steps reach, and S_k's weights fall off within a few rings. From ``PATCH_FROM`` movable
+  vertices up, the data run and the probes run on patches (every vertex within ``PATCH_RINGS`` rings
+  of ``PATCH_SEEDS`` evenly spaced seeds), the sample vertices and the trace read on their inner
+  vertices, at least ``PATCH_MARGIN`` rings from a cut: the choice costs about the same on any mesh,
+  and the whole mesh is smoothed once, with the k chosen. On noisy tori of 1M and 5M vertices and a
+  bunny scan subdivided to 1.8M vertices the patches choose the whole mesh's k
+  (``python bench/bench_default_cost.py --vertices 5M --repeat 1 --choice``).
+* **Work budget**: the smoothing costs k x vertices; k is at most ``WORK_BUDGET`` / vertices (12 at
+  5M vertices, 60 at 1M; meshes of up to 300k vertices are never cut), so that on a 5M-vertex scan
+  the default takes at most about three times the time of the fixed 10-iteration run. The cut costs
+  error where GCV wants many iterations: on a 5M-vertex torus with noise of 0.1 % of the diagonal, 12
+  iterations leave 0.029 % of the diagonal (RMS distance to the surface) where GCV's 198 leave 0.014 %
+  and the fixed run 0.036 % (``python bench/bench_default_cost.py --vertices 5M --error``; bench/README.md
+  has the 1M torus and a 1.8M-vertex scan). The amount says so (``capped``); the choice stops once it
+  is well past the cut.
+
 The run stops once it is well past the chosen amount. Everything is deterministic (fixed probes,
 evenly spaced sample vertices), independent of the coordinates' scale, position and orientation.
 """
@@ -52,13 +68,12 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import ArrayLike
-from scipy.sparse import csgraph
 
 from .adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError
-from .mesh_noise import find_noise, neighbours
+from .mesh_noise import neighbours, noise_steps
+from .slices import as_fraction
 from .smoothing import Smoothing
 from .validation import check_fixed, check_positions, check_unit_interval
 
@@ -67,8 +82,12 @@ MAX_ITERATIONS = 200  # the most the automatic amount chooses: bounds the cost o
 SAMPLE_VERTICES = 4096  # vertices the residual and normals are measured on
 PROBE_ENTRIES = 60_000  # +-1 probe entries (vertices x probes) for the trace: at least 3 probes, at most 24
 _MIN_NEIGHBOURS = 3  # a 1-ring needs three points to define a plane
-# Probes on patches from this many movable vertices up: PATCH_SEEDS balls of PATCH_RINGS rings, the
-# trace read on vertices at least PATCH_MARGIN rings inside (where S_k sees no cut).
+# The median edge length of a mesh with more than EDGE_SAMPLE_FROM row entries: of an even sample of EDGE_SAMPLE.
+EDGE_SAMPLE_FROM = 1 << 21
+EDGE_SAMPLE = 1 << 16
+_EDGE_ROWS = 1 << 16  # rows per block where every edge is measured
+# The runs go on patches from this many movable vertices up: PATCH_SEEDS balls of PATCH_RINGS rings, the
+# trace and the residual read on vertices at least PATCH_MARGIN rings inside (where S_k sees no cut).
 PATCH_FROM = 250_000
 PATCH_SEEDS = 8
 PATCH_RINGS = 48
@@ -81,6 +100,9 @@ FINE_BETA = 0.75  # ... of this beta
 # shape as noise (up to ~5x the truth at light noise), the robust estimate never does (it reads heavy
 # noise along the normals low, 0.65x at a noise of 3 edge lengths).
 ROBUST_SIGMAS = 2.0
+# The most work the chosen run may do, in vertex-iterations: on big meshes the iterations are cut to
+# WORK_BUDGET / vertices (see the module docstring).
+WORK_BUDGET = 60_000_000
 
 
 @dataclass(frozen=True)
@@ -94,9 +116,13 @@ class MeshAmount:
     sigma : float
         Estimated noise: standard deviation along the normals, in the positions' units.
     edge_length : float
-        Median edge length of the input.
+        Median edge length of the input (of an even sample of its edges on big meshes).
     explored : int
         Iterations the estimate ran.
+    noise_found : bool
+        False: no part has noise to remove, and nothing is smoothed (0 iterations).
+    capped : bool
+        The work budget cut the iterations: GCV wanted more (see the module docstring).
     ratio : float
         sigma / edge_length.
 
@@ -121,6 +147,7 @@ class MeshAmount:
     edge_length: float  # median edge length of the input
     explored: int  # iterations the estimate ran
     noise_found: bool  # False: no part's noise is above core.mesh_noise's threshold (light noise at most)
+    capped: bool = False  # the work budget cut the iterations: GCV wanted more
 
     @property
     def ratio(self):
@@ -249,11 +276,11 @@ def choose_amount(
 
 
 class AmountChooser:
-    """choose_amount in slices, for callers that show progress and let the user cancel: checks and
-    prepares on construction; ``steps()`` yields the fraction of the largest possible run done, as
-    core.Smoothing.steps does; once it is exhausted ``amount`` holds the MeshAmount. Arguments as
-    for ``choose_amount``. ``fixed`` is the mask the smoothing must run with: the given fixed
-    vertices and the parts held (no noise).
+    """choose_amount in slices, for callers that show progress and let the user cancel: checks on
+    construction; ``steps()`` prepares (the noise test, the sample vertices) and chooses, yielding the
+    fraction of the largest possible run done, as core.Smoothing.steps does; once it is exhausted
+    ``amount`` holds the MeshAmount. Arguments as for ``choose_amount``. ``fixed`` (set by ``steps()``)
+    is the mask the smoothing must run with: the given fixed vertices and the parts held (no noise).
 
     Examples
     --------
@@ -272,74 +299,51 @@ class AmountChooser:
 
     def __init__(self, positions, edges=None, *, beta=0.6, fixed=None, operator=None):
         start = check_positions(positions)
-        self.beta = beta = check_unit_interval(beta, "beta")
+        self.beta = check_unit_interval(beta, "beta")
         n = start.shape[0]
         if operator is None:
             operator = umbrella_operator(edges, n)
         elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
             raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
         self.operator = operator
-        # Clean parts (analytic shapes) and those too small to tell noise from shape are held: fixed.
-        # Quiet parts (noise too light to tell from shape) are smoothed within a small radius (the caller).
-        self.noise = find_noise(start, operator)
-        self.fixed = fixed_mask = check_fixed(fixed, n) | operator.isolated | self.noise.held()
-        self.movable = movable = np.flatnonzero(~fixed_mask)
-        self.edge_length = _median_edge_length(start, operator)
         self.fine_beta = FINE_BETA  # light noise: choose again on steps of this beta (None: never)
         self.amount = None
+        self.data = None  # the data run, where it ran on the whole mesh (what result() reads)
+        self._given = check_fixed(fixed, n)
+        self._start = start
+        self._ground = None  # what every choice on this mesh stands on (_Ground), made by the first slices
         self._kept = None  # the data run's state at the amount chosen so far: the result, if the choice stays
         self._fine = None  # the choice made again on gentler steps, where it is taken (light noise)
-        self._start, self._fixed_mask = start, fixed_mask
-        if movable.size == 0:
-            self.amount = MeshAmount(0.0, beta, 0, self.noise.level(), self.edge_length, 0, self.noise.found)
-            return
 
-        surface_rows = movable[operator.degree[movable] >= _MIN_NEIGHBOURS]
-        self.use_normals = surface_rows.size >= 8  # else (lines, tiny meshes): the whole residual
-        candidates = surface_rows if self.use_normals else movable
-        self.rows = candidates[
-            np.unique(
-                np.linspace(0, candidates.size - 1, min(candidates.size, SAMPLE_VERTICES)).round().astype(np.int64)
-            )
-        ]
-        self.y = np.asarray(start[self.rows], dtype=np.float64)
-
-        # The trace's mesh: the whole one, or patches of it (see the module docstring).
-        probe_operator, probe_fixed, inner = operator, fixed_mask, None
-        if movable.size >= PATCH_FROM:
-            probe_operator, probe_fixed, inner = _patches(operator, fixed_mask, movable)
-        self.trace_count = movable.size if inner is None else int(np.count_nonzero(~probe_fixed[inner]))
-        entries = PROBE_ENTRIES if inner is None else PATCH_PROBE_ENTRIES
-        self.probe_count = probe_count = int(min(24, max(3, 3 * math.ceil(entries / (3 * self.trace_count)))))
-        probes = np.random.default_rng(_SEED).choice(
-            np.array([-1.0, 1.0], start.dtype), size=(probe_operator.n_vertices, probe_count)
-        )
-        probes[probe_fixed] = 0.0  # the trace over the movable vertices only
-        with warnings.catch_warnings():  # alpha = 0 lies outside Theorem 5.2's region: on purpose, see above
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            self.runs = [
-                _Run(probes[:, i : i + 3], probe_operator, probe_fixed, beta) for i in range(0, probe_count, 3)
-            ]
-            self.data = _Run(start, operator, fixed_mask, beta)
-        if inner is not None:
-            outer = np.ones(probe_operator.n_vertices, dtype=bool)
-            outer[inner] = False
-            probes[outer] = 0.0  # read on the inner vertices only
-        # Each probe block as its run holds it: (3, n), in the run's vertex order.
-        self.planar_probes = [
-            np.ascontiguousarray((probes[:, i : i + 3] if run.order is None else probes[run.order, i : i + 3]).T)
-            for i, run in zip(range(0, probe_count, 3), self.runs)
-        ]
-        self.n = n
+    # What the ground holds, under the names callers and tests read.
+    noise = property(lambda self: self._ground.noise)
+    fixed = property(lambda self: self._ground.fixed)
+    edge_length = property(lambda self: self._ground.edge_length)
+    trace_count = property(lambda self: self._ground.trace_count)
 
     def steps(self):
+        if self._ground is None:
+            self._ground = yield from as_fraction(_Ground.made(self._start, self.operator, self._given), 0.0)
+        ground = self._ground
+        if ground.movable == 0:
+            self.amount = MeshAmount(0.0, self.beta, 0, ground.noise.level(), ground.edge_length, 0, ground.noise.found)
         if self.amount is not None:
             yield 1.0
             return
-        operator, rows, data, runs = self.operator, self.rows, self.data, self.runs
-        use_normals, probe_count = self.use_normals, self.probe_count
+        with warnings.catch_warnings():  # alpha = 0 lies outside Theorem 5.2's region: on purpose, see above
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            self.runs = [_Run(block, ground.operator, ground.fixed_there, self.beta) for block in ground.probe_blocks]
+            data = _Run(ground.positions, ground.operator, ground.fixed_there, self.beta)
+        # Each probe block as its run holds it: (3, n), in the run's vertex order; zero where not read.
+        planar_probes = [
+            np.ascontiguousarray((block * ground.read if run.order is None else (block * ground.read)[run.order]).T)
+            for block, run in zip(ground.probe_blocks, self.runs)
+        ]
+        rows, runs, operator = ground.rows, self.runs, ground.operator
+        most = most_iterations(self.operator.n_vertices)
+        use_normals, probe_count = ground.use_normals, ground.probe_count
         ring = _ring_of(rows, operator) if use_normals else None
-        points = np.zeros((self.n, 3)) if use_normals else None  # the state at ``ring``, for the normals
+        points = np.zeros((operator.n_vertices, 3)) if use_normals else None  # the state at ``ring``, for the normals
         done = 0
         steps, traces, residuals = [], [], []
         best_whole, normals = math.inf, None
@@ -351,12 +355,10 @@ class AmountChooser:
             except DivergenceError:
                 break
             done = k
-            trace = sum(
-                float(np.einsum("ij,ij->", run.planar(), planar)) for run, planar in zip(runs, self.planar_probes)
-            )
-            t = min(trace / (probe_count * self.trace_count), 0.999)
+            trace = sum(float(np.einsum("ij,ij->", run.planar(), planar)) for run, planar in zip(runs, planar_probes))
+            t = min(trace / (probe_count * ground.trace_count), 0.999)
             state = data.at(rows)
-            residual = self.y - state
+            residual = ground.y - state
             steps.append(k)
             traces.append(t)
             residuals.append(residual)
@@ -367,15 +369,21 @@ class AmountChooser:
                 normals = _ring_normals(points, rows, operator)
             score = _scores(residuals, traces, normals)
             chosen = _chosen(steps, score)
-            if chosen == k:
+            if chosen == k and ground.whole:
                 self._kept = data.snapshot()
             if k >= 12 and k >= 1.5 * chosen and k >= 1.25 * steps[int(np.argmin(_scores(residuals, traces, None)))]:
                 break  # well past the amount chosen
+            if k >= 12 and k >= 1.5 * most and chosen >= most:
+                break  # well past the most the work budget allows, and GCV wants more
             yield k / MAX_ITERATIONS
-        self.amount = self._amount(steps, traces, residuals, normals, done)
+        if ground.whole:
+            self.data = data
+        self.amount = self._amount(steps, traces, residuals, normals, done, most)
         self.traces = dict(zip(steps, traces))  # t(k) at each checkpoint, for inspection
-        if self.fine_beta is not None and self.beta < self.fine_beta and 1 <= self.amount.iterations <= FINE_MAX:
-            fine = AmountChooser(self._start, beta=self.fine_beta, fixed=self._fixed_mask, operator=self.operator)
+        light = 1 <= self.amount.iterations <= FINE_MAX and not self.amount.capped
+        if self.fine_beta is not None and self.beta < self.fine_beta and light:
+            fine = AmountChooser(self._start, beta=self.fine_beta, fixed=self._given, operator=self.operator)
+            fine._ground = ground  # the same noise, fixed vertices and samples
             for fraction in fine.steps():
                 yield min(done / MAX_ITERATIONS + fraction, 0.999)
             smooths = fine.amount.iterations * (1.0 - self.fine_beta)  # a low frequency's share, as above
@@ -395,36 +403,111 @@ class AmountChooser:
             return None
         return self.data.positions(self._kept[1])
 
-    def _amount(self, steps, traces, residuals, normals, done):
+    def _amount(self, steps, traces, residuals, normals, done, most):
+        ground = self._ground
         if not steps:  # diverged at once (beta far below 0.5): no amount is safe
-            return MeshAmount(0.0, self.beta, 0, 0.0, self.edge_length, 0, True)
+            return MeshAmount(0.0, self.beta, 0, 0.0, ground.edge_length, 0, True)
         score = _scores(residuals, traces, normals)
         chosen = _chosen(steps, score)
         minimum = max(float(score.min()), 0.0)
-        sigma = math.sqrt(minimum) if self.use_normals else math.sqrt(minimum / 3)
-        sigma = min(sigma, ROBUST_SIGMAS * self.noise.level())
-        return MeshAmount(0.0, self.beta, int(chosen), sigma, self.edge_length, int(done), self.noise.found)
+        sigma = math.sqrt(minimum) if ground.use_normals else math.sqrt(minimum / 3)
+        sigma = min(sigma, ROBUST_SIGMAS * ground.noise.level())
+        iterations = min(int(chosen), most)
+        return MeshAmount(
+            0.0, self.beta, iterations, sigma, ground.edge_length, int(done), ground.noise.found, chosen > most
+        )
+
+
+class _Ground:
+    """What every choice on a mesh stands on, whatever its beta: the noise found and the vertices held,
+    the mesh the runs go on (the whole one, or patches of it) and the sample vertices read there."""
+
+    @classmethod
+    def made(cls, start, operator, given):
+        """A generator (yields None between its passes) that returns the _Ground of a mesh."""
+        ground = cls()
+        ground.noise = yield from noise_steps(start, operator)
+        ground.fixed = fixed_mask = given | operator.isolated | ground.noise.held()
+        movable = np.flatnonzero(~fixed_mask)
+        ground.movable = movable.size
+        ground.edge_length = _median_edge_length(start, operator)
+        ground.whole = movable.size < PATCH_FROM
+        if movable.size == 0:
+            return ground
+        yield
+        # The mesh the runs go on, its fixed vertices, and the vertices read there.
+        inner = None
+        if ground.whole:
+            ground.operator, ground.fixed_there, ground.positions = operator, fixed_mask, start
+            candidates = movable
+        else:
+            ground.operator, ground.fixed_there, inner, vertices = _patches(operator, fixed_mask, movable)
+            ground.positions = start[vertices]
+            candidates = inner[~ground.fixed_there[inner]]
+        del movable
+        degree = ground.operator.degree
+        surface_rows = candidates[degree[candidates] >= _MIN_NEIGHBOURS]
+        ground.use_normals = surface_rows.size >= 8  # else (lines, tiny meshes): the whole residual
+        candidates = surface_rows if ground.use_normals else candidates
+        ground.rows = candidates[
+            np.unique(
+                np.linspace(0, candidates.size - 1, min(candidates.size, SAMPLE_VERTICES)).round().astype(np.int64)
+            )
+        ]
+        ground.y = np.asarray(ground.positions[ground.rows], dtype=np.float64)
+        ground.trace_count = ground.movable if inner is None else int(np.count_nonzero(~ground.fixed_there[inner]))
+        entries = PROBE_ENTRIES if inner is None else PATCH_PROBE_ENTRIES
+        ground.probe_count = probe_count = int(min(24, max(3, 3 * math.ceil(entries / (3 * ground.trace_count)))))
+        probes = np.random.default_rng(_SEED).choice(
+            np.array([-1.0, 1.0], start.dtype), size=(ground.operator.n_vertices, probe_count)
+        )
+        probes[ground.fixed_there] = 0.0  # the trace over the movable vertices only
+        ground.probe_blocks = [probes[:, i : i + 3] for i in range(0, probe_count, 3)]
+        ground.read = np.ones((ground.operator.n_vertices, 1), start.dtype)  # the probes are read at ...
+        if inner is not None:  # ... the patches' inner vertices only
+            ground.read[:] = 0.0
+            ground.read[inner] = 1.0
+        return ground
+
+
+def most_iterations(vertices):
+    """The most iterations the work budget allows on a mesh of ``vertices`` vertices (at least one)."""
+    return int(max(1, min(MAX_ITERATIONS, WORK_BUDGET // max(vertices, 1))))
 
 
 def _patches(operator, fixed_mask, movable):
-    """(umbrella, fixed mask, inner vertices) of the patches: every vertex within PATCH_RINGS rings of
-    PATCH_SEEDS evenly spaced movable vertices, with the edges among them; inner ones lie at most
-    PATCH_RINGS - PATCH_MARGIN rings from a seed. Vertices numbered in increasing original order."""
-    n = operator.n_vertices
-    graph = sp.csr_matrix((np.ones(operator.indices.size), operator.indices, operator.indptr), shape=(n, n))
+    """(umbrella, fixed mask, inner vertices, vertices) of the patches: every vertex within PATCH_RINGS
+    rings of PATCH_SEEDS evenly spaced movable vertices, with the edges among them; inner ones lie at
+    most PATCH_RINGS - PATCH_MARGIN rings from a seed (both numbered in the patches), ``vertices`` the
+    patches' vertices in the mesh, increasing (the patches number them in that order)."""
     seeds = movable[np.linspace(0, movable.size - 1, PATCH_SEEDS).round().astype(np.int64)]
-    rings = csgraph.dijkstra(graph, indices=seeds, unweighted=True, limit=PATCH_RINGS + 0.5, min_only=True)
-    chosen = np.flatnonzero(rings <= PATCH_RINGS)
-    number = np.full(n, -1, dtype=np.int64)
+    levels = _rings(operator, seeds, PATCH_RINGS)
+    chosen = np.sort(np.concatenate(levels))
+    number = np.full(operator.n_vertices, -1, dtype=np.int64)
     number[chosen] = np.arange(chosen.size)
     owner, neighbour = neighbours(chosen, operator)
     keep = number[neighbour] >= 0
-    inner = number[chosen[rings[chosen] <= PATCH_RINGS - PATCH_MARGIN]]
+    inner = np.sort(number[np.concatenate(levels[: PATCH_RINGS - PATCH_MARGIN + 1])])
     # The operator's own pairs (a directed pattern stays directed: core.borders' curves).
     patches = umbrella_from_pairs(
         owner[keep], number[neighbour[keep]], chosen.size, symmetric=operator.symmetric or None
     )
-    return patches, fixed_mask[chosen], inner
+    return patches, fixed_mask[chosen], inner, chosen
+
+
+def _rings(operator, seeds, count):
+    """The vertices at 0, 1, ..., ``count`` rings from the nearest of ``seeds`` (along the operator's
+    rows), one array per ring."""
+    reached = np.zeros(operator.n_vertices, dtype=bool)
+    ring = np.unique(seeds)
+    reached[ring] = True
+    levels = [ring]
+    for _ in range(count):
+        ring = np.unique(neighbours(ring, operator)[1])
+        ring = ring[~reached[ring]]
+        reached[ring] = True
+        levels.append(ring)
+    return levels
 
 
 def _ring_of(rows, operator):
@@ -450,9 +533,25 @@ def _chosen(steps, score):
 
 
 def _median_edge_length(points, operator):
-    rows = np.repeat(np.arange(operator.n_vertices), operator.degree)
-    upper = operator.indices > rows
-    if not upper.any():
-        return 0.0
-    difference = np.asarray(points[rows[upper]], np.float64) - np.asarray(points[operator.indices[upper]], np.float64)
-    return float(np.median(np.sqrt(np.einsum("ij,ij->i", difference, difference))))
+    """The median length of the edges (i, j), i < j, of the operator's rows; on big meshes of an even
+    sample of EDGE_SAMPLE of the rows' entries. The lengths are measured in blocks of rows."""
+    entries = operator.indices.size
+    if entries > EDGE_SAMPLE_FROM:
+        picked = np.linspace(0, entries - 1, EDGE_SAMPLE).astype(np.int64)
+        rows = np.searchsorted(operator.indptr, picked, side="right") - 1
+        lengths = _lengths(points, rows, operator.indices[picked])
+    else:
+        lengths = []
+        for low in range(0, operator.n_vertices, _EDGE_ROWS):
+            high = min(low + _EDGE_ROWS, operator.n_vertices)
+            rows = np.repeat(np.arange(low, high), operator.degree[low:high])
+            lengths.append(_lengths(points, rows, operator.indices[operator.indptr[low] : operator.indptr[high]]))
+        lengths = np.concatenate(lengths) if lengths else np.zeros(0)
+    return float(np.median(lengths)) if lengths.size else 0.0
+
+
+def _lengths(points, rows, columns):
+    """The lengths of the pairs (row, column) with row < column."""
+    upper = columns > rows
+    difference = np.asarray(points[rows[upper]], np.float64) - np.asarray(points[columns[upper]], np.float64)
+    return np.sqrt(np.einsum("ij,ij->i", difference, difference))

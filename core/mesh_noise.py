@@ -30,7 +30,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse import csgraph
+
+from .parts import parts as connected_parts
+from .slices import to_end
 
 GAIN = 1.6  # r's standard deviation over the noise's, on the tuning set's dense meshes (valence 4 to 6)
 # On a curve, r = L_i - (L_{i-1} + L_{i+1}) / 2 = (4 e_{i-1} + 4 e_{i+1} - 6 e_i - e_{i-2} - e_{i+2}) / 4 of
@@ -52,6 +54,7 @@ _MAD = 0.6745  # median |N(0, 1)|
 # The planes are fitted to the rings after this many umbrella averages of the positions: noise along the
 # normals as large as the edges would otherwise tilt them towards itself (a symmetric mesh stays symmetric).
 PLANE_STEPS = 2
+_FEW_PARTS = 1000  # parts in vertex order up to this many are sampled part by part
 
 
 @dataclass(frozen=True)
@@ -72,7 +75,7 @@ class Noise:
         """(n,) bool: vertices of parts without noise found."""
         return ~self.noisy[self.part_of_vertex]
 
-    def held(self, sizes_only=False):
+    def held(self):
         """(n,) bool: vertices no smoothing should move: parts of at most DEGENERATE vertices (their shape is
         all they have) and parts whose estimate is ``CLEAN`` or less of their edge length (analytic shapes:
         Blender's primitives, CAD parts)."""
@@ -112,13 +115,19 @@ def neighbours(rows, operator):
 
 def find_noise(positions, operator):
     """The Noise of a mesh: ``positions`` (n, 3), ``operator`` its core.umbrella_operator."""
-    points = np.asarray(positions, dtype=np.float64)
+    return to_end(noise_steps(positions, operator))
+
+
+def noise_steps(positions, operator):
+    """``find_noise`` in slices, for callers that let the user cancel: a generator that yields (None)
+    between its passes and returns the Noise. Reads the positions at the sample vertices' few rings only."""
     n = operator.n_vertices
-    graph = sp.csr_matrix((np.ones(operator.indices.size, np.int8), operator.indices, operator.indptr), shape=(n, n))
-    parts, part_of_vertex = csgraph.connected_components(graph, directed=False)
+    parts, part_of_vertex = connected_parts(operator.indptr, operator.indices, n, cyclic=operator.symmetric)
+    yield
     sizes = np.bincount(part_of_vertex, minlength=parts)
     rows = _sample(part_of_vertex, sizes, operator)
-    residual, edge = _residuals(points, rows, operator)
+    yield
+    residual, edge = _residuals(positions, rows, operator)
     owner = part_of_vertex[rows]
     sigma, edge_length = np.zeros(parts), np.zeros(parts)
     for values, out in ((residual, sigma), (edge, edge_length)):
@@ -134,20 +143,41 @@ def _sample(part_of_vertex, sizes, operator):
     """Evenly spaced vertices with neighbours: SAMPLES over the mesh, at least PART_SAMPLES (or all) per part."""
     want = np.minimum(sizes, np.maximum(PART_SAMPLES, np.ceil(SAMPLES * sizes / max(1, sizes.sum()))))
     stride = np.ceil(sizes / np.maximum(want, 1)).astype(np.int64)
-    order = np.argsort(part_of_vertex, kind="stable")
-    rank = np.arange(order.size) - np.repeat(np.cumsum(sizes) - sizes, sizes)
-    rows = order[rank % stride[part_of_vertex[order]] == 0]
+    starts = np.cumsum(sizes) - sizes
+    if sizes.size <= _FEW_PARTS and not np.any(part_of_vertex[1:] < part_of_vertex[:-1]):
+        # Parts in vertex order (one part, say): every stride-th vertex of each part's run.
+        runs = [np.arange(start, start + size, step) for start, size, step in zip(starts, sizes, stride)]
+        rows = np.concatenate(runs) if runs else np.zeros(0, dtype=np.int64)
+    else:
+        order = np.argsort(part_of_vertex, kind="stable")
+        rank = np.arange(order.size) - np.repeat(starts, sizes)
+        rows = order[rank % stride[part_of_vertex[order]] == 0]
     return np.sort(rows[operator.degree[rows] > 0])
 
 
-def _residuals(points, rows, operator):
+def _residuals(positions, rows, operator):
     """(|r_i| at each row, NaN where undefined; the median length of each row's edges)."""
     owner, neighbour = neighbours(rows, operator)
     ring = np.unique(np.concatenate([rows, neighbour]))
-    place = np.full(operator.n_vertices, -1, dtype=np.int64)
-    place[ring] = np.arange(ring.size)
-    normals, umbrella = _planes(points, ring, operator, _averaged(points, operator, PLANE_STEPS))
-    row_at, neighbour_at = place[rows], place[neighbour]
+    # around[k]: the vertices within k + 1 rings of the rows. The positions are read (as float64) on the
+    # outermost; each average reaches one ring less, and the planes' points lie within two rings.
+    around = [ring]
+    for _ in range(PLANE_STEPS + 1):
+        around.append(np.union1d(around[-1], neighbours(around[-1], operator)[1]))
+    points = np.asarray(positions[around[-1]], dtype=np.float64)
+    plane, plane_vertices = points, around[-1]
+    for step in range(PLANE_STEPS):
+        targets = around[PLANE_STEPS - step]
+        plane, plane_vertices = _averaged(plane, plane_vertices, targets, operator), targets
+
+    def point_at(vertices):
+        return points[np.searchsorted(around[-1], vertices)]
+
+    def plane_at(vertices):
+        return plane[np.searchsorted(plane_vertices, vertices)]
+
+    normals, umbrella = _planes(point_at, ring, operator, plane_at)
+    row_at, neighbour_at = np.searchsorted(ring, rows), np.searchsorted(ring, neighbour)
     surface = operator.degree[rows] >= 3
 
     # Surfaces: the normal part of the umbrella against its neighbours' median.
@@ -165,32 +195,33 @@ def _residuals(points, rows, operator):
         vector = umbrella[row_at] - medians
         residual[curve] = np.linalg.norm(vector[curve], axis=1) * (_MAD * GAIN / CURVE_GAIN)
 
-    lengths = np.linalg.norm(points[neighbour] - points[rows[owner]], axis=1)
+    lengths = np.linalg.norm(point_at(neighbour) - point_at(rows)[owner], axis=1)
     return residual, _group_medians(owner, lengths, rows.size)
 
 
-def _averaged(points, operator, steps):
-    """``points`` after ``steps`` umbrella averages (each vertex to the mean of its neighbours)."""
-    n = operator.n_vertices
-    if steps == 0:
-        return points
-    weights = np.repeat(1.0 / np.maximum(operator.degree, 1), operator.degree)
-    average = sp.csr_matrix((weights, operator.indices, operator.indptr), shape=(n, n))
-    lonely = operator.degree == 0
-    for _ in range(steps):
-        moved = average @ points
-        moved[lonely] = points[lonely]
-        points = moved
-    return points
+def _averaged(values, sources, targets, operator):
+    """One umbrella average (each vertex to the mean of its neighbours; one without neighbours stays) at
+    the sorted vertices ``targets``, from ``values`` at the sorted ``sources`` (which hold every
+    target's neighbours): row for row the product of the whole mesh's averaging matrix, bit for bit."""
+    owner, neighbour = neighbours(targets, operator)
+    degree = operator.degree[targets]
+    weights = np.repeat(1.0 / np.maximum(degree, 1), degree)
+    indptr = np.zeros(targets.size + 1, dtype=np.int64)
+    np.cumsum(degree, out=indptr[1:])
+    average = sp.csr_matrix((weights, np.searchsorted(sources, neighbour), indptr), shape=(targets.size, sources.size))
+    moved = average @ values
+    lonely = degree == 0
+    moved[lonely] = values[np.searchsorted(sources, targets[lonely])]
+    return moved
 
 
-def _planes(points, ring, operator, plane_points):
-    """(normal, umbrella vector) at each vertex of ``ring``: the smallest PCA axis of its neighbours in
-    ``plane_points`` (with itself where it has fewer than three), and mean(adj) - x in ``points``."""
+def _planes(point_at, ring, operator, plane_at):
+    """(normal, umbrella vector) at each vertex of ``ring``: the smallest PCA axis of its neighbours'
+    ``plane_at`` points (with itself where it has fewer than three), and mean(adj) - x of ``point_at``."""
     owner, neighbour = neighbours(ring, operator)
     few = np.flatnonzero(operator.degree[ring] < 3)
     owner_all = np.concatenate([owner, few])
-    spots = plane_points[np.concatenate([neighbour, ring[few]])]
+    spots = plane_at(np.concatenate([neighbour, ring[few]]))
     counts = np.bincount(owner_all, minlength=ring.size).astype(np.float64)
     centre = np.stack([np.bincount(owner_all, spots[:, k], ring.size) for k in range(3)], axis=1) / counts[:, None]
     spread = spots - centre[owner_all]
@@ -200,8 +231,9 @@ def _planes(points, ring, operator, plane_points):
             covariance[:, a, b] = covariance[:, b, a] = np.bincount(owner_all, spread[:, a] * spread[:, b], ring.size)
     normals = np.linalg.eigh(covariance)[1][:, :, 0]
     degree = operator.degree[ring].astype(np.float64)
-    mean = np.stack([np.bincount(owner, points[neighbour, k], ring.size) for k in range(3)], axis=1)
-    umbrella = mean / np.maximum(degree, 1.0)[:, None] - points[ring]
+    around = point_at(neighbour)
+    mean = np.stack([np.bincount(owner, around[:, k], ring.size) for k in range(3)], axis=1)
+    umbrella = mean / np.maximum(degree, 1.0)[:, None] - point_at(ring)
     return normals, umbrella
 
 

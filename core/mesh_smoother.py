@@ -24,14 +24,24 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import volume, welding
+from . import parallel, topology, volume, welding
 from .adjacency import Umbrella, umbrella_operator
 from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
-from .mesh_amount import AmountChooser, MeshAmount
+from .mesh_amount import PATCH_FROM, AmountChooser, MeshAmount
 from .metrics import fan_triangles
-from .smoothing import METHODS, Cancelled, Smoothing
-from .validation import check_choice, check_fixed, check_influence, check_positions
+from .slices import as_fraction, to_end
+from .smoothing import METHODS, MODES, Cancelled, Smoothing
+from .validation import (
+    check_choice,
+    check_fixed,
+    check_influence,
+    check_iterations,
+    check_max_deviation,
+    check_positions,
+    check_tolerance,
+    check_unit_interval,
+)
 
 AUTO = "auto"
 DEFAULT_ALPHA = 0.1
@@ -41,8 +51,12 @@ DEFAULT_ITERATIONS = 10
 # farthest a vertex may move when the caller set no limit.
 DEVIATION_IN_NOISE = 4.0
 # Of a run with the Automatic Amount, the part of its progress the choice takes: its runs (the data and
-# the probes) go about twice as far as the smoothing that follows.
+# the probes) go about twice as far as the smoothing that follows; on big meshes they go on patches
+# (core.mesh_amount), which cost a few iterations of the whole mesh.
 CHOOSING_SHARE = 2 / 3
+PATCH_CHOOSING_SHARE = 1 / 5
+RESTORE_SHARE = 1 / 10  # ... and the volume restore, at the end
+_ROWS = 1 << 17  # vertices per block of the final projection onto the deviation limit
 
 
 @dataclass(frozen=True)
@@ -152,22 +166,52 @@ class MeshSmoother:
         self.influence = check_influence(influence, n)
         self.faces = None if faces is None else fan_triangles(faces)
         self.border = check_choice(border, "border", BORDERS)
-        # Coincident vertices run as one welded vertex (core.welding); the result is scattered back.
-        self.welding = welding.weld(start, operator) if weld else None
-        if self.welding is not None:
-            self.positions, operator = self.welding.positions(), self.welding.operator(operator)
-            self.fixed, self.influence = self.welding.fixed(self.fixed), self.welding.influence(self.influence)
-            if self.faces is not None:
-                self.faces = self.welding.triangles(self.faces)
-        self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed)
-        # Checks every number now (a Smoothing is cheap to make: the heavy parts are built on first use).
-        self._smoothing(self.alpha, self.beta, self.iterations, 0.0 if self.max_deviation == AUTO else max_deviation)
+        if self.border != "free" and self.faces is None:
+            raise ValueError(
+                f"border={border!r} needs the faces (a border edge is an edge of exactly one face): pass faces=, "
+                "or border='free'"
+            )
+        self.operator, self.weld = operator, bool(weld)
+        # Every number checked now, as core.Smoothing checks them.
+        check_choice(mode, "mode", MODES)
+        check_unit_interval(self.alpha, "alpha")
+        check_unit_interval(self.beta, "beta")
+        check_iterations(self.iterations)
+        check_tolerance(tolerance)
+        check_max_deviation(0.0 if self.max_deviation == AUTO else self.max_deviation, n)
+        self.welding = self.surface = None
+        self.prepared = False  # the welding, the faces' surface and the border rule: the first slices of steps()
         self.result = None
         self.report = None
+
+    def _prepare(self):
+        """Weld coincident vertices (core.welding: the result is scattered back), find what the faces
+        make (parts, closed ones, border edges: for the border rule and the volume restore) and apply the
+        border rule, yielding 0.0 between these passes."""
+        operator = self.operator
+        surfaced = self.faces is not None and (self.border != "free" or self.automatic)
+        if self.weld or surfaced:
+            yield 0.0  # the construction built the operator: a slice of its own before these passes
+        if self.weld:
+            self.welding = yield from as_fraction(welding.weld_steps(self.positions, operator), 0.0)
+            if self.welding is not None:
+                self.positions, operator = self.welding.positions(), self.welding.operator(operator)
+                self.fixed, self.influence = self.welding.fixed(self.fixed), self.welding.influence(self.influence)
+                if self.faces is not None:
+                    self.faces = self.welding.triangles(self.faces)
+            yield 0.0
+        if surfaced:
+            self.surface = yield from as_fraction(topology.surface_steps(self.faces, operator.n_vertices), 0.0)
+            yield 0.0
+        edges = None if self.surface is None else self.surface.border
+        self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed, edges)
+        self.prepared = True
 
     def still(self) -> np.ndarray:
         """(n,) bool: the vertices this run never moves (fixed, held by the border rule, without
         neighbours), in the caller's numbering."""
+        if not self.prepared:
+            to_end(self._prepare())
         still = self.fixed | self.operator.isolated
         return still if self.welding is None else still[self.welding.label]
 
@@ -190,19 +234,25 @@ class MeshSmoother:
             )
 
     def steps(self, chunk: int | None = None) -> Iterator[float]:
-        """Run in slices of ``chunk`` iterations (all at once if None), yielding the fraction done."""
+        """Run in slices of ``chunk`` iterations (all at once if None), yielding the fraction done; the
+        Automatic Amount's choice and volume restore yield between their passes too."""
         start = time.perf_counter()
-        alpha, beta, iterations, share, amount, done = self.alpha, self.beta, self.iterations, 0.0, None, None
+        if not self.prepared:
+            yield from self._prepare()
+        alpha, beta, iterations, amount, done = self.alpha, self.beta, self.iterations, None, None
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
+        fixed, share, restoring = self.fixed, 0.0, self.automatic and self.faces is not None
+        if restoring:  # what the restore needs of the input, on another thread while the choice runs on one
+            measuring = parallel.in_background(lambda: volume.measure_before(self.positions, self.faces, self.surface))
         if self.automatic:
             chooser = AmountChooser(self.positions, operator=self.operator, beta=self.beta, fixed=self.fixed)
             if self.beta_given:
                 chooser.fine_beta = None  # the caller's beta is used as given
-            share = CHOOSING_SHARE
+            share = CHOOSING_SHARE if self.operator.n_vertices < PATCH_FROM else PATCH_CHOOSING_SHARE
             for fraction in chooser.steps():
                 if fraction < 1.0:
                     yield share * fraction
-            amount = chooser.amount
+            amount, fixed = chooser.amount, chooser.fixed  # the Automatic Amount holds parts without noise
             alpha, beta, iterations = amount.alpha, amount.beta, amount.iterations
             if self.max_deviation == AUTO:
                 limit = DEVIATION_IN_NOISE * amount.sigma
@@ -212,33 +262,42 @@ class MeshSmoother:
             unlimited = not isinstance(limit, np.ndarray) and not limit
             if self.influence is None and self.mode == "simultaneous" and not self.tolerance and unlimited:
                 done = chooser.result()  # the choice ran exactly these iterations on its way: not again
-        fixed = self.fixed if amount is None else chooser.fixed  # the Automatic Amount holds parts without noise
+            del chooser  # its runs' buffers go before the smoothing's come
+        end = 1.0 - RESTORE_SHARE if restoring else 1.0  # where the smoothing's share of the progress ends
         if done is not None:
             result, ran = done, iterations
         else:
             smoothing = self._smoothing(alpha, beta, iterations, limit, fixed)
             for fraction in smoothing.steps(chunk):
                 if fraction < 1.0:
-                    yield share + (1.0 - share) * fraction
+                    yield share + (end - share) * fraction
             smoothed = smoothing.result()
+            del smoothing
             result, ran = smoothed.positions, smoothed.iterations
         offset = 0.0
-        if self.automatic and ran > 0 and self.faces is not None:
-            result, offset = self._keep_volume(result, fixed, volume.NOISE_OFFSETS * amount.sigma)
+        if restoring and ran > 0:
+            limited = volume.NOISE_OFFSETS * amount.sigma
+            result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), end)
             if np.any(limit):  # the offset keeps to the limit too
-                result = _within(result, self.positions, limit)
+                _within(result, self.positions, limit)
         self.result = result if self.welding is None else self.welding.scatter(result)
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, largest, time.perf_counter() - start)
         yield 1.0
 
-    def _keep_volume(self, result, fixed, limit):
+    def _keep_volume(self, result, fixed, limit, measured, progress):
         """Each closed part's volume given back by a bounded uniform offset of its moving vertices along
-        their normals (core.volume). Fixed vertices and those of influence 0 stay bit for bit."""
+        their normals (core.volume), in slices (yielding ``progress``); returns (positions, largest offset).
+        Fixed vertices and those of influence 0 stay bit for bit."""
         movable = ~fixed if self.influence is None else ~fixed & (self.influence > 0.0)
-        restored, offsets = volume.restore_volume(self.positions, result, self.faces, movable=movable, limit=limit)
-        restored = restored.astype(result.dtype)
-        restored[~movable] = result[~movable]
+        restored, offsets = yield from as_fraction(
+            volume.restore_steps(
+                self.positions, result, self.faces, movable, limit, result.dtype, self.surface, measured
+            ),
+            progress,
+        )
+        still = ~movable
+        restored[still] = result[still]
         return restored, float(np.abs(offsets).max()) if offsets.size else 0.0
 
     def run(self, progress: Callable[[float], bool | None] | None = None) -> np.ndarray:
@@ -250,16 +309,17 @@ class MeshSmoother:
 
 
 def _within(points, start, radius):
-    """``points`` projected onto the balls of ``radius`` (a distance, or one per row) around ``start``
-    (rows beyond it only)."""
-    away = points - start
-    lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
-    over = lengths > radius
-    if over.any():
-        points = points.copy()
-        radius = radius[over] if isinstance(radius, np.ndarray) else radius
-        points[over] = start[over] + away[over] * (radius / lengths[over])[:, None].astype(points.dtype)
-    return points
+    """``points`` projected, in place, onto the balls of ``radius`` (a distance, or one per row) around
+    ``start`` (rows beyond it only)."""
+    for low in range(0, len(points), _ROWS):
+        rows = slice(low, low + _ROWS)
+        away = points[rows] - start[rows]
+        lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
+        bound = radius[rows] if isinstance(radius, np.ndarray) else radius
+        over = np.flatnonzero(lengths > bound)
+        if over.size:
+            reach = bound[over] if isinstance(bound, np.ndarray) else bound
+            points[rows][over] = start[rows][over] + away[over] * (reach / lengths[over])[:, None].astype(points.dtype)
 
 
 def smooth_mesh(

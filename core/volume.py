@@ -8,8 +8,10 @@ normals gives that back without changing the shape's detail (unlike a scaling ab
 moves far-away vertices most).
 
 The volume of a part after an offset d along the (area-weighted, unit) vertex normals is a cubic in
-d: its four coefficients per part come from one pass over the triangles, and Newton steps from d = 0
-solve it.
+d: a first pass over the triangles makes the normals, the volumes before and after and the areas, a
+second the cubic's other coefficients, and Newton steps from d = 0 solve it. A part whose volume
+barely changed (the offset would stay under NEGLIGIBLE times the caller's ``limit``) needs no second
+pass: on big dense meshes that is the rule.
 
 The offset gives back what smoothing took, a little, and nothing else: it is bounded. A part that
 smoothing collapsed (too small to smooth, flattened: it kept less than KEPT of its volume) has a cubic
@@ -19,9 +21,12 @@ on its own; no offset grows a part's bounding box by more than GROWTH, and a cal
 it further (the mesh pipeline passes NOISE_OFFSETS times the estimated noise).
 """
 
+from dataclasses import dataclass
+
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
+
+from . import parallel, topology
+from .slices import to_end
 
 _NEWTON_STEPS = 6  # at most; the volume is a cubic in the offset, Newton from 0 needs two or three
 _RELATIVE_ACCURACY = 1e-12
@@ -33,7 +38,11 @@ KEPT = 0.5  # a part that kept less than this share of its volume collapsed: it 
 # The mesh pipeline's limit, in noise deviations: the offsets that give back what HC took measure 0.01-0.3
 # noise deviations on dense meshes, up to 0.75 on a coarse tube (noise 0.2-1 edge lengths).
 NOISE_OFFSETS = 1.0
-_BLOCK = 1 << 18  # triangles per block: bounds the temporaries
+# A part whose volume changed so little that the offset giving it back would stay under this share of
+# ``limit`` keeps its smoothed shape: the offset would not matter, and finding it takes a pass.
+NEGLIGIBLE = 1e-3
+_BLOCK = 1 << 15  # triangles per block: bounds the temporaries (a few MB a block, one block per thread)
+_VERTEX_BLOCK = 1 << 17  # vertices per block
 
 
 def vertex_normals(positions, triangles):
@@ -48,83 +57,182 @@ def vertex_normals(positions, triangles):
     >>> volume.vertex_normals(positions, triangles).round(3).tolist()
     [[-0.577, -0.577, -0.577], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
     """
-    n = positions.shape[0]
-    a, b, c = (positions[triangles[:, k]] for k in range(3))
-    face = _cross(b - a, c - a)
-    normals = np.stack(
-        [sum(np.bincount(triangles[:, k], weights=face[j], minlength=n) for k in range(3)) for j in range(3)], axis=1
-    )
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    return normals / np.where(length > 0.0, length, 1.0)
+    return to_end(_normal_steps(_planar(np.asarray(positions)), np.asarray(triangles))).T.copy()
+
+
+def _normal_steps(planar, triangles):
+    """vertex_normals in slices (yields between rounds of blocks), of (3, n) ``planar`` positions: the
+    unit normals as float64 (3, n)."""
+    return (yield from _first_pass(planar, triangles, None, 1, np.zeros(3)))[0]
+
+
+def _first_pass(after, triangles, part_of_vertex, parts, centre):
+    """(normals, measures) in slices, of (3, n) planar positions: the unit vertex normals (area-weighted,
+    float64 (3, n)) and per part, (2, parts), its volume less the ``centre`` (times 6) and its area
+    (times 2). Each block's triangles are measured on the threads, then their normals added at their
+    corners block by block: the same numbers whatever the thread count."""
+    normals = np.zeros((3, after.shape[1]))
+
+    def measured(start, stop):
+        block = np.ascontiguousarray(triangles[start:stop].T, dtype=_index(after.shape[1]))
+        a, b, c = _corners(after, block, centre)
+        volume = _dot(a, _cross(b, c))
+        b -= a
+        c -= a
+        faces = _cross(b, c)
+        return block, faces, _part_sums([volume, np.sqrt(_dot(faces, faces))], part_of_vertex, block, parts)
+
+    measures = np.zeros((2, parts))
+    for blocks in _in_rounds(measured, len(triangles)):
+        for block, faces, sums in blocks:
+            _add_at_corners(normals, block, faces)
+            measures += sums
+        yield
+    for start in range(0, normals.shape[1], _VERTEX_BLOCK):
+        rows = normals[:, start : start + _VERTEX_BLOCK]
+        length = np.sqrt(_dot(rows, rows))
+        rows /= np.where(length > 0.0, length, 1.0)
+    return normals, measures
+
+
+@dataclass(frozen=True)
+class Before:
+    """What the volume restore needs of the positions before smoothing (``measure_before``)."""
+
+    centre: np.ndarray  # (3,) the point the volumes are taken about
+    volumes: np.ndarray  # (parts,) each part's enclosed volume, times 6
+    low: np.ndarray  # (parts, 3) each part's bounding box
+    high: np.ndarray
+
+
+def measure_before(before, triangles, surface):
+    """The Before of (n, 3) positions with the (t, 3) ``triangles`` and their core.topology.surface: one
+    thread's work, which the mesh pipeline does in the background while it chooses the amount."""
+    return to_end(_before_steps(np.asarray(before), np.asarray(triangles), surface))
+
+
+def _before_steps(before, triangles, surface):
+    """measure_before in slices (yields between blocks of triangles)."""
+    planar = _planar(before)
+    low, high = _boxes(planar, surface.part_of_vertex, surface.used, surface.parts)
+    centre = _centre(before)
+    volumes = np.zeros(surface.parts)
+    for start in range(0, len(triangles), _BLOCK):
+        block = np.ascontiguousarray(triangles[start : start + _BLOCK].T, dtype=_index(planar.shape[1]))
+        a, b, c = _corners(planar, block, centre)
+        volumes += _part_sums([_dot(a, _cross(b, c))], surface.part_of_vertex, block, surface.parts)[0]
+        yield
+    return Before(centre, volumes, low, high)
+
+
+def _part_sums(terms, part_of_vertex, block, parts):
+    """(len(terms), parts): each per-triangle term summed over each part's triangles."""
+    if parts == 1:
+        return np.array([[term.sum()] for term in terms])
+    owner = part_of_vertex[block[0]]
+    return np.array([np.bincount(owner, weights=term, minlength=parts) for term in terms])
+
+
+def _index(n):
+    return np.int32 if n < np.iinfo(np.int32).max else np.int64
+
+
+def _add_at_corners(sums, corners, values):
+    """sums[:, v] += values[:, i] for each corner v of triangle i (``corners``: (3, t) columns): by a
+    count over the block's span of vertices where it is short (meshes numbered with some locality),
+    else one at a time."""
+    low, high = int(corners.min()), int(corners.max()) + 1
+    for at in corners:
+        if high - low <= 4 * corners.shape[1]:
+            at = at - low
+            for j in range(3):
+                sums[j, low:high] += np.bincount(at, weights=values[j], minlength=high - low)
+        else:
+            for j in range(3):
+                np.add.at(sums[j], at, values[j])
+
+
+def _planar(points):
+    """A (3, n) C-contiguous copy of (n, 3) ``points``, in their dtype."""
+    return np.ascontiguousarray(points.T)
+
+
+def _corners(planar, columns, centre=None):
+    """(a, b, c): the corners of the triangles (``columns``: their (3, t) corner columns) in (3, n)
+    ``planar`` points, as float64 (3, t) rows (less ``centre``)."""
+    corners = np.empty((3, 3, columns.shape[1]))
+    for k, at in enumerate(columns):
+        for j in range(3):
+            corners[k, j] = planar[j].take(at)
+            if centre is not None:
+                corners[k, j] -= centre[j]
+    return corners
 
 
 def _cross(b, c):
-    """Row-wise b x c of (k, 3) arrays, as three columns."""
-    return (
-        b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1],
-        b[:, 2] * c[:, 0] - b[:, 0] * c[:, 2],
-        b[:, 0] * c[:, 1] - b[:, 1] * c[:, 0],
-    )
+    """Column-wise b x c of (3, t) rows, (3, t)."""
+    return np.stack((b[1] * c[2] - b[2] * c[1], b[2] * c[0] - b[0] * c[2], b[0] * c[1] - b[1] * c[0]))
 
 
-def _det(a, b, c):
-    x, y, z = _cross(b, c)
-    return a[:, 0] * x + a[:, 1] * y + a[:, 2] * z
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-def _volume_cubics(positions, normals, triangles, part_of_triangle, parts, centre):
-    """Per part, the coefficients (c0, c1, c2, c3) of its volume after an offset d along the normals:
-    V(d) = c0 + c1 d + c2 d^2 + c3 d^3 (each triangle's signed tetrahedron volume is a cubic in d).
-    ``normals`` None: the volume alone, (c0,)."""
-    cubics = np.zeros((4 if normals is not None else 1, parts))
-    for start in range(0, len(triangles), _BLOCK):
-        block = triangles[start : start + _BLOCK]
-        a, b, c = (positions[block[:, k]] - centre for k in range(3))
-        owner = part_of_triangle[start : start + _BLOCK]
-        if normals is None:
-            cubics[0] += np.bincount(owner, weights=_det(a, b, c) / 6.0, minlength=parts)
-            continue
-        na, nb, nc = (normals[block[:, k]] for k in range(3))
-        terms = (
-            _det(a, b, c),
-            _det(na, b, c) + _det(a, nb, c) + _det(a, b, nc),
-            _det(na, nb, c) + _det(na, b, nc) + _det(a, nb, nc),
-            _det(na, nb, nc),
-        )
-        for degree, term in enumerate(terms):
-            cubics[degree] += np.bincount(owner, weights=term / 6.0, minlength=parts)
-    return cubics
+def _in_rounds(function, size):
+    """Generator of rounds: function(start, stop) for consecutive blocks of _BLOCK elements of
+    range(size), one block per thread at a time; yields each round's results in block order. The
+    blocks are the same whatever the thread count."""
+    starts = range(0, size, _BLOCK)
+    per_round = parallel.thread_count()
+    for first in range(0, len(starts), per_round):
+        tasks = [
+            lambda start=start: function(start, min(start + _BLOCK, size))
+            for start in starts[first : first + per_round]
+        ]
+        yield parallel.run_all(tasks)
 
 
-def closed_parts(triangles, part_of_triangle, parts):
-    """(parts,) bool: whether each part's triangles close a consistently oriented surface (every directed
-    edge once, and its reverse once)."""
-    heads = triangles.ravel().astype(np.int64)
-    tails = np.roll(triangles, -1, axis=1).ravel().astype(np.int64)
-    n = int(triangles.max()) + 1
-    keys, counts = np.unique(heads * n + tails, return_counts=True)
-    reverse = np.searchsorted(keys, tails * n + heads)
-    found = keys[np.minimum(reverse, keys.size - 1)] == tails * n + heads
-    good = found & (counts[np.searchsorted(keys, heads * n + tails)] == 1)
-    good &= counts[np.minimum(reverse, keys.size - 1)] == 1
-    bad = np.bincount(np.repeat(part_of_triangle, 3)[~good], minlength=parts)
-    return bad == 0
+def _cubic_steps(after, normals, triangles, part_of_vertex, parts, centre):
+    """(c1, c2, c3) in slices, of (3, n) planar positions and normals: per part, (3, parts), the
+    coefficients beyond c0 (the volume, from _first_pass) of its volume after an offset d along
+    ``normals``: V(d) = c0 + c1 d + c2 d^2 + c3 d^3 (times 6). Each triangle's signed tetrahedron volume
+    det(a, b, c) / 6 is a cubic in d: with b x c, n_b x c + b x n_c and n_b x n_c, its coefficients
+    are a . (b x c), n_a . (b x c) + a . (n_b x c + b x n_c), n_a . (n_b x c + b x n_c) + a . (n_b x n_c)
+    and n_a . (n_b x n_c)."""
+
+    def block_sums(start, stop):
+        block = np.ascontiguousarray(triangles[start:stop].T, dtype=_index(after.shape[1]))
+        a, b, c = _corners(after, block, centre)
+        na, nb, nc = _corners(normals, block)
+        first, second, third = _cross(b, c), _cross(nb, c), _cross(nb, nc)
+        second += _cross(b, nc)
+        terms = [_dot(na, first) + _dot(a, second), _dot(na, second) + _dot(a, third), _dot(na, third)]
+        return _part_sums(terms, part_of_vertex, block, parts)
+
+    total = np.zeros((3, parts))
+    for sums in _in_rounds(block_sums, len(triangles)):
+        for block in sums:
+            total += block
+        yield
+    return total
 
 
 def restore_volume(before, after, triangles, movable=None, limit=None):
     """``after`` with each closed part's enclosed volume set back to its volume in ``before``, by a
     uniform offset of that part's movable vertices along their normals, within bounds. Returns
-    (positions, offsets) with offsets the distance per part (same units as the positions).
+    (positions, offsets) with positions float64 and offsets the distance per part (same units as the
+    positions).
 
     ``triangles`` (t, 3), consistently oriented; ``movable`` a boolean mask (default: every vertex);
     ``limit`` the largest offset allowed (None: no limit but the bounding box's). A part is left as it
     is where it is open (not every edge in two faces, in opposite directions), has at most
     ``DEGENERATE`` vertices or no volume (nothing to give back), has no movable vertex, kept less than
-    ``KEPT`` of its volume (collapsed), or where the volume has no root within reach (an offset that
-    does not grow the volume, Newton that does not settle). An offset outwards never makes the part's
-    bounding box more than ``GROWTH`` larger than its box in ``before`` along any axis; inwards it is
-    at most half the part's thinnest side; either way at most ``limit``: a root beyond that is clipped
-    to it.
+    ``KEPT`` of its volume (collapsed), where the offset would be negligible (under ``NEGLIGIBLE`` times
+    ``limit``: the volume change over the area says so before the cubic is made), or where the volume
+    has no root within reach (an offset that does not grow the volume, Newton that does not settle).
+    An offset outwards never makes the part's bounding box more than ``GROWTH`` larger than its box in
+    ``before`` along any axis; inwards it is at most half the part's thinnest side; either way at most
+    ``limit``: a root beyond that is clipped to it.
 
     Examples
     --------
@@ -139,27 +247,34 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     >>> offsets.round(4).tolist()  # one part, moved this far along its normals
     [0.05]
     """
-    before = np.asarray(before, dtype=np.float64)
-    result = np.array(after, dtype=np.float64)
-    triangles = np.asarray(triangles)
-    n = result.shape[0]
+    return to_end(restore_steps(before, after, triangles, movable, limit))
+
+
+def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.float64, surface=None, measured=None):
+    """``restore_volume`` in slices, for callers that let the user cancel: a generator that yields (None)
+    between its passes and returns (positions in ``dtype``, offsets); the same numbers (float64 math,
+    cast to ``dtype`` at the end). ``surface``: the triangles' core.topology.surface, and ``measured``:
+    ``measure_before(before, triangles, surface)``, if the caller has them. Beside its result it holds
+    the float64 normals, a planar copy of the positions after (in their dtype) and a few bytes a vertex;
+    the rest works in blocks of triangles."""
+    before, after, triangles = np.asarray(before), np.asarray(after), np.asarray(triangles)
+    n = after.shape[0]
     if triangles.size == 0:
-        return result, np.zeros(0)
+        return np.array(after, dtype=dtype), np.zeros(0)
     movable = np.ones(n, bool) if movable is None else np.asarray(movable, bool)
-    pairs = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    graph = sp.coo_matrix((np.ones(len(pairs), np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    parts, part_of_vertex = connected_components(graph, directed=False)
-    part_of_triangle = part_of_vertex[triangles[:, 0]]
-    used = np.zeros(n, bool)
-    used[triangles.ravel()] = True
+    if surface is None:
+        surface = topology.surface(triangles, n)
+        yield
+    if measured is None:
+        measured = yield from _before_steps(before, triangles, surface)
+    parts, part_of_vertex, used, closed = surface.parts, surface.part_of_vertex, surface.used, surface.closed
     sizes = np.bincount(part_of_vertex[used], minlength=parts)
-    low_before, high_before = _boxes(before, part_of_vertex, used, parts)
-    low_after, high_after = _boxes(result, part_of_vertex, used, parts)
-    extent = high_before - low_before
-    centre = before.mean(axis=0)
-    target = _volume_cubics(before, None, triangles, part_of_triangle, parts, centre)[0]
-    normals = vertex_normals(result, triangles) * movable[:, None]
-    c0, c1, c2, c3 = _volume_cubics(result, normals, triangles, part_of_triangle, parts, centre)
+    planar_after = _planar(after)
+    low_after, high_after = _boxes(planar_after, part_of_vertex, used, parts)
+    extent, centre, target = measured.high - measured.low, measured.centre, measured.volumes
+    yield
+    normals, (c0, area) = yield from _first_pass(planar_after, triangles, part_of_vertex, parts, centre)
+    normals *= movable
     # An offset d moves every vertex by at most |d|: outwards, each side of the box grows by at most 2 d.
     # Inwards the box does not grow; there half the part's thinnest side bounds d (it would turn inside out).
     outward = np.maximum(((1.0 + GROWTH) * extent - (high_after - low_after)).min(axis=1), 0.0) / 2.0
@@ -167,12 +282,18 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     if limit is not None:
         outward, inward = np.minimum(outward, float(limit)), np.minimum(inward, float(limit))
     has_movable = np.bincount(part_of_vertex[movable & used], minlength=parts) > 0
-    eligible = closed_parts(triangles, part_of_triangle, parts) & (sizes > DEGENERATE) & has_movable
-    eligible &= np.abs(target) > _FLAT * np.linalg.norm(extent, axis=1) ** 3
-    eligible &= c1 > 0.0  # the volume grows as the surface moves along its normals
+    eligible = closed & (sizes > DEGENERATE) & has_movable
+    eligible &= np.abs(target) > 6.0 * _FLAT * np.linalg.norm(extent, axis=1) ** 3
     # Smoothing that took more than half the volume collapsed the part (or turned it inside out): no
     # uniform offset mends that, and one that tried would balloon it. (Same sign as target: c0 / target.)
     eligible &= c0 * np.sign(target) > KEPT * np.abs(target)
+    if limit is not None:  # the offset that gives the volume back, about its change over the area, is negligible
+        eligible &= np.abs(target - c0) > NEGLIGIBLE * float(limit) * 3.0 * area
+    if not eligible.any():
+        return np.array(after, dtype=dtype), np.zeros(parts)
+    c1, c2, c3 = yield from _cubic_steps(planar_after, normals, triangles, part_of_vertex, parts, centre)
+    del planar_after
+    eligible &= c1 > 0.0  # the volume grows as the surface moves along its normals
     offsets = np.zeros(parts)
     for _ in range(_NEWTON_STEPS):
         d = offsets
@@ -187,15 +308,41 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     # A root is sensible where Newton settled near it (the volume a cubic: from 0 it takes two or three steps).
     sensible = eligible & np.isfinite(offsets) & (np.abs(missing) <= _SETTLED * np.abs(target))
     offsets = np.where(sensible, np.clip(offsets, -inward, outward), 0.0)
-    return result + normals * offsets[part_of_vertex][:, None], offsets
+    result = np.empty((n, 3), dtype=dtype)
+    for start in range(0, n, _VERTEX_BLOCK):
+        rows = slice(start, start + _VERTEX_BLOCK)
+        moved = np.asarray(after[rows], dtype=np.float64) + normals[:, rows].T * offsets[part_of_vertex[rows]][:, None]
+        result[rows] = moved
+    return result, offsets
 
 
-def _boxes(points, part_of_vertex, used, parts):
-    """(low, high) corners of each part's bounding box, (parts, 3) each."""
+def _centre(points):
+    """The mean of (n, 3) points, in float64."""
+    if points.shape[0] <= _VERTEX_BLOCK:
+        return np.asarray(points, dtype=np.float64).mean(axis=0)
+    total = sum(
+        np.asarray(points[start : start + _VERTEX_BLOCK], dtype=np.float64).sum(axis=0)
+        for start in range(0, points.shape[0], _VERTEX_BLOCK)
+    )
+    return total / points.shape[0]
+
+
+def _boxes(planar, part_of_vertex, used, parts):
+    """(low, high) corners of each part's bounding box, float64 (parts, 3) each, of (3, n) points."""
     low = np.full((parts, 3), np.inf)
     high = np.full((parts, 3), -np.inf)
-    np.minimum.at(low, part_of_vertex[used], points[used])
-    np.maximum.at(high, part_of_vertex[used], points[used])
+    for start in range(0, planar.shape[1], _VERTEX_BLOCK):
+        rows = slice(start, start + _VERTEX_BLOCK)
+        block, owner, inside = planar[:, rows], part_of_vertex[rows], used[rows]
+        if not inside.all():
+            block, owner = block[:, inside], owner[inside]
+        if owner.size and owner[0] == owner[-1] and np.all(owner == owner[0]):  # one part: a plain min and max
+            low[owner[0]] = np.minimum(low[owner[0]], block.min(axis=1))
+            high[owner[0]] = np.maximum(high[owner[0]], block.max(axis=1))
+        elif owner.size:
+            for j in range(3):
+                np.minimum.at(low[:, j], owner, block[j])
+                np.maximum.at(high[:, j], owner, block[j])
     empty = ~np.isfinite(low[:, 0])  # a part without triangles (a loose vertex) has no box
     low[empty] = high[empty] = 0.0
     return low, high

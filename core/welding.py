@@ -37,13 +37,16 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from . import parallel
 from .adjacency import Umbrella, umbrella_from_pairs
+from .slices import to_end
 
 TOLERANCE = 1e-6  # vertices closer than this times the median edge length are one (equal ones always)
 CELL_EDGES = 1 / 8  # cell side in median edge lengths: distinct vertices rarely share a cell
 _EDGE_SAMPLE = 65_536  # edges the median edge length is measured on (evenly spaced)
 _FINEST_CELL = 2.0**-40  # cell side at least this times the bounding-box diagonal (keys fit in int64)
 _PACKED_BITS = 21  # cell coordinates below 2**21 per axis are packed into a key exactly
+_ROWS = 1 << 16  # vertices per block of the cell keys (float64 and int64 temporaries: a few MB a thread)
 
 
 @dataclass(frozen=True)
@@ -103,8 +106,14 @@ class Welding:
 def weld(positions, operator: Umbrella, tolerance: float = TOLERANCE) -> Welding | None:
     """The Welding of the coincident vertices of a mesh (its (n, 3) ``positions`` and umbrella
     ``operator``), or None when no two vertices coincide. ``tolerance``: in median edge lengths."""
+    return to_end(weld_steps(positions, operator, tolerance))
+
+
+def weld_steps(positions, operator: Umbrella, tolerance: float = TOLERANCE):
+    """``weld`` in slices, for callers that let the user cancel: a generator that yields (None) between
+    its passes and returns the Welding (or None)."""
     points = np.asarray(positions)
-    labels = _coincident(points, median_edge_length(points, operator), tolerance)
+    labels = yield from _coincident(points, median_edge_length(points, operator), tolerance)
     if labels is None:
         return None
     count = int(labels.max()) + 1
@@ -121,45 +130,76 @@ def weld(positions, operator: Umbrella, tolerance: float = TOLERANCE) -> Welding
 
 def median_edge_length(points, operator):
     """The median length of (an even sample of) the operator's edges, 0 without edges."""
-    rows = operator.rows()
-    upper = np.flatnonzero(operator.indices > rows)
-    if upper.size == 0:
+    # Row i's edges (i, j), j > i, are the last entries of its (increasing) row: ``above`` counts them,
+    # so the k-th such entry of the mesh is found without listing them all.
+    above = np.zeros(operator.n_vertices + 1, dtype=np.int64)
+    for low in range(0, operator.n_vertices, _ROWS):
+        high = min(low + _ROWS, operator.n_vertices)
+        first, last = operator.indptr[low], operator.indptr[high]
+        rows = np.repeat(np.arange(low, high, dtype=operator.indices.dtype), operator.degree[low:high])
+        above[low + 1 : high + 1] = np.bincount(rows[operator.indices[first:last] > rows] - low, minlength=high - low)
+    np.cumsum(above, out=above)
+    total = int(above[-1])
+    if total == 0:
         return 0.0
-    pick = upper[np.unique(np.linspace(0, upper.size - 1, min(upper.size, _EDGE_SAMPLE)).astype(np.int64))]
-    difference = np.asarray(points[rows[pick]], np.float64) - points[operator.indices[pick]]
+    pick = np.unique(np.linspace(0, total - 1, min(total, _EDGE_SAMPLE)).astype(np.int64))
+    rows = np.searchsorted(above, pick, side="right") - 1
+    entries = operator.indptr[rows + 1] - (above[rows + 1] - pick)
+    difference = np.asarray(points[rows], np.float64) - points[operator.indices[entries]]
     return float(np.median(np.sqrt(np.einsum("ij,ij->i", difference, difference))))
 
 
 def _coincident(points, edge, tolerance):
-    """Per vertex a label shared by the coincident ones (equal, or within ``tolerance`` x ``edge`` through
-    a chain of such pairs), or None when every vertex stands alone."""
+    """A generator (yields once, between the cell keys and their sort) returning per vertex a label
+    shared by the coincident ones (equal, or within ``tolerance`` x ``edge`` through a chain of such
+    pairs), or None when every vertex stands alone."""
     n = points.shape[0]
     if n < 2:
         return None
-    low = points.min(axis=0).astype(np.float64)
-    extent = points.max(axis=0) - low
+    low = np.array([points[:, k].min() for k in range(3)], dtype=np.float64)  # per column: 3x an axis-0 min
+    high = np.array([points[:, k].max() for k in range(3)], dtype=points.dtype)
+    extent = high - low
     diagonal = float(np.sqrt(np.dot(extent, extent)))
     if diagonal == 0.0:
         return np.zeros(n, dtype=np.int64)  # every vertex in one place
     radius = tolerance * edge
     side = max((edge or diagonal * 2.0**-20) * CELL_EDGES, diagonal * _FINEST_CELL, 2.0 * radius)
-    scaled = (points - low) / side
-    cells = np.floor(scaled).astype(np.int64)
-    key = _cell_keys(cells)
+    # Each point's cell key, and whether it lies within the radius of its cell's side, in blocks of rows.
+    packed = np.floor((high - low) / side).max() < 1 << _PACKED_BITS
+    key = np.empty(n, dtype=np.int64)
+    near = np.zeros(n, dtype=bool)
+    margin = 2.0 * radius / side
+
+    def keys(start, stop):  # element-wise: the blocks run on the threads
+        scaled = (points[start:stop] - low) / side
+        cells = np.floor(scaled).astype(np.int64)
+        key[start:stop] = _cell_keys(cells, packed)
+        if radius > 0.0:
+            fraction = scaled - cells
+            off = (fraction < margin) | (fraction > 1.0 - margin)  # within the margin of a side
+            near[start:stop] = off[:, 0] | off[:, 1] | off[:, 2]
+
+    parallel.run_chunks(keys, n, _ROWS)
+    yield
     order = np.argsort(key, kind="stable")
-    sorted_key, sorted_points = key[order], points[order]
+    sorted_key = key[order]
+    key = None
     same_cell = sorted_key[1:] == sorted_key[:-1]
-    equal = same_cell & np.all(sorted_points[1:] == sorted_points[:-1], axis=1)
+    del sorted_key
+    sorted_points = points[order]
+    same = sorted_points[1:] == sorted_points[:-1]
+    equal = same_cell & same[:, 0] & same[:, 1] & same[:, 2]
+    del same
     run = np.concatenate(([0], np.cumsum(~same_cell)))  # cell run of each sorted vertex
     # Points in a run with a different point, and points within the radius of a side of their cell, are
     # the only ones that may coincide with more than their equal neighbours in the sorted order.
     mixed_run = np.zeros(run[-1] + 1, dtype=bool)
     mixed_run[run[1:][same_cell & ~equal]] = True
     candidate = mixed_run[run]
+    del run, same_cell
     if radius > 0.0:
-        margin = 2.0 * radius / side
-        fraction = scaled - cells
-        candidate |= np.any((fraction < margin) | (fraction > 1.0 - margin), axis=1)[order]
+        candidate |= near[order]
+    near = None
     candidate = np.flatnonzero(candidate)
     pairs = np.empty((0, 2), dtype=np.int64)
     if candidate.size > 1:
@@ -179,10 +219,10 @@ def _coincident(points, edge, tolerance):
     return labels
 
 
-def _cell_keys(cells):
-    """One int64 per cell: packed exactly when the cell coordinates are small, else a hash (cells that
+def _cell_keys(cells, packed):
+    """One int64 per cell: ``packed`` exactly (every cell coordinate below 2**21), else a hash (cells that
     share a hash only make more candidates for the tree, never a wrong weld)."""
-    if cells.max() < 1 << _PACKED_BITS:
+    if packed:
         return (cells[:, 0] << (2 * _PACKED_BITS)) | (cells[:, 1] << _PACKED_BITS) | cells[:, 2]
     with np.errstate(over="ignore"):
         return (

@@ -37,7 +37,8 @@ def test_chunked_run_equals_one_call_and_reports_rising_progress(scene):
         progress = list(jobs.run(chunked, props, chunk=2))
         assert np.array_equal(chunked[0].result, whole[0].result)
         assert chunked[0].report.iterations == 9
-        assert len(progress) == 5 and progress == sorted(progress) and progress[-1] == 1.0
+        assert progress == sorted(progress) and progress[-1] == 1.0
+        assert len([fraction for fraction in progress if fraction > 0.0]) == 5  # after the welding's slices
 
 
 def test_leaving_between_chunks_writes_nothing(scene):
@@ -46,7 +47,10 @@ def test_leaving_between_chunks_writes_nothing(scene):
     before = positions_of(obj.data)
     props = settings()
     runner = jobs.run([jobs.make_job(obj, props)], props, chunk=2)
-    assert 0.0 < next(runner) < 1.0
+    fraction = next(runner)
+    while fraction == 0.0:  # the welding and the faces' surface: slices of their own, before the iterations
+        fraction = next(runner)
+    assert 0.0 < fraction < 1.0
     runner.close()  # Esc: the modal handler stops stepping and never calls finish()
     assert np.array_equal(positions_of(obj.data).view(np.uint32), before.view(np.uint32))
     assert obj.data.shape_keys is None

@@ -189,7 +189,7 @@ def test_a_soup_of_an_open_patch_finds_its_border_after_welding():
 
 
 def test_the_automatic_amount_probes_patches_of_the_curve_adjacency(monkeypatch):
-    """On big meshes the trace is read on patches: they keep the operator's own (directed) rows."""
+    """On big meshes the choice runs on patches: they keep the operator's own (directed) rows."""
     noisy, faces = wavy_disc(20, 64, sigma=0.3, seed=9)
     n = len(noisy)
     operator, fixed = apply_border(
@@ -197,7 +197,7 @@ def test_the_automatic_amount_probes_patches_of_the_curve_adjacency(monkeypatch)
     )
     monkeypatch.setattr(mesh_amount, "PATCH_RINGS", 6)
     monkeypatch.setattr(mesh_amount, "PATCH_MARGIN", 2)
-    patches, patch_fixed, inner = mesh_amount._patches(operator, fixed, np.flatnonzero(~fixed))
+    patches, patch_fixed, inner, _ = mesh_amount._patches(operator, fixed, np.flatnonzero(~fixed))
     assert not patches.symmetric and inner.size > 0
     symmetric = mesh_amount._patches(core.umbrella_operator(sm.edges_of(faces), n), fixed, np.arange(n))[0]
     assert symmetric.symmetric

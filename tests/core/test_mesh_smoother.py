@@ -111,6 +111,36 @@ def test_cancel_leaves_the_input_and_raises(noisy_sphere):
     assert run.result is None and np.array_equal(noisy, before)
 
 
+@pytest.mark.parametrize("patches", [False, True])
+def test_every_stage_yields_and_a_cancel_anywhere_hands_nothing_back(noisy_sphere, monkeypatch, patches):
+    """The default as the add-on runs it (weld, border curve) yields between the passes of every stage:
+    the welding and the faces' surface, the noise test, the choice (on the whole mesh, or on patches as
+    big meshes have it), the smoothing and the volume restore (rounds of triangles). Abandoned after any
+    slice, it hands nothing back and leaves the input as it was."""
+    noisy, edges, faces = noisy_sphere
+    before = noisy.copy()
+    monkeypatch.setattr(core.volume, "_BLOCK", 64)  # the restore in many rounds of triangles
+    if patches:
+        monkeypatch.setattr(mesh_amount, "PATCH_FROM", 100)
+        monkeypatch.setattr(mesh_amount, "PATCH_RINGS", 8)
+        monkeypatch.setattr(mesh_amount, "PATCH_MARGIN", 3)
+    options = dict(faces=faces, weld=True, border="curve")
+    run = core.MeshSmoother(noisy, edges, **options)
+    fractions = list(run.steps(chunk=1))
+    restoring = 1.0 - core.mesh_smoother.RESTORE_SHARE
+    assert run.report.volume_offset > 0.0 and fractions == sorted(fractions)
+    assert fractions.count(0.0) >= 5  # welding, surface, noise test, choice's preparation
+    assert sum(0.0 < f < restoring for f in fractions) > run.report.iterations  # choice and smoothing
+    assert fractions.count(restoring) >= 3  # the restore's rounds
+    for stop in (1, 3, 6, fractions.index(restoring) + 1, len(fractions) - 1):
+        run = core.MeshSmoother(noisy, edges, **options)
+        steps = run.steps(chunk=1)
+        for _ in range(stop):
+            next(steps)
+        steps.close()
+        assert run.result is None and run.report is None and np.array_equal(noisy, before)
+
+
 def test_fixed_and_zero_influence_stay_bit_for_bit_through_the_volume_restore(noisy_sphere):
     noisy, edges, faces = noisy_sphere
     fixed = np.zeros(len(noisy), bool)

@@ -197,7 +197,7 @@ def test_coincident_vertices_are_those_within_the_radius(spread, seed):
         direction /= np.linalg.norm(direction, axis=1, keepdims=True)
         copies.append(base[rng.integers(0, 149, 30)] + distance * radius * direction)
     points = np.concatenate(copies)[rng.permutation(150 + 5 * 30)]
-    labels = welding._coincident(points, edge, tolerance)
+    labels = core.slices.to_end(welding._coincident(points, edge, tolerance))
     expected = brute_force_groups(points, radius)
     assert labels is not None and same_partition(labels, expected)
     assert len(set(labels.tolist())) < len(points) - 60  # the planted copies within the radius joined
