@@ -154,6 +154,22 @@ max_deviation : float >= 0, or (n,) ndarray of them, default 0.0
 progress : callable, optional
     ``progress(done, total)`` is called after each iteration; returning False stops the run and
     raises `Cancelled`.""",
+    "wrapper": """\
+Other Parameters
+----------------
+{options}
+{progress}
+
+Returns
+-------
+ndarray
+    The new positions, same shape and dtype as ``positions``.
+
+Raises
+------
+{raises}
+Cancelled
+    ``progress`` returned False.""",
     "raises": """\
 ValueError
     Bad input, with a message saying what to fix: wrong shapes, NaN or infinite coordinates,
@@ -168,8 +184,9 @@ def _documented(thing):
     """``thing`` with each {name} of its docstring replaced by the entries _DOCS[name]."""
     if thing.__doc__:  # None under python -OO
         text = inspect.cleandoc(thing.__doc__)  # Python 3.13 dedents docstrings itself, 3.11 does not
-        for name, entries in _DOCS.items():
-            text = text.replace("{" + name + "}", entries)
+        for _ in range(2):  # an entry may hold others ("wrapper")
+            for name, entries in _DOCS.items():
+                text = text.replace("{" + name + "}", entries)
         thing.__doc__ = text
     return thing
 
@@ -564,21 +581,7 @@ def hc_smooth(
     iterations : int >= 0
         How many iterations to run.
 
-    Other Parameters
-    ----------------
-    {options}
-    {progress}
-
-    Returns
-    -------
-    ndarray
-        The new positions, same shape and dtype as ``positions``.
-
-    Raises
-    ------
-    {raises}
-    Cancelled
-        ``progress`` returned False.
+    {wrapper}
 
     Warns
     -----
@@ -642,21 +645,7 @@ def laplacian_smooth(
     iterations : int >= 0
         How many iterations to run.
 
-    Other Parameters
-    ----------------
-    {options}
-    {progress}
-
-    Returns
-    -------
-    ndarray
-        The new positions, same shape and dtype as ``positions``.
-
-    Raises
-    ------
-    {raises}
-    Cancelled
-        ``progress`` returned False.
+    {wrapper}
 
     See Also
     --------
