@@ -37,7 +37,7 @@ def ply(elements, encoding="ascii", comments=("made by the tests",), obj_info=("
                 f"property list {kind[1]} {kind[2]} {prop}" if isinstance(kind, tuple) else f"property {kind} {prop}"
             )
     header.append("end_header")
-    out = ("\n".join(header) + "\n").encode()
+    out = [("\n".join(header) + "\n").encode()]  # pieces joined once: += on bytes copies every time
     order = "<" if encoding == "binary_little_endian" else ">"
     for _, properties, rows in elements:
         for row in rows:
@@ -48,15 +48,15 @@ def ply(elements, encoding="ascii", comments=("made by the tests",), obj_info=("
                         words += [str(len(value)), *(_text(v, kind[2]) for v in value)]
                     else:
                         words.append(_text(value, kind))
-                out += (" ".join(words) + "\n").encode()
+                out.append((" ".join(words) + "\n").encode())
             else:
                 for (_, kind), value in zip(properties, row):
                     if isinstance(kind, tuple):
-                        out += np.array(len(value), order + PLY_TYPES[kind[1]]).tobytes()
-                        out += np.array(value, order + PLY_TYPES[kind[2]]).tobytes()
+                        out.append(np.array(len(value), order + PLY_TYPES[kind[1]]).tobytes())
+                        out.append(np.array(value, order + PLY_TYPES[kind[2]]).tobytes())
                     else:
-                        out += np.array(value, order + PLY_TYPES[kind]).tobytes()
-    return out
+                        out.append(np.array(value, order + PLY_TYPES[kind]).tobytes())
+    return b"".join(out)
 
 
 def _text(value, kind):
