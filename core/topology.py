@@ -18,18 +18,6 @@ from .slices import to_end
 _ROW_BLOCK = 1 << 16  # vertices per block where each of their half-edges is compared (several int64 each)
 
 
-def faces_per_edge(n_edges, corner_edges):
-    """How many face corners start on each edge (two for an edge inside a surface, one on a border).
-
-    Examples
-    --------
-    >>> from core import topology
-    >>> topology.faces_per_edge(4, [0, 1, 2, 0, 2, 3]).tolist()
-    [2, 1, 2, 1]
-    """
-    return np.bincount(corner_edges, minlength=n_edges)
-
-
 def closed_from_corners(edges, corner_verts, corner_edges):
     """Whether the faces form a closed, consistently oriented surface: every edge of a face is in exactly
     two faces, which run along it in opposite directions (loose edges do not matter).
@@ -67,24 +55,6 @@ def closed_from_corners(edges, corner_verts, corner_edges):
     seen = np.zeros(2 * len(edges), dtype=bool)
     seen[keys] = True
     return bool(np.count_nonzero(seen) == keys.size and np.array_equal(seen[0::2], seen[1::2]))
-
-
-def boundary_vertices(n_vertices, edges, corner_edges):
-    """Vertices on an open boundary: on an edge used by exactly one face (edges without faces don't count).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from core import topology
-    >>> edges = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]])
-    >>> corner_verts = np.array([0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3])  # a tetrahedron, 4 triangles
-    >>> corner_edges = np.array([1, 3, 0, 0, 4, 2, 2, 5, 1, 3, 5, 4])  # each corner's edge to the next
-    >>> topology.boundary_vertices(4, edges, corner_edges[:9]).tolist()  # without the face (1, 2, 3)
-    [False, True, True, True]
-    """
-    mask = np.zeros(n_vertices, dtype=bool)
-    mask[edges[faces_per_edge(len(edges), corner_edges) == 1].ravel()] = True
-    return mask
 
 
 def closed_from_triangles(triangles):

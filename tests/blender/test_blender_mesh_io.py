@@ -60,7 +60,7 @@ def test_closedness_from_corner_edges_matches_the_core(scene, make, change, expe
 @pytest.mark.parametrize(
     "make", [noisy_sphere, noisy_grid, lambda: (bpy.ops.mesh.primitive_monkey_add(), bpy.context.active_object)[1]]
 )
-def test_boundary_from_corner_edges_matches_the_faces(scene, make):
+def test_border_of_the_fanned_faces_matches_the_faces(scene, make):
     # Reference: an edge of exactly one face, counted from the faces' own corner pairs.
     mesh = make().data
     faces = mesh_io().read_faces(mesh)
@@ -73,7 +73,7 @@ def test_boundary_from_corner_edges_matches_the_faces(scene, make):
     unique, counts = np.unique(pairs, axis=0, return_counts=True)
     expected = np.zeros(len(mesh.vertices), dtype=bool)
     expected[unique[counts == 1].ravel()] = True
-    _verts, corner_edges = mesh_io().read_corners(mesh)
-    got = core.topology.boundary_vertices(len(mesh.vertices), mesh_io().read_edges(mesh), corner_edges)
+    got = np.zeros(len(mesh.vertices), dtype=bool)  # what the border rules hold (core.borders)
+    got[core.borders.border_edges(core.metrics.fan_triangles(mesh_io().read_faces(mesh)), len(got)).ravel()] = True
     np.testing.assert_array_equal(got, expected)
     assert got.any() != (make is noisy_sphere)

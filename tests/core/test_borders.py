@@ -79,10 +79,7 @@ def test_fixed_border_is_pin_boundary(mode):
     positions, faces = sm.grid(8, 6)
     noisy = sm.noisy(positions, seed=4)
     edges = sm.edges_of(faces)
-    corner_edges = np.array(
-        [np.flatnonzero((edges == sorted(p)).all(axis=1))[0] for f in faces for p in zip(f, f[1:] + f[:1])]
-    )
-    pinned = core.topology.boundary_vertices(len(noisy), edges, corner_edges)
+    pinned = border_mask(faces, len(noisy))  # the vertices on an edge of one face
     for numbers in ({}, dict(iterations=6)):
         fixed = core.smooth_mesh(noisy, edges, faces=faces, border="fixed", mode=mode, **numbers)
         pin = core.smooth_mesh(noisy, edges, faces=faces, fixed=pinned, mode=mode, **numbers)

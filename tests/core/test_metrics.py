@@ -158,10 +158,10 @@ def test_closed_from_corners_agrees_with_the_triangles():
         assert is_closed(fan_triangles(polygons(faces))) is expected, faces
 
 
-def test_boundary_vertices_are_those_of_one_face_edges():
+def test_border_vertices_are_those_of_one_face_edges():
     _, faces = sm.grid(4, 3)
-    edges, _, corner_edges = blender_layout(faces)
-    boundary = core.topology.boundary_vertices(12, edges, corner_edges)
+    boundary = np.zeros(12, dtype=bool)
+    boundary[core.borders.border_edges(fan_triangles(polygons(faces)), 12).ravel()] = True
     assert np.array_equal(np.flatnonzero(~boundary), [5, 6])  # the two inner vertices of a 4 x 3 grid
 
 
