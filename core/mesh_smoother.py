@@ -174,10 +174,10 @@ class MeshSmoother:
         self.operator, self.weld = operator, bool(weld)
         # Every number checked now, as core.Smoothing checks them.
         check_choice(mode, "mode", MODES)
-        check_unit_interval(self.alpha, "alpha")
-        check_unit_interval(self.beta, "beta")
-        check_iterations(self.iterations)
-        check_tolerance(tolerance)
+        self.alpha = check_unit_interval(self.alpha, "alpha")  # float: a Fraction reports as the number ran
+        self.beta = check_unit_interval(self.beta, "beta")
+        self.iterations = check_iterations(self.iterations)
+        self.tolerance = check_tolerance(tolerance)
         check_max_deviation(0.0 if self.max_deviation == AUTO else self.max_deviation, n)
         self.welding = self.surface = None
         self.prepared = False  # the welding, the faces' surface and the border rule: the first slices of steps()

@@ -164,7 +164,7 @@ def check_max_deviation(value, n_vertices):
 
 def check_unit_interval(value, name):
     """Return ``value`` as a float in [0, 1], or raise ValueError."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
         raise ValueError(f"{name} must be a number between 0 and 1, got {value!r}")
     if not 0.0 <= value <= 1.0:
         raise ValueError(f"{name} must lie between 0 and 1, got {value}")
@@ -180,7 +180,7 @@ def check_iterations(value):
 
 
 def check_tolerance(value):
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value < 0:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) or value < 0:
         raise ValueError(f"tolerance must be a number >= 0 (0 = always run every iteration), got {value!r}")
     return float(value)
 

@@ -50,7 +50,7 @@ def read_positions(obj, noun=("vertex", "vertices")):
     bad = core.validation.nonfinite_rows(positions)
     if bad.size:
         raise InputError(
-            f"'{obj.data.name}' has {bad.size} {noun[1]} with NaN or infinite coordinates "
+            f"Object '{obj.name}' has {bad.size} {noun[bad.size != 1]} with NaN or infinite coordinates "
             f"(first: {noun[0]} {int(bad[0])}): fix or delete them first"
         )
     return positions, key_block

@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import core, settings_spec
 from ..core.pointcloud import PointCloudSmoother
+from ..core.pointcloud.geometry import collinear
 from ..core.pointcloud.noise import MAX_STEPS, matched_alpha
 from ..core.pointcloud.sdg import reach_gap_problem
 from ..settings_spec import PointSettings
@@ -43,7 +44,8 @@ def _attribute_mask(data, name, count):
 
 
 def _too_few_points(name, positions):
-    """Why ``positions`` cannot be smoothed (fewer than three distinct points: no RFS face), or None."""
+    """Why ``positions`` cannot be smoothed (fewer than three distinct points, or all on one line: no RFS
+    face), or None."""
     n = len(positions)
     if n == 1:
         return f"'{name}' is a single point: nothing to smooth"
@@ -53,6 +55,8 @@ def _too_few_points(name, positions):
     other = np.all(positions == positions[int(np.argmax(differs))], axis=1)
     if np.all(other | ~differs):  # every point is the first one or that other one
         return f"The {n} points of '{name}' lie at only 2 distinct positions: nothing to smooth"
+    if collinear(positions):
+        return f"The {n} points of '{name}' lie on one straight line: no RFS face can form, nothing to smooth"
     return None
 
 

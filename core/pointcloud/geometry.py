@@ -244,3 +244,23 @@ class Incidence:
                 self.order, self.edge_of = self.order.astype(np.int32), self.edge_of.astype(np.int32)
             self.keys = sorted_keys[self.edge_start]
             self.edges = np.stack([self.keys // max(n, 1), self.keys % max(n, 1)], axis=1)
+
+
+# Off-line spread, relative to the spread along the line, below which points count as on one line: far
+# below any scan's noise, far above float32 rounding.
+COLLINEAR = 1e-6
+
+
+def collinear(points):
+    """Whether (n, 3) ``points`` lie on one straight line (within COLLINEAR of their extent): no triangle
+    of them has an area, so no RFS face can form.
+
+    >>> import numpy as np
+    >>> t = np.linspace(0.0, 1.0, 5)[:, None]
+    >>> collinear(t * [1.0, 2.0, 3.0]), collinear(np.eye(3))
+    (True, False)
+    """
+    centred = np.asarray(points, dtype=np.float64)
+    centred = centred - centred.mean(axis=0)
+    spread = np.sqrt(np.clip(np.linalg.eigvalsh(centred.T @ centred), 0.0, None))  # ascending
+    return bool(spread[1] <= COLLINEAR * spread[2])

@@ -8,6 +8,7 @@ on, each point takes a share of every step's move that follows its curvature aga
 local amount, core.pointcloud.local_amount).
 """
 
+import math
 import numbers
 import time
 from collections.abc import Callable
@@ -81,7 +82,7 @@ def _alpha(value):
 
 
 def _positive(value, name):
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value <= 0:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) or value <= 0:
         raise ValueError(f"{name} must be a number > 0, got {value!r}")
     return float(value)
 

@@ -37,10 +37,11 @@ def test_mesh_without_edges_points_to_point_cloud_smoothing(scene):
 
 def test_nan_coordinates(scene):
     obj = noisy_sphere()
+    obj.data.name = "SphereData"  # the message names the object the user selected, as the others do
     positions = positions_of(obj.data)
     positions[5] = np.nan
     obj.data.vertices.foreach_set("co", positions.ravel())
-    run_expecting("NaN or infinite.*vertex 5")
+    run_expecting(f"Object '{obj.name}' has 1 vertex with NaN or infinite.*vertex 5")
 
 
 def test_missing_vertex_group(scene):

@@ -143,6 +143,7 @@ def snapshot():
         ("single", "'Single' is a single point: nothing to smooth"),
         ("coincide", "All 100 points of 'Same' coincide: nothing to smooth"),
         ("two", "The 100 points of 'Two' lie at only 2 distinct positions: nothing to smooth"),
+        ("line", "The 200 points of 'Line' lie on one straight line: no RFS face can form, nothing to smooth"),
         ("nan", "NaN or infinite.*point 7"),
         ("group", "no vertex group 'Nope'"),
         ("nothing", "Select a mesh of loose vertices or a point cloud"),
@@ -160,6 +161,9 @@ def test_bad_input_writes_nothing(scene, case, message):
         select_only(make_mesh_object("Same", [(1, 2, 3)] * 100))
     elif case == "two":
         select_only(make_mesh_object("Two", [(1, 2, 3), (1, 2, 4)] * 50))
+    elif case == "line":  # no advice to raise Reach or Gap: no setting makes a face of collinear points
+        t = np.linspace(-1.0, 1.0, 200)
+        select_only(make_mesh_object("Line", np.stack([t, 2.0 * t + 0.5, 0.25 - t], axis=1)))
     elif case == "nan":
         points = noisy_sphere_points(100)
         points[7] = np.nan

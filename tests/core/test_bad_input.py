@@ -1,5 +1,8 @@
 """Bad input raises ValueError with a message a user can act on, and changes nothing."""
 
+from decimal import Decimal
+from fractions import Fraction
+
 import numpy as np
 import pytest
 import small_meshes as sm
@@ -33,6 +36,7 @@ def run(**overrides):
         (dict(beta=1.5), "beta must lie between 0 and 1"),
         (dict(alpha=float("nan")), "alpha"),
         (dict(alpha="0.5"), "alpha"),
+        (dict(alpha=Decimal("0.1")), "alpha must be a number"),  # not a numbers.Real
         (dict(iterations=-1), "iterations must be 0 or more"),
         (dict(iterations=2.5), "whole number"),
         (dict(mode="parallel"), "mode must be one of"),
@@ -49,6 +53,21 @@ def test_bad_input_raises_value_error(overrides, message):
     with pytest.raises(ValueError, match=message):
         run(**overrides)
     np.testing.assert_array_equal(np.asarray(positions), before)
+
+
+def test_any_real_number_is_a_number():
+    """A Fraction or a NumPy scalar is a number like a float: the same run, and reports hold floats."""
+    as_floats = run(alpha=0.1, beta=0.6, tolerance=0.001)
+    exact = dict(alpha=Fraction(1, 10), beta=Fraction(3, 5), tolerance=Fraction(1, 1000))
+    np.testing.assert_array_equal(run(**exact), as_floats)
+    np.testing.assert_array_equal(run(alpha=np.float64(0.1), beta=np.float64(0.6), tolerance=0.001), as_floats)
+    _, report = core.smooth_mesh(POSITIONS, EDGES, iterations=3, return_report=True, **exact)
+    assert type(report.alpha) is float and report.alpha == 0.1 and type(report.beta) is float
+    cloud = np.random.default_rng(0).random((200, 3))
+    np.testing.assert_array_equal(
+        core.smooth_point_cloud(cloud, alpha=Fraction(1, 10), rounds=1, iterations_per_round=2),
+        core.smooth_point_cloud(cloud, alpha=0.1, rounds=1, iterations_per_round=2),
+    )
 
 
 def test_unknown_variant_and_method():
