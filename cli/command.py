@@ -2,10 +2,10 @@
 
 ``main(argv)`` is the function registered with bpy.utils.register_cli_command; tests call it directly
 with an argument list (the bpy module cannot run `blender -c`). PLY, OBJ and STL files are read and
-written by cli/formats (NumPy); their meshes are smoothed with the shared job code of the mesh
-operators (operators/jobs.py), point clouds with that of the point operator (operators/point_cloud.py),
-through a Blender mesh built from the file's arrays (``smooth_arrays``). .blend files are opened,
-smoothed the same way and saved as a copy.
+written by cli/formats (NumPy); their arrays go to core without Blender (``smooth_arrays``), in the
+precision the file stores, through the shared job code of the mesh operators (operators/jobs.py) and
+that of the point operator (operators/point_cloud.py). .blend files are opened, their objects smoothed
+by the same job code and saved as a copy.
 """
 
 import contextlib
@@ -254,53 +254,75 @@ def smooth_mesh_file(outcome, plan, settings, console):
     name = os.path.splitext(os.path.basename(outcome.source))[0]
     wanted = {plan.settings.vertex_group, plan.settings.influence_group} - {""}
     groups = mesh.groups(wanted) if wanted and hasattr(mesh, "groups") else {}
-    result = smooth_arrays(name, mesh.positions, mesh.corners, mesh.sizes, plan, settings, outcome, groups)
+    positions = mesh.positions.astype(mesh.precision, copy=False)  # no copy when the file holds doubles
+    result = smooth_arrays(name, positions, mesh.corners, mesh.sizes, plan, settings, outcome, groups)
     console.stage(outcome, "writing", outcome.target)
     files.write_bytes(outcome.target, files.result_bytes(mesh, result, outcome.target))
 
 
 def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome, groups=None):
-    """The smoothed positions ((n, 3) float32) of a file's mesh: vertex ``positions`` and faces given as
-    ``corners`` (vertex indices, face after face) with ``sizes`` (corners per face; faces of fewer than
-    three corners take no part). No faces: a point cloud (--points). ``groups``: {name: vertex
-    indices} for --fixed-group and --influence-group (an OBJ's groups, weight 1).
+    """The smoothed positions of a file's mesh: vertex ``positions`` (in the precision the smoothing runs
+    in) and faces given as ``corners`` (vertex indices, face after face) with ``sizes`` (corners per face;
+    faces of fewer than three corners, or with a corner repeating the one before it, take no part). No
+    faces: a point cloud (--points). ``groups``: {name: vertex indices} for --fixed-group and
+    --influence-group (an OBJ's groups, weight 1). ``name`` is what messages call the mesh.
 
-    The one place that hands a file's arrays to the smoothing: a Blender mesh named ``name`` (so that
-    messages name it as the operators would) smoothed by the operators' own job code."""
-    with in_blender(outcome):
-        bpy.ops.wm.read_homefile(use_empty=True)  # each file starts from an empty scene
-        ctrl_c_interrupts()  # loading a file may hand SIGINT back to Blender (5.x)
-        obj = blender_object(name, positions, corners, sizes)
-        for group, members in (groups or {}).items():
-            obj.vertex_groups.new(name=group).add(members.tolist(), 1.0, "REPLACE")
-        smooth_objects([obj], plan, settings, outcome)
-        result = np.empty(3 * len(positions), dtype=np.float32)
-        obj.data.vertices.foreach_get("co", result)
-    return result.reshape(-1, 3)
+    The one place that hands a file's arrays to the smoothing, through the operators' job code (the same
+    options and checks, the same core run) but not through a Blender mesh, which would hold them in
+    single precision."""
+    n = len(positions)
+    fixed = group_mask(name, groups, plan.settings.vertex_group, plan.settings.invert_vertex_group, n)
+    if plan.points:
+        if np.any(sizes >= 3):
+            raise FileError(f"'{name}' has edges: it is a mesh, not a point cloud (smooth it without --points)")
+        check_point_groups(plan.settings)
+        cloud = point_cloud.Cloud.of_arrays(name, positions, fixed)
+        smooth_clouds([cloud], settings, outcome)
+        outcome.objects = 1
+        return cloud.result
+    influence = group_mask(name, groups, plan.settings.influence_group, plan.settings.invert_influence_group, n)
+    job = mesh_job(name, positions, corners, sizes, fixed, None if influence is None else influence.astype(float))
+    smooth_jobs([job], settings, outcome, plan.given)
+    outcome.objects = 1
+    return job.result
 
 
-def blender_object(name, positions, corners, sizes):
-    """A mesh object in the current scene with these vertices and the faces Blender can hold (at least
-    three corners, no corner repeating the one before it)."""
-    following, _ = corner_neighbours(np.cumsum(sizes) - sizes, sizes)
+def check_point_groups(settings):
+    if settings.influence_group:
+        raise FileError("--influence-group is for meshes: point clouds take --fixed-group only")
+
+
+def group_mask(name, groups, group, invert, n):
+    """The ``n`` vertices' membership of vertex group ``group`` (bool, inverted if asked), None without one."""
+    if not group:
+        return None
+    members = (groups or {}).get(group)
+    if members is None:
+        raise FileError(f"Object '{name}' has no vertex group '{group}'")
+    mask = np.zeros(n, dtype=bool)
+    mask[members] = True
+    return ~mask if invert else mask
+
+
+def mesh_job(name, positions, corners, sizes, fixed, influence):
+    """A job of the mesh operators (operators/jobs.py) for a file's arrays: its edges are the sides of
+    the faces Blender would keep (at least three corners, none repeating the one before it)."""
+    n = len(positions)
+    if n == 0:
+        raise FileError(f"Mesh '{name}' has no vertices: nothing to smooth")
+    starts = np.cumsum(sizes) - sizes
+    following, _ = corner_neighbours(starts, sizes)
     degenerate = np.repeat(np.arange(len(sizes)), sizes)[corners == corners[following]]
     keep = sizes >= 3
     keep[degenerate] = False
     mask = np.repeat(keep, sizes)
-    loops = corners[mask].astype(np.int32)
-    counts = sizes[keep].astype(np.int32)
-    mesh = bpy.data.meshes.new(name)
-    mesh.vertices.add(len(positions))
-    mesh.vertices.foreach_set("co", np.ascontiguousarray(positions, dtype=np.float32).ravel())
-    mesh.loops.add(len(loops))
-    mesh.loops.foreach_set("vertex_index", loops)
-    mesh.polygons.add(len(counts))
-    mesh.polygons.foreach_set("loop_start", (np.cumsum(counts) - counts).astype(np.int32))
-    mesh.polygons.foreach_set("loop_total", counts)
-    mesh.update(calc_edges=True)
-    obj = bpy.data.objects.new(name, mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    return obj
+    edges = np.stack([corners[mask], corners[following][mask]], axis=1)
+    if not len(edges):
+        raise FileError(f"'{name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
+    kept = sizes[keep]
+    faces = core.metrics.fan_triangles((np.concatenate([[0], np.cumsum(kept)]), corners[mask]))
+    fixed = np.zeros(n, dtype=bool) if fixed is None else fixed
+    return jobs_module.Job(None, None, positions, edges, faces, fixed, closed=None, influence=influence)
 
 
 def is_point_cloud(obj):
@@ -375,12 +397,18 @@ def smooth_meshes(objects, settings, outcome, given=frozenset()):
         if is_point_cloud(obj):
             raise FileError(f"'{obj.name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
     jobs = [jobs_module.make_job(obj, settings) for obj in unique_data(objects)]
+    smooth_jobs(jobs, settings, outcome, given)
+    for job in jobs:
+        jobs_module.write(job, settings)
+
+
+def smooth_jobs(jobs, settings, outcome, given):
+    """Run the mesh operators' jobs and count what they did into ``outcome``; writes nothing."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)  # said once, at the start
         for _ in jobs_module.run(jobs, settings, given=given):
             pass
     for job in jobs:
-        jobs_module.write(job, settings)
         outcome.changes.append(jobs_module.measure(job))
         outcome.vertices += len(job.positions)
         outcome.iterations = max(outcome.iterations, job.report.iterations)
@@ -392,9 +420,15 @@ def smooth_point_clouds(objects, settings, outcome):
         if obj.type == "MESH" and (len(obj.data.edges) or len(obj.data.polygons)):
             raise FileError(f"'{obj.name}' has edges: it is a mesh, not a point cloud (smooth it without --points)")
     clouds = point_cloud.read_clouds(objects, settings)
+    smooth_clouds(clouds, settings, outcome)
+    point_cloud.write(clouds, settings, bpy.context)
+
+
+def smooth_clouds(clouds, settings, outcome):
+    """Run the point operator's clouds and count what they did into ``outcome``; writes nothing."""
+    point_cloud.check_settings(settings)
     for _ in point_cloud.run(clouds, settings):
         pass
-    point_cloud.write(clouds, settings, bpy.context)
     for cloud in clouds:
         outcome.changes.append(core.measure_change(cloud.positions, cloud.result))
         outcome.vertices += len(cloud.positions)

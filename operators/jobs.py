@@ -20,12 +20,12 @@ METHOD_LABEL = {choice.identifier: choice.short for choice in settings_spec.METH
 class Job:
     obj: object
     mesh: object
-    positions: np.ndarray  # float32 (n, 3): the mesh's, or its active shape key's
+    positions: np.ndarray  # (n, 3): the mesh's or its active shape key's (float32), or a file's
     edges: np.ndarray
     faces: np.ndarray  # (t, 3) triangles (a fan of each face), None for a mesh without faces
     fixed: np.ndarray  # bool (n,)
     closed: bool | None = False  # the faces enclose a volume; None: not checked yet (see input_measure)
-    corners: tuple = None  # (corner_verts, corner_edges) while ``closed`` is None
+    corners: tuple = None  # (corner_verts, corner_edges) while ``closed`` is None, if Blender gave them
     influence: np.ndarray = None  # float32 (n,) weights of the influence group, if any
     key_block: object = None  # the active shape key that holds ``positions``, if any
     result: np.ndarray = None
@@ -185,7 +185,7 @@ def input_measure(job):
 
 def _measure_input(job):
     closed = job.closed
-    if closed is None:
+    if closed is None and job.corners is not None:  # else measure_input finds it from the triangles
         closed = core.topology.closed_from_corners(job.edges, *job.corners)
     return core.metrics.measure_input(job.positions, job.faces, closed=closed)
 

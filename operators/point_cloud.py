@@ -88,6 +88,20 @@ class Cloud:
         self.result = None
         self.report = None
 
+    @classmethod
+    def of_arrays(cls, name, positions, fixed=None):
+        """A cloud given as arrays (a file's points, on the command line), checked as an object's is;
+        ``name`` is what messages call it. It has no object to write to."""
+        if len(positions) == 0:
+            raise InputError(f"'{name}' has no points: nothing to smooth")
+        too_few = _too_few_points(name, positions)
+        if too_few:
+            raise InputError(too_few)
+        cloud = cls.__new__(cls)
+        cloud.obj = cloud.data = cloud.key_block = None
+        cloud.positions, cloud.fixed, cloud.result, cloud.report = positions, fixed, None, None
+        return cloud
+
     def _fixed(self, settings):
         n = len(self.positions)
         if not settings.vertex_group:
@@ -130,11 +144,16 @@ class Cloud:
         return obj
 
 
-def read_clouds(selected, settings):
-    """Read and check every object (an object data shared by several objects once); raises InputError. Reads only."""
+def check_settings(settings):
+    """Raise InputError for settings no cloud can run with (Reach and Gap that do not fit together)."""
     problem = reach_gap_problem(settings.spacing_factor, settings.gap_factor, REACH_GAP)
     if problem:
         raise InputError(problem)
+
+
+def read_clouds(selected, settings):
+    """Read and check every object (an object data shared by several objects once); raises InputError. Reads only."""
+    check_settings(settings)
     return [Cloud(obj, settings) for obj in unique_data(selected)]
 
 

@@ -13,6 +13,7 @@ class ObjFile:
     corner its `vn` index in ``corner_normals`` (-1: none)."""
 
     ext = ".obj"
+    precision = np.float64  # text: as many digits as the writer gave (georeferenced scans need doubles)
 
     def __init__(self, data):
         if b"\\\n" in data or b"\\\r\n" in data:

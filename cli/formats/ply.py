@@ -110,6 +110,8 @@ class PlyFile:
         else:
             self._locate_binary(body)
         self.positions = np.stack([self._read(vertex, axis) for axis in "xyz"], axis=1)
+        # The precision the file keeps its positions in: the smoothing runs in it.
+        self.precision = np.float64 if any(vertex.property(axis).type == "f8" for axis in "xyz") else np.float32
         self.face = next(
             (e for e in self.elements if e.name == "face" and any(e.property(n) for n in FACE_LISTS)), None
         )

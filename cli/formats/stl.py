@@ -25,6 +25,7 @@ class StlFile:
 
     ext = ".stl"
     has_normals = True  # facet normals: always there, recomputed from the smoothed facet
+    precision = np.float32  # what STL stores, ASCII ones included (their numbers come from floats)
 
     def __init__(self, data):
         self.data = data

@@ -127,6 +127,47 @@ def test_ply_keeps_its_encoding_and_normals(cli, tmp_path, encoding, normals):
         assert not np.allclose(written_normals, radial, atol=1e-3)
 
 
+# A georeferenced scan: a unit sphere at UTM-like coordinates, where single precision steps by 0.5.
+FAR = np.array([512345.0, 4123456.0, 250.0])
+
+
+def far_sphere():
+    """(positions in doubles, far from the origin, and triangles) of a noisy icosphere of radius 1."""
+    bpy.ops.wm.read_homefile(use_empty=True)
+    obj = noisy_sphere(sigma=0.02)
+    return positions_of(obj.data).astype(np.float64) + FAR, np.array(faces_of(obj.data))
+
+
+@pytest.mark.parametrize("kind", ["ply-double", "obj"])
+def test_files_are_smoothed_in_the_precision_they_store(cli, addon, tmp_path, kind):
+    """Doubles stay doubles: the run is core's on the file's float64 arrays, bit for bit, with the add-on's
+    options; through single precision the sphere would be shattered into 0.5-unit steps."""
+    positions, faces = far_sphere()
+    if kind == "obj":
+        source = tmp_path / "scan.obj"
+        lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in positions.tolist()] + [
+            f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces
+        ]
+        source.write_text("\n".join(lines) + "\n")
+    else:
+        columns = [(axis, "double", positions[:, i]) for i, axis in enumerate("xyz")]
+        source = write_ply(tmp_path / "scan.ply", columns, faces, "binary_little_endian")
+    assert cli.main([str(source), "-o", str(tmp_path / "out")]) == 0
+    out = tmp_path / "out" / source.name
+    if kind == "obj":
+        smoothed = np.array([line.split()[1:] for line in out.read_text().splitlines() if line.startswith("v ")], float)
+    else:
+        smoothed = columns_of(read_ply(out)[2], "xyz")
+    jobs, settings_spec = sys.modules[ADDON + ".operators.jobs"], sys.modules[ADDON + ".settings_spec"]
+    options = jobs.core_options(settings_spec.MeshSettings())
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    expected = sys.modules[ADDON + ".core"].MeshSmoother(positions, edges, faces=faces, **options).run()
+    assert expected.dtype == np.float64
+    np.testing.assert_array_equal(smoothed, expected)
+    radius = np.linalg.norm(smoothed - FAR, axis=1)
+    assert np.abs(radius - 1.0).max() < 0.1  # on the sphere: no single-precision steps
+
+
 def test_ply_keeps_colours_uvs_and_other_properties(cli, tmp_path):
     positions, faces, _ = sphere_arrays(seed=1)
     count = len(positions)
