@@ -102,10 +102,10 @@ def make_case(mesh, kind, sigma, seed, reference="scan"):
     return quality.Case(mesh, kind, sigma, clean, faces, noisy)
 
 
-def hc_grid(case):
-    """RMS at every (alpha, beta, checkpoint) of the grid (NaN past a path's end). Returns (grid, best
-    {params, rms})."""
-    grid = quality.walk_grid(case, ALPHAS, BETAS, CHECKPOINTS)
+def hc_grid(case, border="free"):
+    """RMS at every (alpha, beta, checkpoint) of the grid (NaN past a path's end), under the open-border
+    rule ``border``. Returns (grid, best {params, rms})."""
+    grid = quality.walk_grid(case, ALPHAS, BETAS, CHECKPOINTS, border=border)
     ia, ib, ic = np.unravel_index(np.nanargmin(grid), grid.shape)
     params = {"alpha": ALPHAS[ia], "beta": BETAS[ib], "iterations": CHECKPOINTS[ic]}
     return grid, {"params": params, "rms": float(grid[ia, ib, ic])}
@@ -143,6 +143,8 @@ def measure_cell(mesh, set_name, kind, sigma, seed, reference="scan"):
     }
     grid, best = hc_grid(case)
     cell["best"] = best
+    if quality.BORDER != "free" and cell["border"] > 0:  # the best HC setting that keeps borders as ours does
+        cell["best_same_border"] = hc_grid(case, quality.BORDER)[1]
     cell["grid"] = {"alphas": ALPHAS, "betas": BETAS, "iterations": CHECKPOINTS, "rms": grid.tolist()}
     return cell
 
@@ -229,6 +231,14 @@ def summary(name, cells, out):
         f"{fixed} of {n} (target: all; worst {max(fixed_ratios):.2f}×); below both Taubin defaults in {taubin} of "
         f"{n} = {taubin / n:.0%} (target ≥ {TAUBIN_SHARE:.0%})."
     )
+    same = [c for c in cells if "best_same_border" in c]
+    if same:
+        ratios = [c["default"]["rms"] / c["best_same_border"]["rms"] for c in same]
+        within = sum(r <= BEST_WITHIN for r in ratios)
+        out(
+            f"  Open meshes against the best HC setting with the same border rule ({quality.BORDER}): within 15 % "
+            f"in {within} of {len(same)} (median {np.median(ratios):.2f}×, worst {max(ratios):.2f}×)."
+        )
     by_sigma = {}
     for cell in cells:
         by_sigma.setdefault(cell["sigma"], []).append(cell)
@@ -299,8 +309,10 @@ def main():
     parser.add_argument("--no-scanner", action="store_true", help="skip the real scans with no noise added")
     parser.add_argument("--reference", default="scan", choices=tuple(REFERENCES), help="the real scans' truth")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--border", default=quality.BORDER, help="the default's open-border rule (core.borders)")
     parser.add_argument("--from", dest="sources", nargs="+", default=[], help="report these JSON files' numbers")
     args = parser.parse_args()
+    quality.BORDER = args.border
     with Report("bench_default_heldout") as out:
         out(f"`{' '.join(['bench/bench_default_heldout.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
         if args.sources:
@@ -311,6 +323,7 @@ def main():
                 record["scanner"] += data["scanner"]
             report(record, out)
             return
+        out(f"The default's open borders: {quality.BORDER}.")
         out(f"Load average at start: {' '.join(f'{x:.2f}' for x in os.getloadavg())}.")
         only = set(inputs.parse_list(args.meshes))
         sets = inputs.parse_list(args.sets)

@@ -121,12 +121,15 @@ def hc_default_settings():
     }
 
 
+BORDER = "free"  # the open-border rule hc_default runs with (core.borders)
+
+
 def hc_default(case):
     """HC Smooth's default result: what the operator and the command line give with nothing changed
     (core.smooth_mesh, the pipeline they all run, with the options the add-on passes: split vertices
     welded)."""
     result, report = core.smooth_mesh(
-        case.noisy, case.edges, faces=case.faces, weld=True, border="free", return_report=True
+        case.noisy, case.edges, faces=case.faces, weld=True, border=BORDER, return_report=True
     )
     settings = {"alpha": report.alpha, "beta": report.beta, "iterations": report.iterations}
     if report.amount is not None:
@@ -151,10 +154,13 @@ def hc_fixed(case, params):
     )
 
 
-def walk_grid(case, alphas, betas, checkpoints, rows=None):
+def walk_grid(case, alphas, betas, checkpoints, rows=None, border="free"):
     """RMS of HC (on ``rows``, all vertices if None) at every (alpha, beta, checkpoint), NaN past the end
-    of a path: each path runs once, read at its checkpoints, and stops past its minimum."""
+    of a path: each path runs once, read at its checkpoints, and stops past its minimum. ``border``: the
+    open-border rule of the runs (core.borders; "free" is the paper's algorithm)."""
     operator = core.umbrella_operator(case.edges, len(case.noisy))
+    held = np.zeros(len(case.noisy), dtype=bool)
+    operator, held = core.borders.apply_border(border, operator, case.faces, held)
     grid = np.full((len(alphas), len(betas), len(checkpoints)), np.nan)
     for ia, alpha in enumerate(alphas):
         for ib, beta in enumerate(betas):
@@ -167,6 +173,7 @@ def walk_grid(case, alphas, betas, checkpoints, rows=None):
                 beta=beta,
                 iterations=checkpoints[-1],
                 operator=operator,
+                fixed=held,
             )
             done = 0
             for ic, checkpoint in enumerate(checkpoints):

@@ -204,6 +204,9 @@ class MeshSmoother:
             self.surface = yield from as_fraction(topology.surface_steps(self.faces, operator.n_vertices), 0.0)
             yield 0.0
         edges = None if self.surface is None else self.surface.border
+        # The Automatic Amount chooses on the surface's own umbrella: its noise test and GCV read a
+        # vertex's 1-ring, which a border vertex's curve row no longer is.
+        self.surface_operator = operator
         self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed, edges)
         self.prepared = True
 
@@ -245,7 +248,7 @@ class MeshSmoother:
         if restoring:  # what the restore needs of the input, on another thread while the choice runs on one
             measuring = parallel.in_background(lambda: volume.measure_before(self.positions, self.faces, self.surface))
         if self.automatic:
-            chooser = AmountChooser(self.positions, operator=self.operator, beta=self.beta, fixed=self.fixed)
+            chooser = AmountChooser(self.positions, operator=self.surface_operator, beta=self.beta, fixed=self.fixed)
             if self.beta_given:
                 chooser.fine_beta = None  # the caller's beta is used as given
             share = CHOOSING_SHARE if self.operator.n_vertices < PATCH_FROM else PATCH_CHOOSING_SHARE
@@ -260,7 +263,8 @@ class MeshSmoother:
                     quiet = chooser.noise.quiet_radius(self.positions, DEVIATION_IN_NOISE)
                     limit = np.where(chooser.noise.quiet, quiet, limit)
             unlimited = not isinstance(limit, np.ndarray) and not limit
-            if self.influence is None and self.mode == "simultaneous" and not self.tolerance and unlimited:
+            same = self.operator is self.surface_operator
+            if same and self.influence is None and self.mode == "simultaneous" and not self.tolerance and unlimited:
                 done = chooser.result()  # the choice ran exactly these iterations on its way: not again
             del chooser  # its runs' buffers go before the smoothing's come
         end = 1.0 - RESTORE_SHARE if restoring else 1.0  # where the smoothing's share of the progress ends

@@ -170,6 +170,19 @@ def test_a_smooth_open_border_holds_its_place(numbers):
     assert np.abs(np.ptp(free[:, :2], axis=0) - np.ptp(noisy[:, :2], axis=0)).max() > 1e-2 * diagonal
 
 
+def test_the_automatic_amount_chooses_on_the_surface_umbrella():
+    """The noise test and GCV read 1-rings: a border rule changes how the run smooths, not the amount the
+    surface's noise asks for (the disc's border is one simple curve: no vertex is held)."""
+    noisy, faces = wavy_disc(sigma=0.3, seed=7)
+    edges = sm.edges_of(faces)
+    reports = {
+        border: core.smooth_mesh(noisy, edges, faces=faces, border=border, return_report=True)[1]
+        for border in ("free", "curve")
+    }
+    assert reports["curve"].amount == reports["free"].amount
+    assert reports["curve"].iterations == reports["free"].iterations > 1
+
+
 def test_a_soup_of_an_open_patch_finds_its_border_after_welding():
     noisy, faces = wavy_disc(5, 12, sigma=0.3, seed=8)
     faces = np.array(faces)
