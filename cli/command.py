@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import core
 from ..operators import jobs as jobs_module
-from ..operators import point_cloud
+from ..operators import mesh_io, point_cloud
 from ..operators.objects import InputError, unique_data
 from . import arguments, files
 from .console_capture import captured
@@ -49,6 +49,7 @@ class Outcome:
     rounds: list = field(default_factory=list)  # point clouds: (rounds, steps per round) per cloud
     seconds: float = 0.0
     changes: list = field(default_factory=list)  # core.Change per smoothed mesh
+    legends: list = field(default_factory=list)  # --deviation-attribute: each mesh's deviation map in words
     warnings: list = field(default_factory=list)
     error: str = ""
     blender_lines: list = field(default_factory=list)  # what Blender printed while a failed file ran
@@ -146,6 +147,8 @@ def run(plan, settings, console, outcomes):
         outcomes.append(outcome)
         process(outcome, plan, settings, console)
         console.say(f"[{number}/{total}] {progress_line(outcome)}")
+        for text in outcome.legends if not outcome.error else ():
+            console.say(f"  {text}")
         for text in outcome.warnings:
             console.say(f"  warning: {text}")
         for line in outcome.blender_lines:
@@ -254,16 +257,17 @@ def smooth_mesh_file(outcome, plan, settings, console):
     name = os.path.splitext(os.path.basename(outcome.source))[0]
     wanted = {plan.settings.vertex_group, plan.settings.influence_group} - {""}
     groups = mesh.groups(wanted) if wanted and hasattr(mesh, "groups") else {}
-    result = smooth_arrays(name, mesh.positions, mesh.corners, mesh.sizes, plan, settings, outcome, groups)
+    result, added = smooth_arrays(name, mesh.positions, mesh.corners, mesh.sizes, plan, settings, outcome, groups)
     console.stage(outcome, "writing", outcome.target)
-    files.write_bytes(outcome.target, files.result_bytes(mesh, result, outcome.target))
+    files.write_bytes(outcome.target, files.result_bytes(mesh, result, outcome.target, added))
 
 
 def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome, groups=None):
-    """The smoothed positions ((n, 3) float32) of a file's mesh: vertex ``positions`` and faces given as
-    ``corners`` (vertex indices, face after face) with ``sizes`` (corners per face; faces of fewer than
-    three corners take no part). No faces: a point cloud (--points). ``groups``: {name: vertex
-    indices} for --fixed-group and --influence-group (an OBJ's groups, weight 1).
+    """(smoothed positions ((n, 3) float32), {name: vertex values}) of a file's mesh: vertex ``positions`` and
+    faces given as ``corners`` (vertex indices, face after face) with ``sizes`` (corners per face; faces of
+    fewer than three corners take no part). No faces: a point cloud (--points). ``groups``: {name: vertex
+    indices} for --fixed-group and --influence-group (an OBJ's groups, weight 1). The values are what the
+    file takes besides the positions: the deviation map with --deviation-attribute, else none.
 
     The one place that hands a file's arrays to the smoothing: a Blender mesh named ``name`` (so that
     messages name it as the operators would) smoothed by the operators' own job code."""
@@ -276,7 +280,11 @@ def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome, grou
         smooth_objects([obj], plan, settings, outcome)
         result = np.empty(3 * len(positions), dtype=np.float32)
         obj.data.vertices.foreach_get("co", result)
-    return result.reshape(-1, 3)
+        added = {}
+        if not plan.points and plan.settings.deviation_map:
+            values = added[mesh_io.DEVIATION_ATTRIBUTE] = np.empty(len(positions), dtype=np.float32)
+            obj.data.attributes[mesh_io.DEVIATION_ATTRIBUTE].data.foreach_get("value", values)
+    return result.reshape(-1, 3), added
 
 
 def blender_object(name, positions, corners, sizes):
@@ -379,9 +387,12 @@ def smooth_meshes(objects, settings, outcome, given=frozenset()):
         warnings.simplefilter("ignore", core.ConvergenceWarning)  # said once, at the start
         for _ in jobs_module.run(jobs, settings, given=given):
             pass
+    jobs_module.write_all(jobs, settings)
     for job in jobs:
-        jobs_module.write(job, settings)
         outcome.changes.append(jobs_module.measure(job))
+        if settings.deviation_map:
+            legend = jobs_module.deviation_map(job).legend()
+            outcome.legends.append(f"'{job.obj.name}': {legend}" if len(jobs) > 1 else legend)
         outcome.vertices += len(job.positions)
         outcome.iterations = max(outcome.iterations, job.report.iterations)
 

@@ -49,16 +49,19 @@ _STEPS = 255  # colours in the lookup table: odd, so that 0 falls on the middle 
 PERCENTILE = 99.0  # the share of moved vertices the ramp spans before it saturates
 
 
-def _lookup_table():
+def _lookup_table(linear):
     where = np.linspace(0.0, 1.0, len(RAMP_ANCHORS))
     at = np.linspace(0.0, 1.0, _STEPS)
     table = np.ones((_STEPS, 4), dtype=np.float32)
     for channel in range(3):
         table[:, channel] = np.interp(at, where, RAMP_ANCHORS[:, channel]) / 255.0
+    if linear:  # the sRGB transfer function, inverted (IEC 61966-2-1)
+        rgb = table[:, :3]
+        table[:, :3] = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
     return table
 
 
-_TABLE = _lookup_table()
+_TABLES = {False: _lookup_table(False), True: _lookup_table(True)}
 
 
 @dataclass(frozen=True)
@@ -70,7 +73,7 @@ class DeviationMap:
     deviation : (n,) float ndarray
         The signed move of each vertex along its input normal, in the positions' dtype and units.
     colors : (n, 4) float32 ndarray
-        sRGB-encoded RGBA in [0, 1] (alpha 1), as ``deviation_colors`` gives them.
+        RGBA in [0, 1] (alpha 1), as ``deviation_colors`` gives them: sRGB-encoded, or linear.
     extent : float
         The ramp spans -extent to +extent (the legend); 0 when nothing moved along a normal.
     low, high : float
@@ -180,8 +183,9 @@ def deviation_extent(deviation: ArrayLike) -> float:
     return float(np.partition(magnitude, rank)[rank])
 
 
-def deviation_colors(deviation: ArrayLike, extent: float) -> np.ndarray:
-    """The ramp's colours of ``deviation``: sRGB-encoded RGBA (n, 4) float32 in [0, 1], alpha 1.
+def deviation_colors(deviation: ArrayLike, extent: float, linear: bool = False) -> np.ndarray:
+    """The ramp's colours of ``deviation``: RGBA (n, 4) float32 in [0, 1], alpha 1, sRGB-encoded (as an
+    image or a byte colour holds them) or, ``linear``, in linear RGB (as Blender's float colours do).
 
     -extent and below are blue (#2166ac), 0 near white (#f7f7f7), +extent and above red (#b2182b); in
     between, 255 steps of ColorBrewer's RdBu. An ``extent`` of 0 colours everything near white.
@@ -193,19 +197,20 @@ def deviation_colors(deviation: ArrayLike, extent: float) -> np.ndarray:
     [[33, 102, 172, 255], [247, 247, 247, 255], [246, 178, 147, 255], [178, 24, 43, 255]]
     """
     deviation = np.asarray(deviation)
+    table = _TABLES[bool(linear)]
     middle = _STEPS // 2
     if not extent > 0:
-        return np.repeat(_TABLE[middle : middle + 1], deviation.size, axis=0)
+        return np.repeat(table[middle : middle + 1], deviation.size, axis=0)
     scale = deviation.dtype.type(middle / extent) if deviation.dtype.kind == "f" else middle / extent
     index = np.rint(deviation * scale)
     np.clip(index, -middle, middle, out=index)
-    return _TABLE[index.astype(np.intp) + middle]
+    return table[index.astype(np.intp) + middle]
 
 
-def deviation_map(before: ArrayLike, after: ArrayLike, faces=None, *, normals=None) -> DeviationMap:
+def deviation_map(before: ArrayLike, after: ArrayLike, faces=None, *, normals=None, linear=False) -> DeviationMap:
     """The deviation map of a smoothing run: ``normal_deviation``, its colours and its legend.
 
-    Parameters are those of ``normal_deviation``.
+    Parameters are those of ``normal_deviation``; ``linear`` as for ``deviation_colors``.
 
     Returns
     -------
@@ -226,7 +231,7 @@ def deviation_map(before: ArrayLike, after: ArrayLike, faces=None, *, normals=No
     extent = deviation_extent(deviation)
     return DeviationMap(
         deviation=deviation,
-        colors=deviation_colors(deviation, extent),
+        colors=deviation_colors(deviation, extent, linear),
         extent=extent,
         low=min(0.0, float(deviation.min())) if deviation.size else 0.0,
         high=max(0.0, float(deviation.max())) if deviation.size else 0.0,
