@@ -254,3 +254,98 @@ def test_modifier_passing_the_mesh_through_maps_zero(scene):
     obj = noisy_grid()
     add_modifier(obj, deviation_map=True, iterations=0)
     assert np.all(attribute_values(evaluated(obj)) == 0.0)
+
+
+# --- the command line -----------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def cli(addon):
+    return __import__(ADDON + ".cli", fromlist=["main"])
+
+
+def formats_module():
+    return __import__(ADDON + ".cli.formats", fromlist=["parse"])
+
+
+def write_scan(path, seed=0):
+    """A noisy icosphere as a binary PLY with vertex colours (Blender's exporter)."""
+    bpy.ops.wm.read_homefile(use_empty=True)
+    obj = noisy_sphere(sigma=0.05, seed=seed)
+    obj.data.color_attributes.new("Col", "BYTE_COLOR", "POINT")
+    select_only(obj)
+    bpy.ops.wm.ply_export(filepath=str(path), export_selected_objects=True, export_uv=False, export_normals=False)
+    return path
+
+
+def vertex_values(data):
+    """{property: values} of a PLY's vertex element, read with the command's own reader."""
+    mesh = formats_module().parse(data, ".ply")
+    return {prop.name: mesh._read(mesh.vertex, prop.name) for prop in mesh.vertex.properties}, mesh
+
+
+def test_ply_result_holds_the_property(cli, capsys, tmp_path):
+    source = write_scan(tmp_path / "scan.ply")
+    assert cli.main([str(source), "-o", str(tmp_path / "plain"), "--iterations", "6"]) == 0
+    assert cli.main([str(source), "-o", str(tmp_path / "map"), "--iterations", "6", "--deviation-attribute"]) == 0
+    said = capsys.readouterr().out
+    assert said.count("deviation map -") == 1  # the legend, under the file's progress line
+    plain, plain_mesh = vertex_values((tmp_path / "plain" / "scan.ply").read_bytes())
+    mapped, mesh = vertex_values((tmp_path / "map" / "scan.ply").read_bytes())
+    deviation = mapped.pop(ATTRIBUTE)
+    assert mapped.keys() == plain.keys() and {"red", "green", "blue"} <= set(plain)
+    for name, values in plain.items():  # every other value as the run without the map wrote it
+        np.testing.assert_array_equal(mapped[name], values, err_msg=name)
+    np.testing.assert_array_equal(mesh.corners, plain_mesh.corners)
+    before = formats_module().parse(source.read_bytes(), ".ply").positions.astype(np.float32)
+    after = mesh.positions.astype(np.float32)
+    triangles = mesh.corners.reshape(-1, 3)
+    expected = expected_deviation(before, after, triangles)
+    np.testing.assert_allclose(deviation, expected, rtol=0, atol=1e-5 * np.abs(expected).max())
+    extent = core.deviation_extent(deviation.astype(np.float32))
+    assert f"deviation map -{extent:.3g} to +{extent:.3g}" in said
+
+
+def test_obj_input_converted_to_ply_holds_it(cli, tmp_path):
+    bpy.ops.wm.read_homefile(use_empty=True)
+    select_only(noisy_sphere(sigma=0.05))
+    source = tmp_path / "scan.obj"
+    bpy.ops.wm.obj_export(filepath=str(source), export_selected_objects=True, export_materials=False)
+    argv = [str(source), "-o", str(tmp_path / "out"), "--format", "ply", "--deviation-attribute"]
+    assert cli.main(argv) == 0
+    values, _ = vertex_values((tmp_path / "out" / "scan.ply").read_bytes())
+    assert ATTRIBUTE in values and np.abs(values[ATTRIBUTE]).max() > 0
+
+
+@pytest.mark.parametrize("fmt", ["obj", "stl"])
+def test_obj_and_stl_results_are_refused_before_any_work(cli, capsys, tmp_path, fmt):
+    source = write_scan(tmp_path / "scan.ply")
+    out = tmp_path / "out"
+    capsys.readouterr()  # what the exporter said
+    assert cli.main([str(source), "-o", str(out), "--format", fmt, "--deviation-attribute"]) == 2
+    said = capsys.readouterr()
+    assert "--deviation-attribute stores a value per vertex, which only PLY and .blend files hold" in said.err
+    assert f"scan.{fmt}" in said.err and "--format ply" in said.err and said.out == ""
+    assert not out.exists()
+    plain_input = tmp_path / f"plain.{fmt}"
+    plain_input.write_bytes(b"")  # never read: the refusal comes from the result's format
+    assert cli.main([str(plain_input), "-o", str(out), "--deviation-attribute"]) == 2
+
+
+def test_points_refuse_it(cli, capsys, tmp_path):
+    source = write_scan(tmp_path / "scan.ply")
+    assert cli.main([str(source), "-o", str(tmp_path / "out"), "--points", "--deviation-attribute"]) == 2
+    assert "--deviation-attribute does not apply to point clouds" in capsys.readouterr().err
+
+
+def test_blend_copy_holds_the_attributes(cli, tmp_path):
+    bpy.ops.wm.read_homefile(use_empty=True)
+    obj = noisy_sphere(name="Scan", sigma=0.05)
+    before, triangles = positions_of(obj.data).copy(), triangles_of(obj.data)
+    source = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(source))
+    assert cli.main([str(source), "-o", str(tmp_path / "out"), "--deviation-attribute"]) == 0
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "out" / "scene.blend"))
+    check_map(bpy.data.objects["Scan"].data, before, triangles)
+    bpy.ops.wm.open_mainfile(filepath=str(source))
+    assert ATTRIBUTE not in attribute_names(bpy.data.objects["Scan"].data)  # the input stays as it was
