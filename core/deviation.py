@@ -202,9 +202,11 @@ def deviation_colors(deviation: ArrayLike, extent: float, linear: bool = False) 
     if not extent > 0:
         return np.repeat(table[middle : middle + 1], deviation.size, axis=0)
     scale = deviation.dtype.type(middle / extent) if deviation.dtype.kind == "f" else middle / extent
-    index = np.rint(deviation * scale)
+    index = deviation * scale  # a new array, rounded to the nearest step in place
+    np.rint(index, out=index)
     np.clip(index, -middle, middle, out=index)
-    return table[index.astype(np.intp) + middle]
+    index += middle
+    return np.take(table, index.astype(np.intp), axis=0)
 
 
 def deviation_map(before: ArrayLike, after: ArrayLike, faces=None, *, normals=None, linear=False) -> DeviationMap:

@@ -349,3 +349,17 @@ def test_blend_copy_holds_the_attributes(cli, tmp_path):
     check_map(bpy.data.objects["Scan"].data, before, triangles)
     bpy.ops.wm.open_mainfile(filepath=str(source))
     assert ATTRIBUTE not in attribute_names(bpy.data.objects["Scan"].data)  # the input stays as it was
+
+
+def test_add_as_modifier_carries_the_option_and_says_what_differs(scene):
+    draw = __import__(ADDON + ".ui.draw", fromlist=["modifier_differences"])
+    spec = __import__(ADDON + ".settings_spec", fromlist=["MeshSettings"])
+    assert "The modifier stores hc_deviation without its colours" in draw.modifier_differences(
+        spec.MeshSettings(deviation_map=True)
+    )
+    assert not any("hc_deviation" in line for line in draw.modifier_differences(spec.MeshSettings()))
+    obj = noisy_sphere(sigma=0.05)
+    assert bpy.ops.object.hc_smooth(deviation_map=True, auto_amount=False) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth_modifier_add(deviation_map=True, replace_smoothing=False) == {"FINISHED"}
+    inputs = __import__(ADDON + ".nodes.inputs", fromlist=["get_input"])
+    assert inputs.get_input(obj.modifiers[-1], "Deviation Map")
