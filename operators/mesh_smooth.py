@@ -51,7 +51,7 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
             show_attribute_colors(context)
 
     def _report_done(self, jobs):
-        self.report({"INFO"}, jobs_module.summary(jobs, self._settings, scene_length(context_scene())))
+        self.report({"INFO"}, jobs_module.summary(jobs, self._settings, scene_length(bpy.context.scene)))
         message = jobs_module.convergence_warning(jobs)
         if message:
             self.report({"WARNING"}, message)
@@ -178,10 +178,6 @@ def show_attribute_colors(context):
         for space in area.spaces:
             if space.type == "VIEW_3D":
                 space.shading.color_type = "VERTEX"  # shown as "Attribute"
-
-
-def context_scene():
-    return bpy.context.scene
 
 
 def scene_length(scene):
