@@ -296,6 +296,17 @@ OUTPUT = Setting(
         Choice("SHAPE_KEY", "New Shape Key", "Write the result into a new shape key and leave the mesh as it was"),
     ),
 )
+DEVIATION_MAP = Setting(
+    "deviation_map",
+    "bool",
+    "Deviation Map",
+    "Store each vertex's signed move along its normal as the point attribute hc_deviation, with a colour "
+    "attribute (blue inwards, red outwards) shown in the viewport's Solid shading; the report gives the range",
+    False,
+    flag="deviation-attribute",
+    help="store each vertex's signed move along its normal as the vertex attribute hc_deviation "
+    "(PLY: a float vertex property; .blend: a mesh attribute with a colour attribute; OBJ and STL cannot hold it)",
+)
 
 # The mesh settings in three parts, each drawn together. How strongly to smooth: the N-panel's main
 # settings, and what a preset stores.
@@ -322,7 +333,7 @@ MAX_DEVIATION = Setting(
 MESH_SMOOTHING = (METHOD, MESH_AUTO_AMOUNT, ALPHA, BETA, ITERATIONS, MODE, TOLERANCE, MAX_DEVIATION)
 # Which vertices move, and how far (the N-panel's Fixed Vertices): they belong to one mesh, so presets leave them.
 MESH_VERTICES = (VERTEX_GROUP, INVERT_VERTEX_GROUP, PIN_BOUNDARY, INFLUENCE_GROUP, INVERT_INFLUENCE_GROUP)
-MESH_RESULT = (OUTPUT,)
+MESH_RESULT = (OUTPUT, DEVIATION_MAP)
 MESH = MESH_SMOOTHING + MESH_VERTICES + MESH_RESULT
 # What the Automatic Amount chooses unless the caller sets it; either of the second set given switches it off
 # (then every number runs as set).
@@ -491,6 +502,13 @@ MODIFIER_MAX_DEVIATION = replace(
     flag=None,
     cli_default=None,
 )
+MODIFIER_DEVIATION_MAP = replace(
+    DEVIATION_MAP,
+    description="Store each vertex's signed move along its input normal as the point attribute hc_deviation "
+    "(for the Spreadsheet, or a material's Attribute node)",
+    flag=None,
+    help=None,
+)
 
 MODIFIER = (
     METHOD,
@@ -503,6 +521,7 @@ MODIFIER = (
     PIN_BOUNDARY,
     INFLUENCE_GROUP,
     INVERT_INFLUENCE_GROUP,
+    MODIFIER_DEVIATION_MAP,
 )
 
 # --- plain settings objects: an operator's snapshot, or what the command line fills ---------------------------

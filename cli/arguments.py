@@ -280,6 +280,8 @@ def parse(argv, prog=PROG):
     if args.output_dir:
         check_output_dir(args.output_dir)
     files = plan_outputs(inputs, args.output_dir, args.format, args.in_place, args.overwrite)
+    if settings.deviation_map:
+        check_deviation_targets(files)
     return Plan(
         settings=settings,
         given=frozenset(setting.name for name, setting in MESH_OPTIONS.items() if getattr(args, name) is not None),
@@ -290,6 +292,20 @@ def parse(argv, prog=PROG):
         notes=notes,
         verbose=args.verbose,
     )
+
+
+HOLDS_DEVIATION = (".ply", BLEND)  # the formats with a place for a value per vertex
+
+
+def check_deviation_targets(files):
+    """Refuse --deviation-attribute where a result's format cannot hold the attribute (OBJ, STL)."""
+    refused = [target for _, target in files if os.path.splitext(target)[1].lower() not in HOLDS_DEVIATION]
+    if refused:
+        names = "".join(f"\n  {name}" for name in refused)
+        raise UsageError(
+            "--deviation-attribute stores a value per vertex, which only PLY and .blend files hold; these "
+            f"results would be OBJ or STL:{names}\nwrite them as PLY with --format ply (nothing was read or written)"
+        )
 
 
 def _key(path):

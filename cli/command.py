@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import core
 from ..operators import jobs as jobs_module
-from ..operators import point_cloud
+from ..operators import mesh_io, point_cloud
 from ..operators.objects import InputError, unique_data
 from . import arguments, files
 from .console_capture import captured
@@ -49,6 +49,7 @@ class Outcome:
     rounds: list = field(default_factory=list)  # point clouds: (rounds, steps per round) per cloud
     seconds: float = 0.0
     changes: list = field(default_factory=list)  # core.Change per smoothed mesh
+    legends: list = field(default_factory=list)  # --deviation-attribute: each mesh's deviation map in words
     warnings: list = field(default_factory=list)
     error: str = ""
     blender_lines: list = field(default_factory=list)  # what Blender printed while a failed file ran
@@ -146,6 +147,8 @@ def run(plan, settings, console, outcomes):
         outcomes.append(outcome)
         process(outcome, plan, settings, console)
         console.say(f"[{number}/{total}] {progress_line(outcome)}")
+        for text in outcome.legends if not outcome.error else ():
+            console.say(f"  {text}")
         for text in outcome.warnings:
             console.say(f"  warning: {text}")
         for line in outcome.blender_lines:
@@ -255,17 +258,19 @@ def smooth_mesh_file(outcome, plan, settings, console):
     wanted = {plan.settings.vertex_group, plan.settings.influence_group} - {""}
     groups = mesh.groups(wanted) if wanted and hasattr(mesh, "groups") else {}
     positions = mesh.positions.astype(mesh.precision, copy=False)  # no copy when the file holds doubles
-    result = smooth_arrays(name, positions, mesh.corners, mesh.sizes, plan, settings, outcome, groups)
+    result, added = smooth_arrays(name, positions, mesh.corners, mesh.sizes, plan, settings, outcome, groups)
     console.stage(outcome, "writing", outcome.target)
-    files.write_bytes(outcome.target, files.result_bytes(mesh, result, outcome.target))
+    files.write_bytes(outcome.target, files.result_bytes(mesh, result, outcome.target, added))
 
 
 def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome, groups=None):
-    """The smoothed positions of a file's mesh: vertex ``positions`` (in the precision the smoothing runs
-    in) and faces given as ``corners`` (vertex indices, face after face) with ``sizes`` (corners per face;
-    faces of fewer than three corners, or with a corner repeating the one before it, take no part). No
-    faces: a point cloud (--points). ``groups``: {name: vertex indices} for --fixed-group and
-    --influence-group (an OBJ's groups, weight 1). ``name`` is what messages call the mesh.
+    """(smoothed positions, {name: vertex values}) of a file's mesh: vertex ``positions`` (in the precision
+    the smoothing runs in) and faces given as ``corners`` (vertex indices, face after face) with ``sizes``
+    (corners per face; faces of fewer than three corners, or with a corner repeating the one before it,
+    take no part). No faces: a point cloud (--points). ``groups``: {name: vertex indices} for
+    --fixed-group and --influence-group (an OBJ's groups, weight 1). ``name`` is what messages call the
+    mesh. The values are what the file takes besides the positions: the deviation map with
+    --deviation-attribute, else none.
 
     The one place that hands a file's arrays to the smoothing, through the operators' job code (the same
     options and checks, the same core run) but not through a Blender mesh, which would hold them in
@@ -279,12 +284,15 @@ def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome, grou
         cloud = point_cloud.Cloud.of_arrays(name, positions, fixed)
         smooth_clouds([cloud], settings, outcome)
         outcome.objects = 1
-        return cloud.result
+        return cloud.result, {}
     influence = group_mask(name, groups, plan.settings.influence_group, plan.settings.invert_influence_group, n)
     job = mesh_job(name, positions, corners, sizes, fixed, None if influence is None else influence.astype(float))
     smooth_jobs([job], settings, outcome, plan.given)
     outcome.objects = 1
-    return job.result
+    added = {}
+    if plan.settings.deviation_map:
+        added[mesh_io.DEVIATION_ATTRIBUTE] = jobs_module.deviation_map(job).deviation.astype(np.float32)
+    return job.result, added
 
 
 def check_point_groups(settings):
@@ -408,8 +416,12 @@ def smooth_jobs(jobs, settings, outcome, given):
         warnings.simplefilter("ignore", core.ConvergenceWarning)  # said once, at the start
         for _ in jobs_module.run(jobs, settings, given=given):
             pass
+    jobs_module.write_all(jobs, settings)
     for job in jobs:
         outcome.changes.append(jobs_module.measure(job))
+        if settings.deviation_map:
+            legend = jobs_module.deviation_map(job).legend()
+            outcome.legends.append(f"'{job.obj.name}': {legend}" if len(jobs) > 1 else legend)
         outcome.vertices += len(job.positions)
         outcome.iterations = max(outcome.iterations, job.report.iterations)
 

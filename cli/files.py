@@ -39,11 +39,14 @@ def read_mesh(path):
         raise FileError(f"could not read the file: {error.strerror or error}") from None
 
 
-def result_bytes(mesh, result, target):
-    """The bytes of the result file: the input with ``result`` written in, or in another format (--format)."""
+def result_bytes(mesh, result, target, added=None):
+    """The bytes of the result file: the input with ``result`` written in, or in another format (--format);
+    ``added``: {name: one float per vertex} to store as vertex properties (PLY only)."""
     ext = os.path.splitext(target)[1].lower()
     try:
-        return formats.updated(mesh, result) if ext == mesh.ext else formats.converted(mesh, result, ext)
+        if ext == mesh.ext:
+            return formats.updated(mesh, result, added)
+        return formats.converted(mesh, result, ext, added)
     except formats.FormatError as error:
         raise FileError(str(error)) from None
 

@@ -4,9 +4,10 @@ The same package loads as ``core`` in tests and tools and as ``bl_ext.<repo>.hc_
 Blender, so everything inside uses relative imports.
 """
 
-from . import borders, mesh_amount, metrics, topology, volume, welding
+from . import borders, deviation, mesh_amount, metrics, topology, volume, welding
 from .adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, in_convergence_region
+from .deviation import DeviationMap, deviation_colors, deviation_extent, deviation_map, normal_deviation
 from .mesh_amount import AmountChooser, MeshAmount, choose_amount
 from .mesh_smoother import AUTO, DEFAULT_ALPHA, DEFAULT_BETA, DEFAULT_ITERATIONS, MeshReport, MeshSmoother, smooth_mesh
 from .metrics import Change, measure_change
@@ -25,6 +26,7 @@ __all__ = [
     "Change",
     "ConvergenceWarning",
     "DivergenceError",
+    "DeviationMap",
     "MeshAmount",
     "METHODS",
     "MODES",
@@ -35,11 +37,16 @@ __all__ = [
     "borders",
     "choose_amount",
     "convergence_message",
+    "deviation",
+    "deviation_colors",
+    "deviation_extent",
+    "deviation_map",
     "hc_smooth",
     "in_convergence_region",
     "laplacian_smooth",
     "mesh_amount",
     "metrics",
+    "normal_deviation",
     "measure_change",
     "smooth",
     "smooth_point_cloud",

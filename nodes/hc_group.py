@@ -34,6 +34,10 @@ The Deviation Limit r is core's max_deviation=: every iteration ends with p = o 
 after the influence (0 = no limit). Plain and central Laplacian then run in the Repeat zone too (one Blur
 node cannot stop after each iteration); without a limit the zone is built without it.
 
+Deviation Map stores each vertex's signed move along its input normal as the point attribute hc_deviation, as
+the mesh operators do (core.normal_deviation): the input's positions and area-weighted vertex normals are
+captured first and carried to the end, where (position - start) . normal is stored. Off, neither is evaluated.
+
 Guards (the modifier cannot write garbage, whoever sets its inputs: the panel, a script writing the modifier's
 ID properties, NaN included): each single-value input is clamped to its range inside the tree by comparisons
 (a Clamp or Minimum node passes NaN on); a NaN Alpha, Beta or Deviation Limit, HC with Beta below 0.5 for more
@@ -49,7 +53,8 @@ from ..core.smoothing import BLOW_UP_FACTOR
 
 GROUP_NAME = "HC Smooth"
 # Bump whenever the nodes or the interface change: an older group in a file is then rebuilt in place.
-VERSION = 3
+VERSION = 4
+DEVIATION_ATTRIBUTE = "hc_deviation"  # the Deviation Map's output, as the mesh operators store it
 VERSION_KEY = "hc_smooth_version"
 
 # Blur weight standing in for "only the neighbours" (plain Laplacian): the centre's own share is
@@ -311,6 +316,10 @@ def build(tree):
 
     alpha, beta, iterations, limit, refused = _checked_inputs(t, value, is_method(HC))
 
+    # With Deviation Map on, the input's positions and normals ride along (captured) to the end.
+    deviation_map = value(settings_spec.MODIFIER_DEVIATION_MAP)
+    geometry, start_position, start_normal = _start_of_map(t, inputs["Geometry"], deviation_map)
+
     # Who moves: outside the fixed group (inside it, inverted), not on a pinned boundary, with neighbours.
     in_group = t.math("GREATER_THAN", value(settings_spec.VERTEX_GROUP), 0.0)
     fixed = t.boolean("XOR", in_group, value(settings_spec.INVERT_VERTEX_GROUP))
@@ -343,12 +352,12 @@ def build(tree):
     blur_weight = t.math("MULTIPLY", weight, movable)
     t.feed(blur.inputs["Weight"], blur_weight)
     # Blur gives q + 0 where the weight is 0, which turns -0.0 into 0.0: those vertices keep q itself.
-    blurred = t.set_position(inputs["Geometry"], blur.outputs[0], t.math("GREATER_THAN", blur_weight, 0.0))
+    blurred = t.set_position(geometry, blur.outputs[0], t.math("GREATER_THAN", blur_weight, 0.0))
 
     # Every method with a Deviation Limit, and HC and the original point always: a Repeat zone of simultaneous steps.
     position = t.position()
     start, (original, movable, influence) = t.capture(
-        inputs["Geometry"],
+        geometry,
         [("VECTOR", "Original", position), ("BOOLEAN", "Movable", movable), ("FLOAT", "Influence", influence)],
     )
     # A single value: whether any vertex takes less than the full step. If none does, the steps below are
@@ -405,10 +414,36 @@ def build(tree):
     iterated = repeat_out.outputs["Geometry"]
     uses_blur = t.boolean("AND", t.boolean("OR", is_method(LAPLACIAN), is_method(CENTRAL)), t.boolean("NOT", limited))
     smoothed = t.switch("GEOMETRY", uses_blur, iterated, blurred)
-    t.feed(group_output.inputs["Geometry"], _guarded(t, inputs["Geometry"], smoothed, refused))
+    result = _guarded(t, geometry, smoothed, refused)
+    t.feed(group_output.inputs["Geometry"], _deviation_map(t, result, deviation_map, start_position, start_normal))
 
     sockets[input_name(settings_spec.METHOD)].default_value = METHOD_NAMES[settings_spec.METHOD.default]
     return sockets
+
+
+def _start_of_map(t, geometry, on):
+    """(geometry, position, normal): the input with its positions and unit area-weighted vertex normals (core's:
+    the faces' normals times their areas, averaged on the vertices, normalised; 0 without a face) captured where
+    ``on`` (a single value: the capture is evaluated only then), else the input as it is."""
+    face = t.node("GeometryNodeInputNormal").outputs[0]
+    area = t.node("GeometryNodeInputMeshFaceArea").outputs[0]
+    summed = t.on_domain(t.scale(face, area), "FACE", "FLOAT_VECTOR")
+    normal = t.node_output("ShaderNodeVectorMath", "Vector", operation="NORMALIZE", inputs=[summed])
+    captured, (position, normal) = t.capture(
+        geometry, [("VECTOR", "Start Position", t.position()), ("VECTOR", "Start Normal", normal)]
+    )
+    return t.switch("GEOMETRY", on, geometry, captured), position, normal
+
+
+def _deviation_map(t, geometry, on, start_position, start_normal):
+    """``geometry`` with, where ``on``, the point attribute hc_deviation: (position - start) . start normal."""
+    moved = t.subtract(t.position(), start_position)
+    deviation = t.node_output("ShaderNodeVectorMath", "Value", operation="DOT_PRODUCT", inputs=[moved, start_normal])
+    store = t.node("GeometryNodeStoreNamedAttribute", data_type="FLOAT", domain="POINT")
+    t.feed(store.inputs["Geometry"], geometry)
+    store.inputs["Name"].default_value = DEVIATION_ATTRIBUTE
+    t.feed(store.inputs["Value"], deviation)
+    return t.switch("GEOMETRY", on, geometry, store.outputs["Geometry"])
 
 
 def _checked_inputs(t, value, is_hc):

@@ -4,7 +4,7 @@ Shared by the Object-mode and Edit-mode operators (and the command line): every 
 validated before any mesh is written, so a failure leaves every mesh as it was.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -32,6 +32,7 @@ class Job:
     report: object = None  # the core.MeshReport of the run: what ran, what the Automatic Amount chose
     change: object = None  # core.Change of the result, measured once for every report
     measured_input: object = None  # Future of the core.metrics.InputMeasure the report compares with
+    deviation: object = None  # the core.DeviationMap of the result (Deviation Map on), made before any write
 
 
 def core_options(props, given=frozenset()):
@@ -164,8 +165,22 @@ def make_smoother(job, options):
     )
 
 
+def write_all(jobs, props):
+    """Write every job's result (``write``); with Deviation Map on, every map is made before anything is
+    written, so a failure leaves every mesh as it was."""
+    if props.deviation_map:
+        for job in jobs:
+            deviation_map(job)
+    for job in jobs:
+        write(job, props)
+
+
 def write(job, props):
-    """Write a job's result: into the mesh (and the active shape key) or into a new shape key."""
+    """Write a job's result: into the mesh (and the active shape key) or into a new shape key; with Deviation
+    Map on, also its map as point attributes of the mesh."""
+    if props.deviation_map:
+        deviation = deviation_map(job)
+        mesh_io.write_deviation(job.mesh, deviation.deviation, deviation.colors)
     if props.output == "SHAPE_KEY":
         if job.mesh.shape_keys is None:
             job.obj.shape_key_add(name="Basis", from_mix=False)
@@ -173,6 +188,15 @@ def write(job, props):
         mesh_io.write_shape_key(key, job.result)
         return
     objects.write_positions(job.obj, job.key_block, job.positions, job.result)
+
+
+def deviation_map(job):
+    """The job's core.DeviationMap, made once: the move along the input's vertex normals (those the report
+    measures along), in linear colours as Blender's float colour attributes hold them."""
+    if job.deviation is None:
+        normals = input_measure(job).result().normals
+        job.deviation = core.deviation_map(job.positions, job.result, normals=normals, linear=True)
+    return job.deviation
 
 
 def input_measure(job):
@@ -199,15 +223,18 @@ def measure(job):
 
 def release(job):
     """Measure the job for its report, then drop its arrays: what Blender allocates next (entering Edit
-    mode builds a BMesh) can reuse their memory instead of fresh pages."""
+    mode builds a BMesh) can reuse their memory instead of fresh pages. A deviation map keeps its legend."""
     measure(job)
+    if job.deviation is not None:
+        job.deviation = replace(job.deviation, deviation=None, colors=None)
     job.positions = job.result = job.edges = job.faces = job.fixed = job.influence = None
     job.corners = job.measured_input = None
 
 
-def summary(jobs, props):
+def summary(jobs, props, length=None):
     """One line for the status bar: method, what ran, time, then what changed (core.Change.summary, the
-    words the command line and the demo use too; with several objects, each one's after its name)."""
+    words the command line and the demo use too; with several objects, each one's after its name), and with
+    Deviation Map on, each map's legend (``length`` formats its lengths, e.g. in scene units)."""
     reports = [job.report for job in jobs]
     seconds = sum(report.seconds for report in reports)
     where = " (new shape key)" if props.output == "SHAPE_KEY" else ""
@@ -217,7 +244,13 @@ def summary(jobs, props):
         changed = measure(jobs[0]).summary()
     else:
         changed = "; ".join(f"'{job.obj.name}': {measure(job).summary()}" for job in jobs)
-    return f"{METHOD_LABEL[props.method]} on {names}{where}: {ran}, {seconds:.2f} s; {changed}"
+    text = f"{METHOD_LABEL[props.method]} on {names}{where}: {ran}, {seconds:.2f} s; {changed}"
+    if props.deviation_map:
+        legends = [deviation_map(job).legend(length) for job in jobs]
+        text += "; " + (
+            "; ".join(f"'{j.obj.name}': {t}" for j, t in zip(jobs, legends)) if len(jobs) > 1 else legends[0]
+        )
+    return text
 
 
 def amount_words(reports):

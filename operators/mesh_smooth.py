@@ -46,11 +46,12 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
 
     def finish(self, context, jobs):
         """Write every result (the subclasses wrap this with what their mode needs)."""
-        for job in jobs:
-            jobs_module.write(job, self._settings)
+        jobs_module.write_all(jobs, self._settings)
+        if self._settings.deviation_map:
+            show_attribute_colors(context)
 
     def _report_done(self, jobs):
-        self.report({"INFO"}, jobs_module.summary(jobs, self._settings))
+        self.report({"INFO"}, jobs_module.summary(jobs, self._settings, scene_length(bpy.context.scene)))
         message = jobs_module.convergence_warning(jobs)
         if message:
             self.report({"WARNING"}, message)
@@ -167,6 +168,28 @@ class MESH_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
     def abandon(self, context):
         if context.mode != "EDIT_MESH":
             bpy.ops.object.mode_set(mode="EDIT")
+
+
+def show_attribute_colors(context):
+    """Solid shading shows the active colour attribute in every 3D Viewport of the screen (none without one:
+    a script run without a window). Not part of the undo history, like any view setting."""
+    screen = getattr(context, "screen", None)
+    for area in screen.areas if screen is not None else ():
+        for space in area.spaces:
+            if space.type == "VIEW_3D":
+                space.shading.color_type = "VERTEX"  # shown as "Attribute"
+
+
+def scene_length(scene):
+    """A length formatter in the scene's units ('0.12 mm'), as the legend of a deviation map says it."""
+    units = scene.unit_settings if scene is not None else None
+    if units is None or units.system == "NONE":
+        return None  # core's default: plain numbers
+
+    def length(value):
+        return bpy.utils.units.to_string(units.system, "LENGTH", value * units.scale_length, precision=3)
+
+    return length
 
 
 classes = (OBJECT_OT_hc_smooth, MESH_OT_hc_smooth)

@@ -84,4 +84,6 @@ def modifier_differences(settings):
         lines.append("The modifier runs Simultaneous mode")
     if settings.tolerance > 0.0:
         lines.append("The modifier runs every iteration")
+    if settings.deviation_map:
+        lines.append("The modifier stores hc_deviation without its colours")
     return lines

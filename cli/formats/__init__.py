@@ -3,7 +3,8 @@
 ``read`` gives a file's mesh (positions, faces) and refuses what cannot be smoothed (NaN or infinite
 coordinates, face indices out of range). ``updated`` gives the file's bytes with the smoothed positions
 written in and the normals the file carries recomputed for the smoothed surface; every other byte is
-kept (see ply.py, obj.py, stl.py). ``converted`` writes the smoothed geometry in another format.
+kept (see ply.py, obj.py, stl.py). ``converted`` writes the smoothed geometry in another format. Both
+take ``added``, {name: one float per vertex} (the deviation map), which only a PLY file holds.
 """
 
 import os
@@ -78,9 +79,19 @@ def moved_rows(mesh, result):
     return np.any(result != mesh.positions.astype(result.dtype), axis=1)
 
 
-def updated(mesh, result):
+HOLDS_VERTEX_VALUES = (".ply",)  # the formats that can take ``added`` vertex values
+
+
+def _check_added(added, ext):
+    if added and ext not in HOLDS_VERTEX_VALUES:
+        raise FormatError(f"a {ext[1:].upper()} file cannot hold vertex values ({', '.join(added)}): write PLY")
+
+
+def updated(mesh, result, added=None):
     """The bytes of ``mesh``'s file with positions ``result`` ((n, 3) float32 or float64): moved vertices
-    rewritten, the normals their faces touch recomputed, everything else as it was."""
+    rewritten, the normals their faces touch recomputed, ``added`` vertex values written in (PLY only),
+    everything else as it was."""
+    _check_added(added, mesh.ext)
     moved = moved_rows(mesh, result)
     rows = np.flatnonzero(moved)
     corners, sizes, mask = surface(mesh)
@@ -98,7 +109,7 @@ def updated(mesh, result):
         if mesh.has_normals and len(sizes):
             new, rows_n = _normals(result, corners, starts, sizes, corners, len(result), moved)
             updates.update({axis: (rows_n, new[rows_n, i]) for i, axis in enumerate(("nx", "ny", "nz"))})
-        return mesh.write(updates)
+        return mesh.write(updates, added)
     updates = {"v": (rows, result[rows])}
     if mesh.has_normals and len(sizes):
         targets = mesh.corner_normals[mask]
@@ -125,14 +136,16 @@ def vertex_normals(mesh, result):
     return None
 
 
-def converted(mesh, result, ext):
-    """The smoothed geometry of ``mesh`` as a new file in format ``ext``: positions, faces, and vertex
-    normals when the input has them (binary PLY and STL, as Blender's exporters write them)."""
+def converted(mesh, result, ext, added=None):
+    """The smoothed geometry of ``mesh`` as a new file in format ``ext``: positions, faces, vertex normals
+    when the input has them, and ``added`` vertex values (PLY only; binary PLY and STL, as Blender's
+    exporters write them)."""
+    _check_added(added, ext)
     positions = np.asarray(result, dtype=np.float32)
     corners, sizes, _ = surface(mesh)
     normals = vertex_normals(mesh, result)
     if ext == ".ply":
-        return _ply_bytes(positions, corners, sizes, normals)
+        return _ply_bytes(positions, corners, sizes, normals, added)
     if ext == ".obj":
         return _obj_bytes(positions, corners, sizes, normals)
     if not len(sizes):
@@ -140,8 +153,9 @@ def converted(mesh, result, ext):
     return _stl_bytes(positions, corners, sizes)
 
 
-def _ply_bytes(positions, corners, sizes, normals):
-    names = ["x", "y", "z"] + (["nx", "ny", "nz"] if normals is not None else [])
+def _ply_bytes(positions, corners, sizes, normals, added=None):
+    added = added or {}
+    names = ["x", "y", "z"] + (["nx", "ny", "nz"] if normals is not None else []) + list(added)
     header = [
         "ply",
         "format binary_little_endian 1.0",
@@ -153,6 +167,8 @@ def _ply_bytes(positions, corners, sizes, normals):
         header += [f"element face {len(sizes)}", "property list uchar int vertex_indices"]
     header.append("end_header\n")
     columns = positions if normals is None else np.hstack([positions, normals])
+    if added:
+        columns = np.column_stack([columns, *(np.asarray(values, np.float32) for values in added.values())])
     body = np.ascontiguousarray(columns, dtype="<f4").tobytes()
     if len(sizes):
         if sizes.max() > 255:

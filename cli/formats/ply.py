@@ -2,7 +2,9 @@
 positions (and the vertex normals nx, ny, nz, where the file has them and faces) changed.
 
 Every element, property, comment and obj_info line is kept: the header as it was, binary records byte
-for byte outside the rewritten values, ASCII lines as they were except the rewritten tokens.
+for byte outside the rewritten values, ASCII lines as they were except the rewritten tokens. A float
+vertex property can be added (the deviation map's ``hc_deviation``): one line in the header after the
+vertex's last property, one value at the end of each vertex record; one the file has is rewritten.
 """
 
 import numpy as np
@@ -48,6 +50,7 @@ class Element:
     def __init__(self, name, count):
         self.name, self.count, self.properties = name, count, []
         self.where = {}  # property name -> (count,) byte offsets (binary) or token indices (ASCII)
+        self.ends = None  # (count,) byte offset just past each record (binary) or its last token's index (ASCII)
         self.counts = {}  # list property name -> (count,) list lengths
 
     def property(self, name):
@@ -146,6 +149,7 @@ class PlyFile:
                     counts = tokens.numbers(start + offset, f"PLY {element.name} {prop.name}")
                     element.counts[prop.name] = integers(counts, f"PLY {element.name} {prop.name} count")
                     offset += 1 + element.counts[prop.name]
+            element.ends = start + offset - 1
             if not np.array_equal(offset, per_record[record : record + element.count]):
                 bad = int(np.flatnonzero(offset != per_record[record : record + element.count])[0])
                 raise FormatError(
@@ -171,6 +175,7 @@ class PlyFile:
                     offset += (
                         np.dtype(prop.count_type).itemsize + counts.astype(np.int64) * np.dtype(prop.type).itemsize
                     )
+            element.ends = offset
             position = int(offset[-1]) if element.count else position
             if position > len(self.data):
                 raise FormatError(f"PLY file ends inside its {element.name} records")
@@ -200,18 +205,21 @@ class PlyFile:
             values = _gather(raw, items, FORMATS[self.format] + prop.type)
         return values, counts
 
-    def write(self, updates):
-        """The file's bytes with ``updates`` ({vertex property name: (rows, values)}) written in."""
+    def write(self, updates, added=None):
+        """The file's bytes with ``updates`` ({vertex property name: (rows, values)}) written in, and ``added``
+        ({name: one value per vertex}) as float vertex properties: rewritten where the file has a float or
+        double of that name, else added after the vertex's last property."""
+        updates, new = dict(updates), {}
+        for name, values in (added or {}).items():
+            prop = self.vertex.property(name)
+            if prop is None:
+                new[name] = np.asarray(values, dtype=np.float32)
+            elif prop.count_type is None and prop.type[0] == "f":
+                updates[name] = (np.arange(self.vertex.count), values)
+            else:
+                raise FormatError(f"PLY vertex property {name} is not a float or double: it cannot take its values")
         if self.format == "ascii":
-            starts, ends, texts = [], [], []
-            for name, (rows, values) in updates.items():
-                where = self.vertex.where[name][rows]
-                starts.append(self.tokens.starts[where])
-                ends.append(self.tokens.ends[where])
-                texts += number_texts(values, self.vertex.property(name).type)
-            if not starts:
-                return bytes(self.data)
-            return splice(self.data, np.concatenate(starts), np.concatenate(ends), texts)
+            return self._write_ascii(updates, new)
         out = bytearray(self.data)
         raw = np.frombuffer(out, dtype=np.uint8)
         for name, (rows, values) in updates.items():
@@ -220,7 +228,57 @@ class PlyFile:
             raw[offsets[:, None] + np.arange(dtype.itemsize)] = (
                 np.asarray(values, dtype=dtype).view(np.uint8).reshape(-1, dtype.itemsize)
             )
-        return bytes(out)
+        if not new:
+            return bytes(out)
+        # Each record's new values go just past its end: the insertions at one offset keep their order.
+        dtype = np.dtype(FORMATS[self.format] + "f4")
+        values = np.stack([new[name] for name in new], axis=1).astype(dtype).view(np.uint8)
+        at = np.repeat(self.vertex.ends, values.shape[1])
+        body = np.insert(raw, at, values.ravel())
+        header = self._header_with(new)
+        return header + body[self._header_end() :].tobytes()
+
+    def _write_ascii(self, updates, new):
+        starts, ends, texts = [], [], []
+        for name, (rows, values) in updates.items():
+            where = self.vertex.where[name][rows]
+            starts.append(self.tokens.starts[where])
+            ends.append(self.tokens.ends[where])
+            texts += number_texts(values, self.vertex.property(name).type)
+        if new:
+            # After each vertex record's last token: an empty span, filled with the new values.
+            after = self.tokens.ends[self.vertex.ends]
+            starts.append(after)
+            ends.append(after)
+            columns = [number_texts(values, "f4") for values in new.values()]
+            texts += [b" " + b" ".join(row) for row in zip(*columns)]
+        data = splice(self.data, np.concatenate(starts), np.concatenate(ends), texts) if starts else bytes(self.data)
+        if not new:
+            return data
+        return self._header_with(new) + data[self._header_end() :]
+
+    def _header_end(self):
+        """The offset of the line after end_header (the body's start)."""
+        end = self.data.find(b"end_header")
+        newline = self.data.find(b"\n", end)
+        return len(self.data) if newline < 0 else newline + 1
+
+    def _header_with(self, new):
+        """The header with a ``property float NAME`` line per new name after the vertex element's last property
+        (its line ending that of the line before it)."""
+        header = self.data[: self._header_end()]
+        lines = header.splitlines(keepends=True)
+        words = [line.split() for line in lines]
+        element = next(i for i, w in enumerate(words) if w[:2] == [b"element", b"vertex"])
+        last = element
+        for i in range(element + 1, len(words)):
+            if words[i][:1] in ([b"element"], [b"end_header"]):
+                break
+            if words[i][:1] == [b"property"]:
+                last = i
+        ending = lines[last][len(lines[last].rstrip(b"\r\n")) :] or b"\n"
+        added = [b"property float " + name.encode("ascii") + ending for name in new]
+        return b"".join(lines[: last + 1] + added + lines[last + 1 :])
 
 
 def _gather(raw, offsets, dtype):

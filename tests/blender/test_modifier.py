@@ -33,6 +33,7 @@ INPUT_NAMES = (
     "Pin Boundary",
     "Influence",
     "Invert Influence",
+    "Deviation Map",
 )
 # Painted weights: 0 (stays), 1 (the full step) and shares between that are not binary fractions.
 INFLUENCE_LEVELS = (0.0, 0.3, 0.55, 0.8, 1.0)

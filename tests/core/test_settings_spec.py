@@ -46,6 +46,7 @@ def test_identifiers_users_rely_on():
         "influence_group",
         "invert_influence_group",
         "output",
+        "deviation_map",
     ]
     assert [s.name for s in spec.POINTS] == [
         "auto_amount",
@@ -78,6 +79,7 @@ def test_identifiers_users_rely_on():
         "pin-boundary": "pin_boundary",
         "influence-group": "influence_group",
         "invert-influence": "invert_influence_group",
+        "deviation-attribute": "deviation_map",
         "rounds": "rounds",
         "steps-per-round": "iterations_per_round",
         "neighbours": "neighbours",
@@ -157,11 +159,11 @@ def test_settings_class_holds_the_declared_defaults(settings):
 def test_mesh_parts_make_up_the_mesh_settings():
     # Every mesh setting is drawn with one part (N-panel: main, Fixed Vertices, after the convergence box).
     assert spec.MESH == spec.MESH_SMOOTHING + spec.MESH_VERTICES + spec.MESH_RESULT
-    # The modifier holds mesh settings, two of them with its own limits and tooltips.
+    # The modifier holds mesh settings, three of them with its own limits and tooltips.
     mesh = {s.name: s for s in spec.MESH}
     assert {s.name for s in spec.MODIFIER} <= set(mesh)
     own = {s.name for s in spec.MODIFIER if s is not mesh[s.name]}
-    assert own == {"iterations", "max_deviation"}
+    assert own == {"iterations", "max_deviation", "deviation_map"}
     for setting in spec.MODIFIER:
         assert (setting.label, setting.kind, setting.default) == (
             mesh[setting.name].label,

@@ -1,0 +1,365 @@
+"""The deviation map (Deviation Map, --deviation-attribute): each vertex's signed move along its input normal
+as the point attribute hc_deviation, its colours, its legend, and nothing at all when the option is off.
+
+The expected values are computed here from the positions before and after, with vertex normals summed face
+by face in this file (not core's code): the attribute must equal the displacement's normal component.
+"""
+
+import bmesh
+import bpy
+import numpy as np
+import pytest
+from blender_scene import ADDON, make_mesh_object, noisy_grid, noisy_sphere, positions_of, select_only
+from test_undo import ctrl_z, run_as_from_the_ui
+
+import core
+
+ATTRIBUTE, COLORS = "hc_deviation", "hc_deviation_color"
+
+
+def area_weighted_normals(positions, triangles):
+    """Unit vertex normals: the sum of the cross products (twice the area times the unit normal) of the
+    triangles at each vertex, normalised; zero for a vertex no triangle touches."""
+    positions = positions.astype(np.float64)
+    sums = np.zeros_like(positions)
+    for a, b, c in triangles:
+        cross = np.cross(positions[b] - positions[a], positions[c] - positions[a])
+        for vertex in (a, b, c):
+            sums[vertex] += cross
+    lengths = np.linalg.norm(sums, axis=1, keepdims=True)
+    return np.divide(sums, lengths, out=np.zeros_like(sums), where=lengths > 0)
+
+
+def triangles_of(mesh):
+    """Each face as a fan from its first corner (the triangles the operators measure normals on)."""
+    return [
+        (p.vertices[0], p.vertices[k], p.vertices[k + 1]) for p in mesh.polygons for k in range(1, len(p.vertices) - 1)
+    ]
+
+
+def expected_deviation(before, after, triangles):
+    return np.einsum("ij,ij->i", after.astype(np.float64) - before, area_weighted_normals(before, triangles))
+
+
+def attribute_values(mesh, name=ATTRIBUTE):
+    attribute = mesh.attributes[name]
+    assert (attribute.domain, attribute.data_type) == ("POINT", "FLOAT")
+    values = np.empty(len(mesh.vertices), dtype=np.float32)
+    attribute.data.foreach_get("value", values)
+    return values
+
+
+def colors_of(mesh):
+    attribute = mesh.attributes[COLORS]
+    assert (attribute.domain, attribute.data_type) == ("POINT", "FLOAT_COLOR")
+    values = np.empty(4 * len(mesh.vertices), dtype=np.float32)
+    attribute.data.foreach_get("color", values)
+    return values.reshape(-1, 4)
+
+
+def attribute_names(mesh):
+    """The attributes a user sees (Blender's internal ones start with a dot: selection, UV map layers)."""
+    return sorted(attribute.name for attribute in mesh.attributes if not attribute.name.startswith("."))
+
+
+def check_map(mesh, before, triangles):
+    """hc_deviation is the move along the input's normals; the colours are core's ramp of it, active."""
+    after = positions_of(mesh)
+    assert not np.array_equal(after, before), "nothing moved: the map would be vacuous"
+    values = attribute_values(mesh)
+    expected = expected_deviation(before, after, triangles)
+    scale = np.abs(expected).max()
+    assert scale > 0
+    np.testing.assert_allclose(values, expected, rtol=0, atol=1e-5 * scale)
+    extent = core.deviation_extent(values)
+    np.testing.assert_array_equal(colors_of(mesh), core.deviation_colors(values, extent, linear=True))
+    assert mesh.color_attributes.active_color_name == COLORS
+    # Outwards is red, inwards blue.
+    colors = colors_of(mesh)
+    assert np.all(colors[values > extent / 2, 0] > colors[values > extent / 2, 2])
+    assert np.all(colors[values < -extent / 2, 2] > colors[values < -extent / 2, 0])
+    return values
+
+
+def test_object_mode_stores_the_move_along_the_normals(scene, capfd):
+    obj = noisy_sphere(sigma=0.05)
+    before = positions_of(obj.data)
+    triangles = triangles_of(obj.data)
+    assert bpy.ops.object.hc_smooth(deviation_map=True) == {"FINISHED"}
+    values = check_map(obj.data, before, triangles)
+    extent = core.deviation_extent(values)
+    # The report's legend is the colours' range, in the scene's units (metres by default).
+    said = capfd.readouterr().out
+    assert "deviation map -" in said and "(blue: inwards, red: outwards" in said
+    shown = bpy.utils.units.to_string("METRIC", "LENGTH", extent, precision=3)
+    assert f"deviation map -{shown} to +{shown}" in said
+
+
+def test_off_adds_nothing(scene, capfd):
+    obj = noisy_sphere(sigma=0.05)
+    names = attribute_names(obj.data)
+    active = obj.data.color_attributes.active_color_name
+    assert bpy.ops.object.hc_smooth() == {"FINISHED"}
+    assert attribute_names(obj.data) == names and ATTRIBUTE not in names and COLORS not in names
+    assert obj.data.color_attributes.active_color_name == active
+    assert "deviation map" not in capfd.readouterr().out
+
+
+def test_solid_shading_shows_the_colours(scene):
+    # The bpy module has a screen (and a 3D Viewport): the shading is switched there as in the UI.
+    spaces = [s for a in bpy.context.screen.areas for s in a.spaces if s.type == "VIEW_3D"]
+    assert spaces
+    for space in spaces:
+        space.shading.color_type = "MATERIAL"
+    noisy_sphere(sigma=0.05)
+    assert bpy.ops.object.hc_smooth() == {"FINISHED"}
+    assert {space.shading.color_type for space in spaces} == {"MATERIAL"}  # off: the view is left alone
+    assert bpy.ops.object.hc_smooth(deviation_map=True) == {"FINISHED"}
+    assert {space.shading.color_type for space in spaces} == {"VERTEX"}
+
+
+def test_without_a_screen_nothing_fails(addon):
+    # A context without a screen (a script in a timer, a server): the map is stored, the view not touched.
+    module = __import__(ADDON + ".operators.mesh_smooth", fromlist=["show_attribute_colors"])
+    module.show_attribute_colors(type("Context", (), {"screen": None})())
+
+
+def test_several_objects_and_shape_key_output(scene, capfd):
+    sphere = noisy_sphere(sigma=0.05)
+    grid = noisy_grid()
+    select_only(sphere, grid)
+    befores = {obj.name: (positions_of(obj.data), triangles_of(obj.data)) for obj in (sphere, grid)}
+    assert bpy.ops.object.hc_smooth(deviation_map=True, output="SHAPE_KEY") == {"FINISHED"}
+    for obj in (sphere, grid):
+        before, triangles = befores[obj.name]
+        after = positions_of(obj.data)
+        np.testing.assert_array_equal(after, before)  # the result went into the shape key
+        key = obj.data.shape_keys.key_blocks[-1]
+        smoothed = np.empty(3 * len(key.data), dtype=np.float32)
+        key.data.foreach_get("co", smoothed)
+        expected = expected_deviation(before, smoothed.reshape(-1, 3), triangles)
+        np.testing.assert_allclose(attribute_values(obj.data), expected, atol=1e-5 * np.abs(expected).max())
+    said = capfd.readouterr().out
+    assert "'Sphere': deviation map -" in said and "'Grid': deviation map -" in said
+
+
+def test_edit_mode_maps_the_selection(scene):
+    obj = noisy_sphere(sigma=0.05)
+    before = positions_of(obj.data)
+    triangles = triangles_of(obj.data)
+    select_only(obj)
+    bpy.ops.object.mode_set(mode="EDIT")
+    bm = bmesh.from_edit_mesh(obj.data)
+    for vertex in bm.verts:
+        vertex.select_set(vertex.co.z > 0.0)
+    bm.select_flush_mode()
+    bmesh.update_edit_mesh(obj.data)
+    assert bpy.ops.mesh.hc_smooth(deviation_map=True) == {"FINISHED"}
+    assert bpy.context.mode == "EDIT_MESH"
+    bpy.ops.object.mode_set(mode="OBJECT")
+    values = check_map(obj.data, before, triangles)
+    assert np.all(values[before[:, 2] <= 0.0] == 0.0)  # unselected vertices stay: no move
+
+
+def test_object_mode_undo_removes_the_attributes(scene):
+    obj = noisy_sphere(sigma=0.05)
+    names, before = attribute_names(obj.data), positions_of(obj.data)
+    bpy.ops.ed.undo_push(message="Before")
+    run_as_from_the_ui(bpy.ops.object.hc_smooth, deviation_map=True)
+    assert ATTRIBUTE in attribute_names(bpy.data.objects["Sphere"].data)
+    ctrl_z()
+    mesh = bpy.data.objects["Sphere"].data  # undo reloads the data
+    assert attribute_names(mesh) == names
+    np.testing.assert_array_equal(positions_of(mesh), before)
+
+
+def test_edit_mode_undo_removes_the_attributes(scene):
+    obj = noisy_sphere(sigma=0.05)
+    names, before = attribute_names(obj.data), positions_of(obj.data)
+    select_only(obj)
+    bpy.ops.ed.undo_push(message="Object mode")
+    assert bpy.ops.object.mode_set("EXEC_DEFAULT", True, mode="EDIT") == {"FINISHED"}
+    bpy.ops.mesh.select_all(action="SELECT")
+    run_as_from_the_ui(bpy.ops.mesh.hc_smooth, deviation_map=True)
+    obj.update_from_editmode()
+    assert ATTRIBUTE in attribute_names(obj.data)
+    ctrl_z()
+    assert bpy.context.mode == "EDIT_MESH"
+    bpy.ops.object.mode_set(mode="OBJECT")  # the mesh as Edit mode writes it back
+    mesh = bpy.data.objects["Sphere"].data
+    assert attribute_names(mesh) == names
+    np.testing.assert_array_equal(positions_of(mesh), before)
+
+
+def test_existing_attributes_of_those_names_are_replaced(scene):
+    obj = noisy_sphere(sigma=0.05)
+    obj.data.attributes.new(ATTRIBUTE, "INT", "FACE")
+    obj.data.attributes.new(COLORS, "BYTE_COLOR", "CORNER")
+    before, triangles = positions_of(obj.data), triangles_of(obj.data)
+    assert bpy.ops.object.hc_smooth(deviation_map=True) == {"FINISHED"}
+    check_map(obj.data, before, triangles)
+
+
+def test_a_mesh_without_faces_maps_zero(scene):
+    # Loose edges have no normals: every vertex's deviation is 0 (and the colours the ramp's middle).
+    rng = np.random.default_rng(2)
+    line = np.c_[np.linspace(0, 1, 30), rng.normal(scale=0.02, size=(30, 2))]
+    obj = make_mesh_object("Line", line, edges=[(i, i + 1) for i in range(29)])
+    select_only(obj)
+    assert bpy.ops.object.hc_smooth(deviation_map=True, auto_amount=False, iterations=5) == {"FINISHED"}
+    assert not np.array_equal(positions_of(obj.data), line.astype(np.float32))
+    assert np.all(attribute_values(obj.data) == 0.0)
+    assert np.all(colors_of(obj.data) == core.deviation_colors(np.zeros(1), 0.0, linear=True)[0])
+
+
+# --- the modifier --------------------------------------------------------------------------------------------
+
+
+def add_modifier(obj, **settings):
+    select_only(obj)
+    assert bpy.ops.object.hc_smooth_modifier_add(**settings) == {"FINISHED"}
+    return obj.modifiers[-1]
+
+
+def evaluated(obj):
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    return obj.evaluated_get(depsgraph).data
+
+
+@pytest.mark.parametrize("method", ["HC", "LAPLACIAN"])
+def test_modifier_outputs_the_move_along_the_normals(scene, method):
+    obj = noisy_sphere(sigma=0.05)
+    before, triangles = positions_of(obj.data), triangles_of(obj.data)
+    add_modifier(obj, method=method, deviation_map=True, alpha=0.1, iterations=8)
+    mesh = evaluated(obj)
+    after = positions_of(mesh)
+    assert not np.array_equal(after, before)
+    expected = expected_deviation(before, after, triangles)
+    np.testing.assert_allclose(attribute_values(mesh), expected, rtol=0, atol=1e-5 * np.abs(expected).max())
+    assert ATTRIBUTE not in attribute_names(obj.data)  # the original mesh stays as it is
+
+
+def test_modifier_off_adds_nothing(scene):
+    obj = noisy_sphere(sigma=0.05)
+    names = attribute_names(obj.data)
+    modifier = add_modifier(obj)
+    assert attribute_names(evaluated(obj)) == names
+    inputs = __import__(ADDON + ".nodes.inputs", fromlist=["set_input"])
+    inputs.set_input(modifier, "Deviation Map", True)
+    assert ATTRIBUTE in attribute_names(evaluated(obj))
+
+
+def test_modifier_passing_the_mesh_through_maps_zero(scene):
+    # Zero iterations: the mesh comes out as it went in, and every deviation is 0.
+    obj = noisy_grid()
+    add_modifier(obj, deviation_map=True, iterations=0)
+    assert np.all(attribute_values(evaluated(obj)) == 0.0)
+
+
+# --- the command line -----------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def cli(addon):
+    return __import__(ADDON + ".cli", fromlist=["main"])
+
+
+def formats_module():
+    return __import__(ADDON + ".cli.formats", fromlist=["parse"])
+
+
+def write_scan(path, seed=0):
+    """A noisy icosphere as a binary PLY with vertex colours (Blender's exporter)."""
+    bpy.ops.wm.read_homefile(use_empty=True)
+    obj = noisy_sphere(sigma=0.05, seed=seed)
+    obj.data.color_attributes.new("Col", "BYTE_COLOR", "POINT")
+    select_only(obj)
+    bpy.ops.wm.ply_export(filepath=str(path), export_selected_objects=True, export_uv=False, export_normals=False)
+    return path
+
+
+def vertex_values(data):
+    """{property: values} of a PLY's vertex element, read with the command's own reader."""
+    mesh = formats_module().parse(data, ".ply")
+    return {prop.name: mesh._read(mesh.vertex, prop.name) for prop in mesh.vertex.properties}, mesh
+
+
+def test_ply_result_holds_the_property(cli, capsys, tmp_path):
+    source = write_scan(tmp_path / "scan.ply")
+    assert cli.main([str(source), "-o", str(tmp_path / "plain"), "--iterations", "6"]) == 0
+    assert cli.main([str(source), "-o", str(tmp_path / "map"), "--iterations", "6", "--deviation-attribute"]) == 0
+    said = capsys.readouterr().out
+    assert said.count("deviation map -") == 1  # the legend, under the file's progress line
+    plain, plain_mesh = vertex_values((tmp_path / "plain" / "scan.ply").read_bytes())
+    mapped, mesh = vertex_values((tmp_path / "map" / "scan.ply").read_bytes())
+    deviation = mapped.pop(ATTRIBUTE)
+    assert mapped.keys() == plain.keys() and {"red", "green", "blue"} <= set(plain)
+    for name, values in plain.items():  # every other value as the run without the map wrote it
+        np.testing.assert_array_equal(mapped[name], values, err_msg=name)
+    np.testing.assert_array_equal(mesh.corners, plain_mesh.corners)
+    before = formats_module().parse(source.read_bytes(), ".ply").positions.astype(np.float32)
+    after = mesh.positions.astype(np.float32)
+    triangles = mesh.corners.reshape(-1, 3)
+    expected = expected_deviation(before, after, triangles)
+    np.testing.assert_allclose(deviation, expected, rtol=0, atol=1e-5 * np.abs(expected).max())
+    extent = core.deviation_extent(deviation.astype(np.float32))
+    assert f"deviation map -{extent:.3g} to +{extent:.3g}" in said
+
+
+def test_obj_input_converted_to_ply_holds_it(cli, tmp_path):
+    bpy.ops.wm.read_homefile(use_empty=True)
+    select_only(noisy_sphere(sigma=0.05))
+    source = tmp_path / "scan.obj"
+    bpy.ops.wm.obj_export(filepath=str(source), export_selected_objects=True, export_materials=False)
+    argv = [str(source), "-o", str(tmp_path / "out"), "--format", "ply", "--deviation-attribute"]
+    assert cli.main(argv) == 0
+    values, _ = vertex_values((tmp_path / "out" / "scan.ply").read_bytes())
+    assert ATTRIBUTE in values and np.abs(values[ATTRIBUTE]).max() > 0
+
+
+@pytest.mark.parametrize("fmt", ["obj", "stl"])
+def test_obj_and_stl_results_are_refused_before_any_work(cli, capsys, tmp_path, fmt):
+    source = write_scan(tmp_path / "scan.ply")
+    out = tmp_path / "out"
+    capsys.readouterr()  # what the exporter said
+    assert cli.main([str(source), "-o", str(out), "--format", fmt, "--deviation-attribute"]) == 2
+    said = capsys.readouterr()
+    assert "--deviation-attribute stores a value per vertex, which only PLY and .blend files hold" in said.err
+    assert f"scan.{fmt}" in said.err and "--format ply" in said.err and said.out == ""
+    assert not out.exists()
+    plain_input = tmp_path / f"plain.{fmt}"
+    plain_input.write_bytes(b"")  # never read: the refusal comes from the result's format
+    assert cli.main([str(plain_input), "-o", str(out), "--deviation-attribute"]) == 2
+
+
+def test_points_refuse_it(cli, capsys, tmp_path):
+    source = write_scan(tmp_path / "scan.ply")
+    assert cli.main([str(source), "-o", str(tmp_path / "out"), "--points", "--deviation-attribute"]) == 2
+    assert "--deviation-attribute does not apply to point clouds" in capsys.readouterr().err
+
+
+def test_blend_copy_holds_the_attributes(cli, tmp_path):
+    bpy.ops.wm.read_homefile(use_empty=True)
+    obj = noisy_sphere(name="Scan", sigma=0.05)
+    before, triangles = positions_of(obj.data).copy(), triangles_of(obj.data)
+    source = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(source))
+    assert cli.main([str(source), "-o", str(tmp_path / "out"), "--deviation-attribute"]) == 0
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "out" / "scene.blend"))
+    check_map(bpy.data.objects["Scan"].data, before, triangles)
+    bpy.ops.wm.open_mainfile(filepath=str(source))
+    assert ATTRIBUTE not in attribute_names(bpy.data.objects["Scan"].data)  # the input stays as it was
+
+
+def test_add_as_modifier_carries_the_option_and_says_what_differs(scene):
+    draw = __import__(ADDON + ".ui.draw", fromlist=["modifier_differences"])
+    spec = __import__(ADDON + ".settings_spec", fromlist=["MeshSettings"])
+    assert "The modifier stores hc_deviation without its colours" in draw.modifier_differences(
+        spec.MeshSettings(deviation_map=True)
+    )
+    assert not any("hc_deviation" in line for line in draw.modifier_differences(spec.MeshSettings()))
+    obj = noisy_sphere(sigma=0.05)
+    assert bpy.ops.object.hc_smooth(deviation_map=True, auto_amount=False) == {"FINISHED"}
+    assert bpy.ops.object.hc_smooth_modifier_add(deviation_map=True, replace_smoothing=False) == {"FINISHED"}
+    inputs = __import__(ADDON + ".nodes.inputs", fromlist=["get_input"])
+    assert inputs.get_input(obj.modifiers[-1], "Deviation Map")
