@@ -406,8 +406,7 @@ def smooth_meshes(objects, settings, outcome, given=frozenset()):
             raise FileError(f"'{obj.name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
     jobs = [jobs_module.make_job(obj, settings) for obj in unique_data(objects)]
     smooth_jobs(jobs, settings, outcome, given)
-    for job in jobs:
-        jobs_module.write(job, settings)
+    jobs_module.write_all(jobs, settings)
 
 
 def smooth_jobs(jobs, settings, outcome, given):
@@ -416,7 +415,6 @@ def smooth_jobs(jobs, settings, outcome, given):
         warnings.simplefilter("ignore", core.ConvergenceWarning)  # said once, at the start
         for _ in jobs_module.run(jobs, settings, given=given):
             pass
-    jobs_module.write_all(jobs, settings)
     for job in jobs:
         outcome.changes.append(jobs_module.measure(job))
         if settings.deviation_map:
