@@ -9,9 +9,10 @@ First, which parts have noise at all (core.mesh_noise): GCV cannot tell a clean 
 noise and would smooth a Blender primitive's shape away. Clean parts (an estimate of at most
 core.mesh_noise.CLEAN edge lengths: analytic shapes) and parts of at most four vertices (nothing tells
 their noise from their shape) are held fixed; a mesh with nothing else gets 0 iterations. Quiet parts
-(noise found below the threshold: light noise, or a coarse shape's detail) are smoothed with the others,
-and core.MeshSmoother keeps their vertices within a small radius (core.mesh_noise.Noise.quiet_radius);
-``noise_found`` says whether any part is above the threshold. On the parts that move:
+(an estimate below the threshold that core.mesh_noise cannot tell from a coarse shape's detail) and
+light-noise parts (below the threshold, but white) are smoothed with the others, and core.MeshSmoother
+keeps their vertices within a radius of their own (core.mesh_noise.Noise.quiet_radius);
+``noise_found`` says whether any part has noise (above the threshold, or light). On the parts that move:
 
 * **Residual**: R(k) = mean over sample vertices of ((y_i - x_i(k)) . n_i)^2, the part of what the
   smoothing removed that lies along the surface normal n_i (y the input, x(k) the result after k
@@ -120,7 +121,7 @@ class MeshAmount:
     explored : int
         Iterations the estimate ran.
     noise_found : bool
-        False: no part has noise to remove, and nothing is smoothed (0 iterations).
+        False: no part has noise found; quiet parts are smoothed within a small radius at most.
     capped : bool
         The work budget cut the iterations: GCV wanted more (see the module docstring).
     ratio : float
@@ -146,7 +147,7 @@ class MeshAmount:
     sigma: float
     edge_length: float  # median edge length of the input
     explored: int  # iterations the estimate ran
-    noise_found: bool  # False: no part's noise is above core.mesh_noise's threshold (light noise at most)
+    noise_found: bool  # False: no part has noise core.mesh_noise can tell from shape (quiet parts at most)
     capped: bool = False  # the work budget cut the iterations: GCV wanted more
 
     @property

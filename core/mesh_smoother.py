@@ -259,9 +259,10 @@ class MeshSmoother:
             alpha, beta, iterations = amount.alpha, amount.beta, amount.iterations
             if self.max_deviation == AUTO:
                 limit = DEVIATION_IN_NOISE * amount.sigma
-                if not chooser.noise.noisy.all():  # quiet parts: within a small radius (core.mesh_noise)
+                limited = chooser.noise.limited  # quiet and light-noise parts: their own radius (core.mesh_noise)
+                if limited.any():
                     quiet = chooser.noise.quiet_radius(self.positions, DEVIATION_IN_NOISE)
-                    limit = np.where(chooser.noise.quiet, quiet, limit)
+                    limit = np.where(limited, quiet, limit)
             unlimited = not isinstance(limit, np.ndarray) and not limit
             same = self.operator is self.surface_operator
             if same and self.influence is None and self.mode == "simultaneous" and not self.tolerance and unlimited:

@@ -85,18 +85,38 @@ def test_chosen_amount_is_near_the_best_number_of_iterations(ratio):
     assert chosen < fixed
 
 
-def test_noise_below_the_threshold_moves_within_a_share_of_the_size():
-    """Noise of 0.05 edge lengths is too light to tell from a coarse mesh's own shape (core.mesh_noise):
-    no noise found, the estimate below the threshold; the default smooths it, but no vertex moves
-    farther than QUIET_SHARE of the size (or DEVIATION_IN_NOISE robust estimates, if less)."""
+def test_light_noise_is_found_and_smoothed_within_its_radius():
+    """Noise of 0.05 edge lengths, below core.mesh_noise's threshold: a half step takes most of it away,
+    so it is found as light noise; the default removes more of it than the fixed HC default does, and no
+    vertex moves farther than LIGHT_DEVIATIONS robust estimates."""
     vertices, faces = bumpy_sphere()
     edges = edges_of(faces)
     noisy, _ = with_normal_noise(vertices, 0.05, edges, seed=3)
-    amount = core.choose_amount(noisy, edges)
-    assert not amount.noise_found and 0.0 < amount.ratio < core.mesh_noise.NOISE_THRESHOLD
+    chooser = core.AmountChooser(noisy, edges)
+    list(chooser.steps())
+    found = chooser.noise
+    assert chooser.amount.noise_found and found.light.all()
+    assert 0.0 < found.sigma[0] < core.mesh_noise.NOISE_THRESHOLD * found.edge_length[0]
     result, report = core.smooth_mesh(noisy, edges, faces=faces, return_report=True)
-    diagonal = np.linalg.norm(np.ptp(noisy, axis=0))
+    fixed = core.hc_smooth(noisy, edges, alpha=0.1, beta=0.6, iterations=10)
+    assert surface_error(result, vertices) < surface_error(fixed, vertices) < surface_error(noisy, vertices)
     moved = np.linalg.norm(result - noisy, axis=1)
+    assert report.iterations > 0
+    assert moved.max() <= core.mesh_noise.LIGHT_DEVIATIONS * found.sigma[0] * (1 + 1e-9)
+
+
+def test_detail_below_the_threshold_moves_within_a_share_of_the_size():
+    """Bumps three to four edges wide, no noise: the estimate reads them as 0.056 edge lengths, below the
+    threshold, and a half step keeps most of them: no noise found. The default smooths them, but no
+    vertex moves farther than QUIET_SHARE of the size."""
+    vertices, faces = icosphere(4)
+    vertices = vertices * (1.0 + 0.08 * np.prod(np.sin(12 * vertices), axis=1))[:, None]
+    edges = edges_of(faces)
+    amount = core.choose_amount(vertices, edges)
+    assert not amount.noise_found and 0.03 < amount.ratio < core.mesh_noise.NOISE_THRESHOLD
+    result, report = core.smooth_mesh(vertices, edges, faces=faces, return_report=True)
+    diagonal = np.linalg.norm(np.ptp(vertices, axis=0))
+    moved = np.linalg.norm(result - vertices, axis=1)
     assert report.iterations > 0 and 0.0 < moved.max() <= core.mesh_noise.QUIET_SHARE * diagonal * (1 + 1e-9)
 
 

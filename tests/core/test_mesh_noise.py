@@ -2,10 +2,11 @@
 
 import numpy as np
 import pytest
-from primitives import CAD, PRIMITIVES, TINY, joined, median_edge, moved, with_noise
+from primitives import CAD, PRIMITIVES, TINY, joined, median_edge, mesh, moved, with_noise
 
 import core
-from core.mesh_noise import NOISE_THRESHOLD, find_noise
+from bench.meshes import icosphere  # pure NumPy, no bench requirements
+from core.mesh_noise import LIGHT_FLOOR, NOISE_THRESHOLD, WHITE_SAMPLES, find_noise
 
 
 def noise_of(part):
@@ -77,8 +78,35 @@ def test_scale_position_and_orientation_do_not_matter():
         assert noise.found and noise.level() == pytest.approx(reference.level() * scale, rel=1e-6)
 
 
-def test_light_noise_on_a_coarse_mesh_is_below_the_threshold():
-    """0.05 edge lengths on the UV sphere: the estimate sees it (~0.05) but it is below the threshold."""
-    part, sigma = with_noise(PRIMITIVES["uv_sphere"](), 0.05, "normal")
+@pytest.mark.parametrize("kind", ["normal", "isotropic"])
+def test_light_noise_is_found_by_a_half_step(kind):
+    """0.05 edge lengths on the UV sphere: the estimate sees it (~0.05), below the threshold, and a half
+    step towards the neighbours takes most of it away (on this quad grid a whole step would flip its
+    checkerboard, not damp it): light noise found."""
+    part, sigma = with_noise(PRIMITIVES["uv_sphere"](), 0.05, kind)
     noise = noise_of(part)
-    assert not noise.found and 0.75 * sigma < noise.level() < NOISE_THRESHOLD * median_edge(part)
+    assert noise.found and noise.light.all()
+    assert 0.75 * sigma < noise.level() < NOISE_THRESHOLD * median_edge(part)
+
+
+def test_detail_a_few_edges_wide_is_not_light_noise():
+    """An icosphere with bumps of period six to seven edges: its estimate (0.056 edge lengths) is above
+    LIGHT_FLOOR, but a half step keeps most of it: no noise found. With light noise added the detail
+    still dominates the estimate, and the part stays quiet."""
+    vertices, faces = icosphere(4)
+    vertices = vertices * (1.0 + 0.08 * np.prod(np.sin(12 * vertices), axis=1))[:, None]
+    part = mesh(vertices, faces.tolist())
+    noise = noise_of(part)
+    assert not noise.found and not noise.light.any()
+    assert LIGHT_FLOOR * median_edge(part) < noise.level() < NOISE_THRESHOLD * median_edge(part)
+    noisy, _ = with_noise(part, 0.03, "normal")
+    assert not noise_of(noisy).found
+
+
+def test_small_parts_are_judged_by_magnitude_alone():
+    """A part with fewer than WHITE_SAMPLES sample vertices (the ico sphere's 42) and light noise: the
+    half step is not asked, nothing found."""
+    part, sigma = with_noise(PRIMITIVES["ico_sphere"](), 0.06, "normal")
+    noise = noise_of(part)
+    assert len(part.positions) < WHITE_SAMPLES
+    assert not noise.found and LIGHT_FLOOR * median_edge(part) < noise.level() < NOISE_THRESHOLD * median_edge(part)
