@@ -102,9 +102,18 @@ def _number(text):
     return value
 
 
+def _shown(setting):
+    """What one unit of the setting is on the command line: an angle (stored in radians, as Blender's
+    angle properties are) is given in degrees."""
+    return 180.0 / math.pi if setting.subtype == "ANGLE" else 1.0
+
+
 def _checked(setting):
-    """The argparse type of a number setting: its declared limits, refused with a message saying which."""
-    low, high = setting.min, setting.max
+    """The argparse type of a number setting: its declared limits, refused with a message saying which.
+    Angles are given in degrees and returned in radians."""
+    scale = _shown(setting)
+    low = None if setting.min is None else round(setting.min * scale, 9)
+    high = None if setting.max is None else round(setting.max * scale, 9)
 
     def parse(text):
         value = int(text) if setting.kind == "int" else _number(text)
@@ -114,14 +123,14 @@ def _checked(setting):
             raise argparse.ArgumentTypeError(f"{text} is negative" if low == 0 else f"{text} is below {low:g}")
         if high is not None and value > high:
             raise argparse.ArgumentTypeError(f"{text} is above {high:g}")
-        return value
+        return math.radians(value) if scale != 1.0 else value
 
     parse.__name__ = "whole number" if setting.kind == "int" else "number"  # argparse: "invalid ... value"
     return parse
 
 
 def _default_text(setting):
-    value = f"{setting.default:g}" if setting.kind == "float" else str(setting.default)
+    value = f"{setting.default * _shown(setting):g}" if setting.kind == "float" else str(setting.default)
     return setting.cli_default.format(default=value) if setting.cli_default else value
 
 
