@@ -313,10 +313,10 @@ class MeshSmoother:
         yield 1.0
 
     def _sharp_steps(self, chunk, start):
-        """``steps`` with Keep Sharp Edges (core.sharp_edges): with the Automatic Amount the steps come from
-        the noise core.mesh_noise finds (parts without noise held or kept within a small radius, as HC's
-        default does), and closed parts get their volume back."""
-        iterations, amount, fixed = self.iterations, None, self.fixed
+        """``steps`` with Keep Sharp Edges (core.sharp_edges): with the Automatic Amount the steps, and an
+        angle no narrower than the noise's, come from the noise core.mesh_noise finds (parts without noise
+        held or kept within a small radius, as HC's default does), and closed parts get their volume back."""
+        iterations, amount, fixed, angle = self.iterations, None, self.fixed, self.sharpness_angle
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
         restoring, share = self.automatic and self.faces is not None, 0.0
         if restoring:
@@ -326,11 +326,15 @@ class MeshSmoother:
             noise = yield from as_fraction(noise_steps(self.positions, self.operator), 0.0)
             edge = welding.median_edge_length(self.positions, self.operator)
             sigma = noise.level()
-            iterations = sharp_edges.steps_for_noise(sigma / edge if edge > 0 else 0.0) if noise.found else 0
+            ratio = sigma / edge if edge > 0 else 0.0
+            if not noise.found:  # light noise at most: smoothed within a small radius (below)
+                ratio = min(ratio, sharp_edges.QUIET_RATIO)
+            iterations = sharp_edges.steps_for_noise(ratio, self.faces.shape[0])
+            angle = sharp_edges.angle_for_noise(angle, ratio)
             fixed = fixed | noise.held()
+            if fixed.all():  # nothing to smooth (clean parts only)
+                iterations = 0
             quiet = noise.quiet
-            if not noise.found and quiet.any():  # light noise at most: smoothed within a small radius
-                iterations = sharp_edges.steps_for_noise(sharp_edges.QUIET_RATIO)
             amount = MeshAmount(self.alpha, self.beta, iterations, sigma, edge, 0, noise.found)
             if self.max_deviation == AUTO:
                 limit = DEVIATION_IN_NOISE * sigma
@@ -341,7 +345,7 @@ class MeshSmoother:
         run = SharpSmoothing(
             self.positions,
             self.faces,
-            sharpness_angle=self.sharpness_angle,
+            sharpness_angle=angle,
             iterations=iterations,
             alpha=self.alpha,
             beta=self.beta,
@@ -365,9 +369,7 @@ class MeshSmoother:
         self.result = result if self.welding is None else self.welding.scatter(result)
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         seconds = time.perf_counter() - start
-        self.report = MeshReport(
-            self.method, self.alpha, self.beta, ran, amount, offset, largest, seconds, True, self.sharpness_angle
-        )
+        self.report = MeshReport(self.method, self.alpha, self.beta, ran, amount, offset, largest, seconds, True, angle)
         yield 1.0
 
     def _keep_volume(self, result, fixed, limit, measured, progress):

@@ -7,7 +7,7 @@ import pytest
 
 import core
 from core import sharp_edges
-from core.sharp_edges import FaceRings, SharpSmoothing, face_normals, filter_normals, fit_vertices, sharp_smooth
+from core.sharp_edges import FaceRings, face_normals, filter_normals, fit_vertices, sharp_smooth
 
 
 def box(cells=12, size=2.0):
@@ -117,11 +117,11 @@ def test_flat_plane_with_noise_along_its_normal_gets_flat():
     grid = np.arange(side * side).reshape(side, side)
     a, b, c, d = grid[:-1, :-1].ravel(), grid[:-1, 1:].ravel(), grid[1:, 1:].ravel(), grid[1:, :-1].ravel()
     faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
-    noisy = np.c_[u.ravel(), v.ravel(), np.random.default_rng(5).normal(0.0, 0.01, side * side)]
+    noisy = np.c_[u.ravel(), v.ravel(), np.random.default_rng(5).normal(0.0, 0.005, side * side)]
     interior = (u.ravel() > 0) & (u.ravel() < 1) & (v.ravel() > 0) & (v.ravel() < 1)
     smoothed = sharp_smooth(noisy, faces, iterations=5)
     assert smoothed[interior, 2].std() < 0.25 * noisy[interior, 2].std()  # a fifth of the noise: its smooth bumps
-    assert np.abs(smoothed[:, :2] - noisy[:, :2]).max() < 0.01  # it moves along the normal, not along the plane
+    assert np.abs(smoothed[interior, :2] - noisy[interior, :2]).max() < 0.005  # along the normal, not the plane
 
 
 def test_fixed_and_zero_influence_vertices_stay_bit_for_bit():
