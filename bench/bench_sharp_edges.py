@@ -10,13 +10,14 @@ seed per cell (bench_quality.make_case's seeding).
 Methods, same run, same input:
 
 * ours: ``core.smooth_mesh(noisy, edges, faces=faces, weld=True, keep_sharp_edges=True)`` (the Automatic
-  Amount, as the add-on would run it), and at the fixed default (``iterations=3``, no Automatic Amount);
+  Amount, as the add-on would run it), and at the fixed default (``core.sharp_edges.DEFAULT_ITERATIONS``
+  steps, no Automatic Amount);
 * HC Smooth's default (``core.smooth_mesh`` with nothing set) and the best HC setting of
   bench_default_heldout.py's grid (α × β × iterations, read on all vertices);
 * MeshLab's two-step smoothing (``apply_coord_two_steps_smoothing``, Sun et al. 2007) at its defaults
   (3 steps, 60°, 20 + 20 passes) and the best of steps {1, 2, 3, 5, 8} × angle {30, 45, 60};
 * MeshLab's surface-preserving Laplacian (``apply_coord_laplacian_smoothing_surface_preserving``) at its
-  defaults and the best of iterations {1, 3, 10} × angle {0.5, 2, 5}°;
+  defaults (1 iteration, 0.5°) and the best of iterations {1, 5, 20} × angle {2, 10, 30}°;
 * MeshLib's ``meshDenoiseViaNormals`` (Mumford–Shah normal filtering) at its defaults and the best of
   β {0.003, 0.01, 0.03, 0.1}.
 
@@ -64,7 +65,7 @@ DIHEDRAL_TARGET = 5.0  # degrees, at TARGET_SIGMA
 TARGET_SIGMA = 0.005
 VOLUME_TARGET = 0.005
 TWO_STEP_GRID = [{"stepsmoothnum": s, "normalthr": a} for s in (1, 2, 3, 5, 8) for a in (30.0, 45.0, 60.0)]
-PRESERVING_GRID = [{"iterations": k, "angledeg": a} for k in (1, 3, 10) for a in (0.5, 2.0, 5.0)]
+PRESERVING_GRID = [{"iterations": k, "angledeg": a} for k in (1, 5, 20) for a in (2.0, 10.0, 30.0)]
 MESHLIB_GRID = [{"beta": b} for b in (0.003, 0.01, 0.03, 0.1)]
 
 
@@ -205,7 +206,7 @@ def pct(value, digits=3):
 COLUMNS = [
     ("input", "input"),
     ("ours", "**ours (auto)**"),
-    ("ours_fixed", "ours (3 steps)"),
+    ("ours_fixed", f"ours ({sharp_edges.DEFAULT_ITERATIONS} steps)"),
     ("hc", "HC default"),
     ("hc_best", "HC best"),
     ("MeshLab two-step", "two-step"),

@@ -72,6 +72,7 @@ WORK_BUDGET = 12_000_000  # triangle-steps
 NOISE_ANGLE_GAIN = 2.5
 QUIET_RATIO = 0.05
 CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its progress the noise estimate takes
+FOLD_ROUNDS = 4  # rounds of putting back the corners of triangles a step turned over
 _BLOCK = 1 << 18  # faces per block of the filtering's dot products (about 13 ring entries each)
 
 
@@ -137,6 +138,7 @@ class FaceRings:
         pattern.sort_indices()
         self.indptr, self.indices = pattern.indptr, pattern.indices
         self.counts = np.diff(self.indptr)
+        self.ring = sp.csr_matrix((np.ones(self.indices.size), self.indices, self.indptr), shape=(t, t))
         self.faces_at = np.diff(self.incidence.indptr)
         self.triangles = triangles
 
@@ -158,21 +160,32 @@ def _unit(vectors):
 
 def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
     """Sun et al.'s normal filtering, ``iterations`` passes: n_i <- normalize(sum_j w_ij n_j) over the faces j
-    sharing a vertex with i (i included), w_ij = (n_i . n_j - T)^2 where n_i . n_j > T, else 0. A face whose
-    sum vanishes keeps its normal."""
+    sharing a vertex with i (i included), w_ij = (n_i . n_j - T)^2 where n_i . n_j > T, else 0. A face with
+    no other face of its ring within the angle (noise tilted it away from all of them) takes the plain mean
+    of its ring's normals instead: kept as it is, it would be a crease of one face, and the fitting would
+    turn it over. A face whose sum vanishes keeps its normal."""
     indptr, indices, counts = rings.indptr, rings.indices, rings.counts
-    weights = sp.csr_matrix((np.empty(indices.size), indices, indptr), shape=(normals.shape[0],) * 2)
+    t = normals.shape[0]
+    weights = sp.csr_matrix((np.empty(indices.size), indices, indptr), shape=(t, t))
+    ring = rings.ring
+    similar = np.empty(t, dtype=np.int64)
     for _ in range(iterations):
         columns = np.ascontiguousarray(normals.T)  # a coordinate at a time: 1-D gathers are the fast ones
-        for low in range(0, normals.shape[0], _BLOCK):  # blocks of faces bound the temporaries
+        for low in range(0, t, _BLOCK):  # blocks of faces bound the temporaries
             faces = slice(low, low + _BLOCK)
-            entries = slice(indptr[low], indptr[min(low + _BLOCK, normals.shape[0])])
+            entries = slice(indptr[low], indptr[min(low + _BLOCK, t)])
             cosine = np.repeat(columns[0][faces], counts[faces]) * columns[0][indices[entries]]
             for k in (1, 2):
                 cosine += np.repeat(columns[k][faces], counts[faces]) * columns[k][indices[entries]]
             near = np.maximum(cosine - cos_threshold, 0.0, out=cosine)
             weights.data[entries] = near * near
-        filtered = _unit(weights @ normals)
+            starts = indptr[low : min(low + _BLOCK, t)] - indptr[low]
+            similar[faces] = np.add.reduceat((near > 0.0).astype(np.int64), starts)
+        summed = weights @ normals
+        lonely = np.flatnonzero(similar <= 1)  # itself only
+        if lonely.size:
+            summed[lonely] = ring[lonely] @ normals
+        filtered = _unit(summed)
         lost = ~np.any(filtered != 0.0, axis=1)
         filtered[lost] = normals[lost]
         normals = filtered
@@ -325,6 +338,7 @@ class SharpSmoothing:
         if self.influence is not None:  # vertex i ends the step at q_i + w_i (p_i - q_i), as in core.smoothing
             moved = start + self.share[:, None] * (moved - start)
         moved[self.still] = start[self.still]
+        _unfold(moved, start, self.triangles, normals, _unit(self.rings.ring @ normals))
         if np.any(self.max_deviation):
             _within(moved, self.original, self.max_deviation)
         self.done += 1
@@ -338,6 +352,19 @@ class SharpSmoothing:
         out = self.current.astype(self.positions.dtype)
         out[self.still] = self.positions[self.still]
         return out
+
+
+def _unfold(points, start, triangles, normals, around, rounds=FOLD_ROUNDS):
+    """Put back, in place, the corners of every triangle the step turned over (its normal now more than 90°
+    from its filtered normal, or from the mean ``around`` of its ring's) where they started the step;
+    again while that turns others over."""
+    for _ in range(rounds):
+        now = face_normals(points, triangles)
+        turned = (np.einsum("ij,ij->i", now, normals) < 0.0) | (np.einsum("ij,ij->i", now, around) < 0.0)
+        if not turned.any():
+            return
+        corners = np.unique(triangles[turned])
+        points[corners] = start[corners]
 
 
 def _within(points, start, radius):

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from primitives import CAD, PRIMITIVES, TINY
 
 import core
 from core import sharp_edges
@@ -93,6 +94,8 @@ def test_box_keeps_its_sharp_edges_and_volume(kind):
     assert error < 5.0 < noisy_error
     assert abs(volume(smoothed, faces) / volume(clean, faces) - 1.0) <= 0.005
     assert off_the_cube(smoothed) < 0.5 * off_the_cube(noisy)
+    turned = np.einsum("ij,ij->i", face_normals(smoothed, faces), face_normals(clean, faces)) < 0.0
+    assert not turned.any()
 
 
 def off_the_cube(points, half=1.0):
@@ -150,23 +153,29 @@ def test_half_influence_moves_less():
 
 
 def _loop_filter(normals, faces, threshold, iterations):
-    """Sun et al.'s normal filtering written from the paper, face by face."""
+    """Sun et al.'s normal filtering written from the paper, face by face, with core.sharp_edges' rule for
+    a face that no other face of its ring is within the angle of: the plain mean of its ring."""
     around = {}
     for f, face in enumerate(faces):
         for v in face:
             around.setdefault(int(v), set()).add(f)
+    lonely_seen = 0
     for _ in range(iterations):
         new = np.empty_like(normals)
         for i, face in enumerate(faces):
             ring = set().union(*(around[int(v)] for v in face))
-            total = np.zeros(3)
+            total, similar = np.zeros(3), 0
             for j in ring:
                 cosine = float(normals[i] @ normals[j])
                 if cosine > threshold:
                     total += (cosine - threshold) ** 2 * normals[j]
+                    similar += j != i
+            if not similar:
+                total = sum(normals[j] for j in ring)
+                lonely_seen += 1
             new[i] = total / np.linalg.norm(total) if np.linalg.norm(total) > 0 else normals[i]
         normals = new
-    return normals
+    return normals, lonely_seen
 
 
 def _loop_fit(points, faces, normals, iterations):
@@ -185,13 +194,16 @@ def _loop_fit(points, faces, normals, iterations):
     return points
 
 
-def test_vectorised_filter_and_fit_equal_the_papers_loops():
-    _, noisy, faces = noisy_box(0.02, "iso", cells=3)
+@pytest.mark.parametrize("share", [0.02, 0.1])
+def test_vectorised_filter_and_fit_equal_the_papers_loops(share):
+    _, noisy, faces = noisy_box(share, "iso", cells=3)
     rings = FaceRings(faces, len(noisy))
     normals = face_normals(noisy, faces)
     threshold = math.cos(math.radians(40.0))
     filtered = filter_normals(normals, rings, threshold, iterations=4)
-    assert np.allclose(filtered, _loop_filter(normals, faces, threshold, 4), atol=1e-12)
+    expected, lonely = _loop_filter(normals, faces, threshold, 4)
+    assert np.allclose(filtered, expected, atol=1e-12)
+    assert (lonely > 0) == (share > 0.05)  # heavy noise leaves faces without a similar neighbour
     assert not np.allclose(filtered, normals, atol=1e-3)  # it did filter
     fitted = fit_vertices(noisy, filtered, rings, np.ones(len(noisy)), iterations=3)
     assert np.allclose(fitted, _loop_fit(noisy, faces, filtered, 3), atol=1e-12)
@@ -274,3 +286,16 @@ def test_default_angle_is_in_range():
         core.MeshSmoother(box(2)[0], edges_of(box(2)[1]), faces=box(2)[1], keep_sharp_edges=True).sharpness_angle
         == sharp_edges.DEFAULT_SHARPNESS_ANGLE
     )
+
+
+CLEAN_WITH_FACES = {name: make for name, make in {**PRIMITIVES, **CAD, **TINY}.items() if make().faces}
+
+
+@pytest.mark.parametrize("name", CLEAN_WITH_FACES)
+def test_noise_free_meshes_stay_with_the_automatic_amount(name):
+    """Blender's primitives, CAD-like parts and tiny parts, noise-free: Keep Sharp Edges at the Automatic
+    Amount moves them by at most 0.1 % of the diagonal, as HC's default contract says."""
+    part = CLEAN_WITH_FACES[name]()
+    result = core.smooth_mesh(part.positions, part.edges, faces=part.faces, keep_sharp_edges=True, weld=True)
+    diagonal = np.linalg.norm(np.ptp(part.positions, axis=0))
+    assert np.linalg.norm(result - part.positions, axis=1).max() <= 1e-3 * diagonal
