@@ -72,7 +72,7 @@ WORK_BUDGET = 12_000_000  # triangle-steps
 NOISE_ANGLE_GAIN = 2.5
 QUIET_RATIO = 0.05
 CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its progress the noise estimate takes
-FOLD_ROUNDS = 4  # rounds of putting back the corners of triangles a step turned over
+FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
 _BLOCK = 1 << 18  # faces per block of the filtering's dot products (about 13 ring entries each)
 
 
@@ -355,16 +355,16 @@ class SharpSmoothing:
 
 
 def _unfold(points, start, triangles, normals, around, rounds=FOLD_ROUNDS):
-    """Put back, in place, the corners of every triangle the step turned over (its normal now more than 90°
-    from its filtered normal, or from the mean ``around`` of its ring's) where they started the step;
-    again while that turns others over."""
+    """Halve, in place, the step's move of the corners of every triangle it turned over (its normal now more
+    than 90° from its filtered normal, or from the mean ``around`` of its ring's), ``rounds`` times at most:
+    the fitting moves along the faces' normals, and on curved parts those moves add up along the surface."""
     for _ in range(rounds):
         now = face_normals(points, triangles)
         turned = (np.einsum("ij,ij->i", now, normals) < 0.0) | (np.einsum("ij,ij->i", now, around) < 0.0)
         if not turned.any():
             return
         corners = np.unique(triangles[turned])
-        points[corners] = start[corners]
+        points[corners] = start[corners] + 0.5 * (points[corners] - start[corners])
 
 
 def _within(points, start, radius):

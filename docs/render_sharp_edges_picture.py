@@ -47,10 +47,22 @@ def smooth(path):
     np.savez(path, clean=clean, faces=faces, noisy=noisy, hc=hc, ours=ours, two_step=two_step)
 
 
-def render(arrays, output, samples):
-    from extension_session import run_and_exit  # noqa: F401  (before bpy: a throw-away user folder)
+def _crease_keys(points, faces, degrees=25.0):
+    """Keys (low * n + high) of the edges whose two triangles meet at more than ``degrees``."""
+    from core import sharp_edges
 
-    import bpy
+    pairs = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    keys = pairs[:, 0] * len(points) + pairs[:, 1]
+    order = np.argsort(keys, kind="stable")
+    keys, owner = keys[order], np.repeat(np.arange(len(faces)), 3)[order]
+    shared = np.flatnonzero(keys[1:] == keys[:-1])
+    normals = sharp_edges.face_normals(points, faces)
+    cosine = np.einsum("ij,ij->i", normals[owner[shared]], normals[owner[shared + 1]])
+    return keys[shared][cosine < math.cos(math.radians(degrees))]
+
+
+def render(arrays, output, samples):
+    import bpy  # after extension_session (main): a throw-away Blender user folder
     import scene_setup
 
     import core
@@ -61,6 +73,7 @@ def render(arrays, output, samples):
     layout = (np.arange(len(faces) + 1) * 3, faces.ravel())
     surface = scene_setup.CleanSurface(clean, layout)
     clean_volume = core.metrics.enclosed_volume(clean, faces)
+    creases = _crease_keys(clean, faces)
     panels = []
     titles = (
         ("noisy", f"Noisy, \u03c3 {NOISE:.1%}"),
@@ -74,6 +87,10 @@ def render(arrays, output, samples):
         mesh.from_pydata(points.tolist(), [], faces.tolist())
         obj = scene_setup.object_from_mesh(mesh, title, (k * scene_setup.SPACING, 0.0, 0.0))
         obj.rotation_euler = (TILT, 0.0, 0.0)
+        # The clean part's creases shade as edges (split normals) on every panel alike; elsewhere smooth.
+        pairs = np.sort(scene_setup.edges(mesh), axis=1)
+        sharp = np.isin(pairs[:, 0] * len(points) + pairs[:, 1], creases)
+        mesh.attributes.new("sharp_edge", "BOOLEAN", "EDGE").data.foreach_set("value", sharp)
         signed = surface.signed_distance(points)
         scene_setup.set_point_attribute(obj, scene_setup.ERROR_ATTRIBUTE, 100 * signed / diagonal)
         volume = core.metrics.enclosed_volume(points, faces) / clean_volume - 1
@@ -108,7 +125,7 @@ def main():
         path = str(pathlib.Path(folder) / "meshes.npz")
         subprocess.run([args.peer_python, __file__, "--smooth", path], check=True)
         arrays = dict(np.load(path))
-    from extension_session import run_and_exit
+    from extension_session import run_and_exit  # before bpy
 
     run_and_exit(lambda: render(arrays, args.output, args.samples))
 
