@@ -16,10 +16,17 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    F_i the faces around vertex i: each vertex moves towards the planes through its faces' centroids
    with the filtered normals (a crease vertex to the line where its two planes meet, a corner to the
    point of three).
-3. **HC's push-back** (paper section 4, Algorithm 1), with the step's move as the Laplacian move:
+3. **Tangential relaxation**: a vertex whose faces all agree (no crease through it, no open border)
+   moves ``TANGENTIAL`` of the way to its neighbours' mean along its tangent plane: noise along the
+   surface (isotropic noise)
+   leaves uneven, folded triangles whose normals the filter cannot trust; this evens them out without
+   moving the surface (on the tuning parts at 0.5 % isotropic noise: 12 % less error).
+4. **HC's push-back** (paper section 4, Algorithm 1), with the step's move as the Laplacian move:
    b_i = p_i - (alpha o_i + (1 - alpha) q_i), then p_i <- p_i - (beta b_i + (1 - beta) mean_adj(b)).
    What the fitting moved alike over a neighbourhood (a face or a rim drifting inwards: shrinkage) is
    taken back, what it moved vertex by vertex (the noise) is kept.
+5. The corners of triangles the step turned over (against their filtered normal or their ring's mean)
+   get half their move, up to ``FOLD_ROUNDS`` times; then the deviation limit, if any.
 
 Everything runs on all faces or vertices at once: the face rings are one sparse pattern (the faces
 sharing a vertex with each face: incidence times its transpose), a filtering pass is one sparse product
@@ -72,6 +79,7 @@ WORK_BUDGET = 12_000_000  # triangle-steps
 NOISE_ANGLE_GAIN = 2.5
 QUIET_RATIO = 0.05
 CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its progress the noise estimate takes
+TANGENTIAL = 0.5  # share of the tangential umbrella move per step on vertices off the creases (step 3)
 FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
 _BLOCK = 1 << 18  # faces per block of the filtering's dot products (about 13 ring entries each)
 
@@ -139,6 +147,11 @@ class FaceRings:
         self.indptr, self.indices = pattern.indptr, pattern.indices
         self.counts = np.diff(self.indptr)
         self.ring = sp.csr_matrix((np.ones(self.indices.size), self.indices, self.indptr), shape=(t, t))
+        # Vertices on an open border (an edge of one triangle): their umbrella leans inwards.
+        pairs = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
+        keys, counts = np.unique(pairs[:, 0] * n_vertices + pairs[:, 1], return_counts=True)
+        self.border = np.zeros(n_vertices, dtype=bool)
+        self.border[np.concatenate([keys[counts == 1] // n_vertices, keys[counts == 1] % n_vertices])] = True
         self.faces_at = np.diff(self.incidence.indptr)
         self.triangles = triangles
 
@@ -162,7 +175,8 @@ def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
     """Sun et al.'s normal filtering, ``iterations`` passes: n_i <- normalize(sum_j w_ij n_j) over the faces j
     sharing a vertex with i (i included), w_ij = (n_i . n_j - T)^2 where n_i . n_j > T, else 0. A face with
     no other face of its ring within the angle (noise tilted it away from all of them) takes the plain mean
-    of its ring's normals instead: kept as it is, it would be a crease of one face, and the fitting would
+    of its ring's normals instead, where that mean is at least half a unit long (the ring is no corner of
+    its own, as a tetrahedron's is): kept as it is, it would be a crease of one face, and the fitting would
     turn it over. A face whose sum vanishes keeps its normal."""
     indptr, indices, counts = rings.indptr, rings.indices, rings.counts
     t = normals.shape[0]
@@ -184,7 +198,9 @@ def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
         summed = weights @ normals
         lonely = np.flatnonzero(similar <= 1)  # itself only
         if lonely.size:
-            summed[lonely] = ring[lonely] @ normals
+            mean = (ring[lonely] @ normals) / counts[lonely, None]
+            agree = np.einsum("ij,ij->i", mean, mean) >= 0.25  # a ring that is no corner of its own
+            summed[lonely[agree]] = mean[agree]
         filtered = _unit(summed)
         lost = ~np.any(filtered != 0.0, axis=1)
         filtered[lost] = normals[lost]
@@ -331,6 +347,8 @@ class SharpSmoothing:
         start = self.current
         normals = filter_normals(face_normals(start, self.triangles), self.rings, self.cos_threshold, NORMAL_ITERATIONS)
         moved = fit_vertices(start, normals, self.rings, self.moving, FIT_ITERATIONS)
+        if TANGENTIAL:
+            _relax(moved, normals, self.rings, self.operator, self.cos_threshold, self.still)
         if self.push_back:
             pushed = moved - (self.alpha * self.original + (1.0 - self.alpha) * start)
             pushed[self.still] = 0.0
@@ -352,6 +370,21 @@ class SharpSmoothing:
         out = self.current.astype(self.positions.dtype)
         out[self.still] = self.positions[self.still]
         return out
+
+
+def _relax(points, normals, rings, operator, cos_threshold, still):
+    """Move, in place, each vertex off the open borders whose faces all agree (their mean filtered normal
+    within half the angle of every one: no crease) ``TANGENTIAL`` of the way to its neighbours' mean
+    along its tangent plane: evens out the triangles that noise along the surface made uneven, without
+    moving the surface."""
+    around = rings.incidence @ normals
+    length = np.sqrt(np.einsum("ij,ij->i", around, around))
+    counts = np.maximum(rings.faces_at, 1)
+    flat = (length / counts > math.sqrt((1.0 + cos_threshold) / 2.0)) & ~still & ~rings.border
+    normal = around[flat] / length[flat, None]
+    umbrella = _mean_of_neighbours(points, operator)[flat] - points[flat]
+    umbrella -= np.einsum("ij,ij->i", umbrella, normal)[:, None] * normal
+    points[flat] += TANGENTIAL * umbrella
 
 
 def _unfold(points, start, triangles, normals, around, rounds=FOLD_ROUNDS):
