@@ -4,7 +4,7 @@ The same package loads as ``core`` in tests and tools and as ``bl_ext.<repo>.hc_
 Blender, so everything inside uses relative imports.
 """
 
-from . import borders, mesh_amount, metrics, topology, volume, welding
+from . import borders, mesh_amount, metrics, sharp_edges, topology, volume, welding
 from .adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, in_convergence_region
 from .mesh_amount import AmountChooser, MeshAmount, choose_amount
@@ -42,6 +42,7 @@ __all__ = [
     "metrics",
     "measure_change",
     "smooth",
+    "sharp_edges",
     "smooth_point_cloud",
     "topology",
     "umbrella_from_pairs",
