@@ -175,8 +175,8 @@ def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
     """Sun et al.'s normal filtering, ``iterations`` passes: n_i <- normalize(sum_j w_ij n_j) over the faces j
     sharing a vertex with i (i included), w_ij = (n_i . n_j - T)^2 where n_i . n_j > T, else 0. A face with
     no other face of its ring within the angle (noise tilted it away from all of them) takes the plain mean
-    of its ring's normals instead, where that mean is at least half a unit long (the ring is no corner of
-    its own, as a tetrahedron's is): kept as it is, it would be a crease of one face, and the fitting would
+    of its ring's normals instead, where that mean is at least a tenth of a unit long (the ring is no corner
+    of its own, as a tetrahedron's is): kept as it is, it would be a crease of one face, and the fitting would
     turn it over. A face whose sum vanishes keeps its normal."""
     indptr, indices, counts = rings.indptr, rings.indices, rings.counts
     t = normals.shape[0]
@@ -199,7 +199,7 @@ def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
         lonely = np.flatnonzero(similar <= 1)  # itself only
         if lonely.size:
             mean = (ring[lonely] @ normals) / counts[lonely, None]
-            agree = np.einsum("ij,ij->i", mean, mean) >= 0.25  # a ring that is no corner of its own
+            agree = np.einsum("ij,ij->i", mean, mean) >= 0.01  # a ring that is no corner of its own
             summed[lonely[agree]] = mean[agree]
         filtered = _unit(summed)
         lost = ~np.any(filtered != 0.0, axis=1)
@@ -272,12 +272,12 @@ class SharpSmoothing:
     --------
     >>> import numpy as np, core
     >>> from core.sharp_edges import SharpSmoothing
-    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
-    >>> faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    >>> positions = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    >>> faces = [[0, 1, 3, 2], [2, 3, 7, 6], [6, 7, 5, 4], [4, 5, 1, 0], [2, 6, 4, 0], [7, 3, 1, 5]]
     >>> run = SharpSmoothing(positions, faces, iterations=2)
     >>> [round(f, 2) for f in run.steps(chunk=1)]
     [0.5, 1.0]
-    >>> bool(np.allclose(run.result(), positions))  # a tetrahedron is all corners: nothing to smooth
+    >>> bool(np.allclose(run.result(), positions))  # a cube is all planes and creases: nothing to smooth
     True
     """
 

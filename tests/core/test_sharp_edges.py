@@ -155,7 +155,7 @@ def test_half_influence_moves_less():
 def _loop_filter(normals, faces, threshold, iterations):
     """Sun et al.'s normal filtering written from the paper, face by face, with core.sharp_edges' rule for
     a face that no other face of its ring is within the angle of: the plain mean of its ring (if that is
-    at least half a unit long)."""
+    at least a tenth of a unit long)."""
     around = {}
     for f, face in enumerate(faces):
         for v in face:
@@ -172,7 +172,7 @@ def _loop_filter(normals, faces, threshold, iterations):
                     total += (cosine - threshold) ** 2 * normals[j]
                     similar += j != i
             mean = sum(normals[j] for j in ring) / len(ring)
-            if not similar and mean @ mean >= 0.25:
+            if not similar and mean @ mean >= 0.01:
                 total = mean
                 lonely_seen += 1
             new[i] = total / np.linalg.norm(total) if np.linalg.norm(total) > 0 else normals[i]
