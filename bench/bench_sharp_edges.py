@@ -30,7 +30,7 @@ at 0.5 % noise; |ΔV| ≤ 0.5 %.
 ``--organic`` smooths organic scans (no sharp edges) with the option on and reports it beside HC's
 default and the best HC setting.
 
-    python bench/bench_sharp_edges.py                                   # both sets (~25 min)
+    python bench/bench_sharp_edges.py                                   # both sets (~10 min)
     python bench/bench_sharp_edges.py --sets tuning --parts cube --sigmas 0.005 --kinds normal
     python bench/bench_sharp_edges.py --organic bunny,cow --sigmas 0.001,0.0025,0.005 --sets none
 
