@@ -44,6 +44,7 @@ from numpy.typing import ArrayLike
 
 from .adjacency import Umbrella, umbrella_operator
 from .metrics import fan_triangles
+from .slices import to_end
 from .validation import (
     bbox_diagonal,
     check_fixed,
@@ -81,6 +82,7 @@ QUIET_RATIO = 0.05
 CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its progress the noise estimate takes
 TANGENTIAL = 0.5  # share of the tangential umbrella move per step on vertices off the creases (step 3)
 FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
+PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the filtering passes
 _BLOCK = 1 << 18  # faces per block of the filtering's dot products (about 13 ring entries each)
 
 
@@ -174,12 +176,18 @@ def _unit(vectors):
 
 
 def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
+    """``filter_steps`` run to its end: the filtered (t, 3) normals."""
+    return to_end(filter_steps(normals, rings, cos_threshold, iterations))
+
+
+def filter_steps(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
     """Sun et al.'s normal filtering, ``iterations`` passes: n_i <- normalize(sum_j w_ij n_j) over the faces j
     sharing a vertex with i (i included), w_ij = (n_i . n_j - T)^2 where n_i . n_j > T, else 0. A face with
     no other face of its ring within the angle (noise tilted it away from all of them) takes the plain mean
     of its ring's normals instead, where that mean is at least a tenth of a unit long (the ring is no corner
     of its own, as a tetrahedron's is): kept as it is, it would be a crease of one face, and the fitting would
-    turn it over. A face whose sum vanishes keeps its normal."""
+    turn it over. A face whose sum vanishes keeps its normal. A generator: yields after each pass, returns
+    the normals."""
     indptr, indices, counts = rings.indptr, rings.indices, rings.counts
     t = normals.shape[0]
     weights = sp.csr_matrix((np.empty(indices.size), indices, indptr), shape=(t, t))
@@ -207,6 +215,7 @@ def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
         lost = ~np.any(filtered != 0.0, axis=1)
         filtered[lost] = normals[lost]
         normals = filtered
+        yield
     return normals
 
 
@@ -329,25 +338,34 @@ class SharpSmoothing:
         self.stopped_early = False
 
     def steps(self, chunk: int | None = None) -> Iterator[float]:
-        """Run the steps left, ``chunk`` at a time, yielding the fraction done after each slice."""
+        """Run the steps left, ``chunk`` at a time, yielding the fraction done after each slice; on meshes of
+        ``PASS_SLICES_FROM`` triangles or more also after each filtering pass (a step takes seconds there)."""
         if self.rings is None:
             self.rings = FaceRings(self.triangles, self.positions.shape[0])
         chunk = self.iterations if chunk is None else max(1, int(chunk))
+        passes = self.triangles.shape[0] >= PASS_SLICES_FROM
         while self.done < self.iterations and not self.stopped_early:
             for _ in range(min(chunk, self.iterations - self.done)):
-                self.advance()
+                for k in self._step():
+                    if passes:
+                        yield (self.done + k / (NORMAL_ITERATIONS + 1)) / self.iterations
                 if self.stopped_early:
                     break
-            yield self.done / self.iterations if self.iterations else 1.0
+            yield self.done / self.iterations
         if self.iterations == 0:
             yield 1.0
 
     def advance(self):
-        """One step: filter the normals, fit the vertices, push back, keep to the limit."""
+        """One step: filter the normals, fit the vertices, relax, push back, unfold, keep to the limit."""
+        to_end(self._step())
+
+    def _step(self):
+        """``advance`` as a generator, yielding the passes done (of NORMAL_ITERATIONS + 1) between them."""
         if self.rings is None:
             self.rings = FaceRings(self.triangles, self.positions.shape[0])
         start = self.current
-        normals = filter_normals(face_normals(start, self.triangles), self.rings, self.cos_threshold, NORMAL_ITERATIONS)
+        filtering = filter_steps(face_normals(start, self.triangles), self.rings, self.cos_threshold, NORMAL_ITERATIONS)
+        normals = yield from _counted(filtering)
         moved = fit_vertices(start, normals, self.rings, self.moving, FIT_ITERATIONS)
         if TANGENTIAL:
             _relax(moved, normals, self.rings, self.operator, self.cos_threshold, self.still)
@@ -387,6 +405,18 @@ def _relax(points, normals, rings, operator, cos_threshold, still):
     umbrella = _mean_of_neighbours(points, operator)[flat] - points[flat]
     umbrella -= np.einsum("ij,ij->i", umbrella, normal)[:, None] * normal
     points[flat] += TANGENTIAL * umbrella
+
+
+def _counted(generator):
+    """``yield from _counted(g)``: g's value, yielding 1, 2, ... for its slices."""
+    count = 0
+    while True:
+        try:
+            next(generator)
+        except StopIteration as done:
+            return done.value
+        count += 1
+        yield count
 
 
 def _unfold(points, start, triangles, normals, around, rounds=FOLD_ROUNDS):

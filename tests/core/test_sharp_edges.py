@@ -8,7 +8,7 @@ from primitives import CAD, PRIMITIVES, TINY
 
 import core
 from core import sharp_edges
-from core.sharp_edges import FaceRings, face_normals, filter_normals, fit_vertices, sharp_smooth
+from core.sharp_edges import FaceRings, SharpSmoothing, face_normals, filter_normals, fit_vertices, sharp_smooth
 
 
 def box(cells=12, size=2.0):
@@ -301,3 +301,17 @@ def test_noise_free_meshes_stay_with_the_automatic_amount(name):
     result = core.smooth_mesh(part.positions, part.edges, faces=part.faces, keep_sharp_edges=True, weld=True)
     diagonal = np.linalg.norm(np.ptp(part.positions, axis=0))
     assert np.linalg.norm(result - part.positions, axis=1).max() <= 1e-3 * diagonal
+
+
+def test_big_meshes_yield_between_filtering_passes(monkeypatch):
+    """From PASS_SLICES_FROM triangles a step is sliced at every filtering pass (a cancel waits for one
+    pass, not a step); the result is the same."""
+    _, noisy, faces = noisy_box(0.005, "iso", cells=6)
+    whole = SharpSmoothing(noisy, faces, iterations=2)
+    coarse = list(whole.steps(chunk=1))
+    monkeypatch.setattr(sharp_edges, "PASS_SLICES_FROM", 10)
+    sliced = SharpSmoothing(noisy, faces, iterations=2)
+    fine = list(sliced.steps(chunk=1))
+    assert coarse == [0.5, 1.0]
+    assert len(fine) == 2 * (sharp_edges.NORMAL_ITERATIONS + 1) and fine == sorted(fine) and fine[-1] == 1.0
+    assert np.array_equal(sliced.result(), whole.result())
