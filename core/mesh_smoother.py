@@ -13,7 +13,8 @@ noise. Either number given switches it off: the other then takes its default (``
 ``DEFAULT_ITERATIONS``) and the run is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
 
 Two options change the mesh the run sees, both off by default: ``weld`` runs coincident vertices as
-one (core.welding), ``border`` chooses what open borders do (core.borders).
+one (core.welding), ``border`` chooses what open borders do (core.borders). ``keep_sharp_edges`` (off by
+default) smooths with core.sharp_edges instead of HC's umbrella: the creases of hard-surface parts stay.
 """
 
 import time
@@ -24,12 +25,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import parallel, topology, volume, welding
+from . import parallel, sharp_edges, topology, volume, welding
 from .adjacency import Umbrella, umbrella_operator
 from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
 from .mesh_amount import PATCH_FROM, AmountChooser, MeshAmount
+from .mesh_noise import noise_steps
 from .metrics import fan_triangles
+from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
 from .slices import as_fraction, to_end
 from .smoothing import METHODS, MODES, Cancelled, Smoothing
 from .validation import (
@@ -76,6 +79,11 @@ class MeshReport:
         The deviation limit the run kept to (0: none).
     seconds : float
         Wall time of the whole run.
+    keep_sharp_edges : bool
+        The run smoothed with core.sharp_edges (then ``iterations`` counts its steps, alpha and beta are
+        its push-back's weights, and ``sharpness_angle`` the angle it kept).
+    sharpness_angle : float or None
+        Radians; None when ``keep_sharp_edges`` is off.
 
     Examples
     --------
@@ -95,6 +103,8 @@ class MeshReport:
     volume_offset: float
     max_deviation: float
     seconds: float
+    keep_sharp_edges: bool = False
+    sharpness_angle: float | None = None
 
 
 def _auto_or(value, name):
@@ -145,16 +155,28 @@ class MeshSmoother:
         operator: Umbrella | None = None,
         weld: bool = False,
         border: str = "free",
+        keep_sharp_edges: bool = False,
+        sharpness_angle: float = DEFAULT_SHARPNESS_ANGLE,
     ) -> None:
         self.positions = start = check_positions(positions)
         n = start.shape[0]
         self.method = check_choice(method, "method", METHODS)
+        if not isinstance(keep_sharp_edges, (bool, np.bool_)):
+            raise ValueError(f"keep_sharp_edges must be True or False, got {keep_sharp_edges!r}")
+        self.keep_sharp_edges = bool(keep_sharp_edges)
+        self.sharpness_angle = check_sharpness_angle(sharpness_angle)
         alpha, beta, iterations = _auto_or(alpha, "alpha"), _auto_or(beta, "beta"), _auto_or(iterations, "iterations")
-        self.automatic = self.method == "hc" and alpha == AUTO and iterations == AUTO
+        hc = self.method == "hc" or self.keep_sharp_edges  # Keep Sharp Edges replaces the method's umbrella
+        self.automatic = hc and alpha == AUTO and iterations == AUTO
         self.beta_given = beta != AUTO
-        self.alpha = DEFAULT_ALPHA if alpha == AUTO else alpha
-        self.beta = DEFAULT_BETA if beta == AUTO else beta
-        self.iterations = DEFAULT_ITERATIONS if iterations == AUTO else iterations
+        if self.keep_sharp_edges:
+            self.alpha = sharp_edges.DEFAULT_ALPHA if alpha == AUTO else alpha
+            self.beta = sharp_edges.DEFAULT_BETA if beta == AUTO else beta
+            self.iterations = sharp_edges.DEFAULT_ITERATIONS if iterations == AUTO else iterations
+        else:
+            self.alpha = DEFAULT_ALPHA if alpha == AUTO else alpha
+            self.beta = DEFAULT_BETA if beta == AUTO else beta
+            self.iterations = DEFAULT_ITERATIONS if iterations == AUTO else iterations
         self.max_deviation = _auto_or(max_deviation, "max_deviation")
         self.mode = mode
         self.tolerance = tolerance
@@ -165,6 +187,8 @@ class MeshSmoother:
         self.fixed = check_fixed(fixed, n)
         self.influence = check_influence(influence, n)
         self.faces = None if faces is None else fan_triangles(faces)
+        if self.keep_sharp_edges:
+            check_triangles(self.faces, n)  # no faces: a clear ValueError now, not after the welding
         self.border = check_choice(border, "border", BORDERS)
         if self.border != "free" and self.faces is None:
             raise ValueError(
@@ -242,6 +266,9 @@ class MeshSmoother:
         start = time.perf_counter()
         if not self.prepared:
             yield from self._prepare()
+        if self.keep_sharp_edges:
+            yield from self._sharp_steps(chunk, start)
+            return
         alpha, beta, iterations, amount, done = self.alpha, self.beta, self.iterations, None, None
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
         fixed, share, restoring = self.fixed, 0.0, self.automatic and self.faces is not None
@@ -288,6 +315,66 @@ class MeshSmoother:
         self.result = result if self.welding is None else self.welding.scatter(result)
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, largest, time.perf_counter() - start)
+        yield 1.0
+
+    def _sharp_steps(self, chunk, start):
+        """``steps`` with Keep Sharp Edges (core.sharp_edges): with the Automatic Amount the steps, and an
+        angle no narrower than the noise's, come from the noise core.mesh_noise finds (parts without noise
+        held or kept within a small radius, as HC's default does), and closed parts get their volume back."""
+        iterations, amount, fixed, angle = self.iterations, None, self.fixed, self.sharpness_angle
+        limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
+        restoring, share = self.automatic and self.faces is not None, 0.0
+        if restoring:
+            measuring = parallel.in_background(lambda: volume.measure_before(self.positions, self.faces, self.surface))
+        if self.automatic:
+            share = sharp_edges.CHOOSING_SHARE
+            noise = yield from as_fraction(noise_steps(self.positions, self.operator), 0.0)
+            edge = welding.median_edge_length(self.positions, self.operator)
+            sigma = noise.level()
+            ratio = sigma / edge if edge > 0 else 0.0
+            if not noise.found:  # light noise at most: smoothed within a small radius (below)
+                ratio = min(ratio, sharp_edges.QUIET_RATIO)
+            iterations = sharp_edges.steps_for_noise(ratio, self.faces.shape[0])
+            angle = sharp_edges.angle_for_noise(angle, ratio)
+            fixed = fixed | noise.held()
+            if fixed.all():  # nothing to smooth (clean parts only)
+                iterations = 0
+            quiet = noise.quiet
+            amount = MeshAmount(self.alpha, self.beta, iterations, sigma, edge, 0, noise.found)
+            if self.max_deviation == AUTO:
+                limit = DEVIATION_IN_NOISE * sigma
+                if quiet.any():
+                    limit = np.where(quiet, noise.quiet_radius(self.positions, DEVIATION_IN_NOISE), limit)
+            yield share
+        end = 1.0 - RESTORE_SHARE if restoring else 1.0
+        run = SharpSmoothing(
+            self.positions,
+            self.faces,
+            sharpness_angle=angle,
+            iterations=iterations,
+            alpha=self.alpha,
+            beta=self.beta,
+            fixed=fixed,
+            influence=self.influence,
+            max_deviation=limit,
+            tolerance=self.tolerance,
+            operator=self.operator,
+        )
+        for fraction in run.steps(chunk):
+            if fraction < 1.0:
+                yield share + (end - share) * fraction
+        result, ran = run.result(), run.done
+        del run
+        offset = 0.0
+        if restoring and ran > 0:
+            limited = volume.NOISE_OFFSETS * amount.sigma
+            result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), end)
+            if np.any(limit):
+                _within(result, self.positions, limit)
+        self.result = result if self.welding is None else self.welding.scatter(result)
+        largest = float(np.max(limit)) if np.size(limit) else 0.0
+        seconds = time.perf_counter() - start
+        self.report = MeshReport(self.method, self.alpha, self.beta, ran, amount, offset, largest, seconds, True, angle)
         yield 1.0
 
     def _keep_volume(self, result, fixed, limit, measured, progress):
@@ -371,6 +458,15 @@ def smooth_mesh(
     border : {"free", "curve", "fixed"}
         Open-border vertices (on an edge of one face) average all their neighbours (the paper's
         algorithm), follow their border as a curve, or stay (core.borders). "curve" and "fixed" need faces.
+    keep_sharp_edges : bool
+        Smooth with core.sharp_edges (face normals filtered without averaging across creases, vertices
+        fitted to them, HC's push-back) instead of HC's umbrella: for hard-surface scans. Needs faces.
+        ``iterations`` then counts its steps (default ``core.sharp_edges.DEFAULT_ITERATIONS``), alpha and
+        beta weight its push-back (defaults 0 and ``core.sharp_edges.DEFAULT_BETA``); ``method`` and
+        ``mode`` are not used. The Automatic Amount chooses the steps from the noise core.mesh_noise finds.
+    sharpness_angle : float
+        Radians in (0, pi): faces meeting at more than this angle keep their crease (as Blender's Auto
+        Smooth angle). Default ``core.sharp_edges.DEFAULT_SHARPNESS_ANGLE``.
     return_report : bool
         Also return a MeshReport (what ran, what was chosen).
     progress : callable, optional

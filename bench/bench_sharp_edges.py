@@ -1,0 +1,383 @@
+"""Keep Sharp Edges (core.sharp_edges) on sharp-edged parts, against HC and feature-preserving peers.
+
+Parts: the cube and the thin plate of bench_quality_inputs.py and the CAD-like parts of sharp_parts.py
+(a bevelled box, a cylinder with a through hole, a fandisk-like block). ``tuning`` (cube, bevelled box,
+holed cylinder) is what the default angle and the Automatic Amount's rule were chosen on; ``heldout``
+(plate, fandisk) was never looked at while choosing. Noise σ = 0.1 / 0.25 / 0.5 / 1 % of the
+bounding-box diagonal, along the clean vertex normals ("normal") or on every coordinate ("iso"), one
+seed per cell (bench_quality.make_case's seeding).
+
+Methods, same run, same input:
+
+* ours: ``core.smooth_mesh(noisy, edges, faces=faces, weld=True, keep_sharp_edges=True)`` (the Automatic
+  Amount, as the add-on would run it), and at the fixed default (``core.sharp_edges.DEFAULT_ITERATIONS``
+  steps, no Automatic Amount);
+* HC Smooth's default (``core.smooth_mesh`` with nothing set) and the best HC setting of
+  bench_default_heldout.py's grid (α × β × iterations, read on all vertices);
+* MeshLab's two-step smoothing (``apply_coord_two_steps_smoothing``, Sun et al. 2007) at its defaults
+  (3 steps, 60°, 20 + 20 passes) and the best of steps {1, 2, 3, 5, 8} × angle {30, 45, 60};
+* MeshLab's surface-preserving Laplacian (``apply_coord_laplacian_smoothing_surface_preserving``) at its
+  defaults (1 iteration, 0.5°) and the best of iterations {1, 5, 20} × angle {2, 10, 30}°;
+* MeshLib's ``meshDenoiseViaNormals`` (Mumford–Shah normal filtering) at its defaults and the best of
+  β {0.003, 0.01, 0.03, 0.1}.
+
+Measured: RMS distance of the vertices to the clean surface (% of the diagonal, as bench_quality.py),
+the dihedral-angle error on the true sharp edges (mean |angle − clean angle| over the mesh edges whose
+clean faces meet at more than 25°), the volume change against the clean part, time. Targets (issue 24):
+ours no worse than MeshLab's two-step (default and best) in RMS in every cell; sharp edges within 5°
+at 0.5 % noise; |ΔV| ≤ 0.5 %.
+
+``--cost`` times the Automatic Amount with the option on against 10 HC iterations on noisy tori of
+meshes.py (isotropic noise 0.1 % of the diagonal, float32).
+
+``--organic`` smooths organic scans (no sharp edges) with the option on and reports it beside HC's
+default and the best HC setting.
+
+    python bench/bench_sharp_edges.py                                   # both sets (~10 min)
+    python bench/bench_sharp_edges.py --sets tuning --parts cube --sigmas 0.005 --kinds normal
+    python bench/bench_sharp_edges.py --organic bunny,cow --sigmas 0.001,0.0025,0.005 --sets none
+    python bench/bench_sharp_edges.py --sets none --cost 250k,1M       # time on noisy tori (~4 min)
+
+The report goes to stdout and bench/results/; the numbers to a JSON file beside it.
+"""
+
+import argparse
+import json
+import math
+import pathlib
+import sys
+import time
+import zlib
+
+import numpy as np
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
+import bench_default_heldout as heldout  # noqa: E402
+import bench_quality as quality  # noqa: E402
+import bench_quality_inputs as inputs  # noqa: E402
+import sharp_parts  # noqa: E402
+from report import Report  # noqa: E402
+
+import core  # noqa: E402
+from core import sharp_edges  # noqa: E402
+
+SETS = {"tuning": ("cube", "bevelled_box", "holed_cylinder"), "heldout": ("plate", "fandisk")}
+SIGMAS = "0.001,0.0025,0.005,0.01"
+CREASE_DEGREES = 25.0
+DIHEDRAL_TARGET = 5.0  # degrees, at TARGET_SIGMA
+TARGET_SIGMA = 0.005
+VOLUME_TARGET = 0.005
+TWO_STEP_GRID = [{"stepsmoothnum": s, "normalthr": a} for s in (1, 2, 3, 5, 8) for a in (30.0, 45.0, 60.0)]
+PRESERVING_GRID = [{"iterations": k, "angledeg": a} for k in (1, 5, 20) for a in (2.0, 10.0, 30.0)]
+MESHLIB_GRID = [{"beta": b} for b in (0.003, 0.01, 0.03, 0.1)]
+
+
+def load(name):
+    if name in sharp_parts.PARTS:
+        return sharp_parts.PARTS[name]()
+    return inputs.load_mesh(name)
+
+
+def make_case(name, kind, sigma, seed, cache):
+    if name not in cache:
+        cache[name] = load(name)
+    clean, faces = cache[name]
+    normals = inputs.vertex_normals(clean, faces)
+    cell_seed = zlib.crc32(f"{name}/{kind}/{sigma:g}".encode()) ^ seed
+    noisy = inputs.add_noise(clean, normals, sigma * inputs.diagonal(clean), kind, cell_seed)
+    case = quality.Case(name, kind, sigma, clean, faces, noisy)
+    case.creases = creases(clean, faces)
+    return case
+
+
+def creases(vertices, faces, degrees=CREASE_DEGREES):
+    """(face a, face b, dihedral angle in degrees) of the mesh edges whose two faces meet at more than
+    ``degrees``: the true sharp edges."""
+    pairs = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    key = pairs[:, 0].astype(np.int64) * len(vertices) + pairs[:, 1]
+    order = np.argsort(key, kind="stable")
+    key, face = key[order], np.repeat(np.arange(len(faces)), 3)[order]
+    shared = key[1:] == key[:-1]
+    a, b = face[:-1][shared], face[1:][shared]
+    angles = dihedral(vertices, faces, a, b)
+    sharp = angles > degrees
+    return a[sharp], b[sharp], angles[sharp]
+
+
+def dihedral(vertices, faces, a, b):
+    normals = sharp_edges.face_normals(vertices, faces)
+    return np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", normals[a], normals[b]), -1.0, 1.0)))
+
+
+def measure(case, positions, seconds=None):
+    measured = case.measure(positions)
+    out = {"rms": measured["rms"], "dv": measured["dv"], "seconds": seconds}
+    if getattr(case, "creases", None) is not None and case.creases[0].size:
+        a, b, angles = case.creases
+        errors = np.abs(dihedral(positions, case.faces, a, b) - angles)
+        out.update(dihedral=float(errors.mean()), dihedral_median=float(np.median(errors)))
+    return out
+
+
+def timed(function, *args, **kwargs):
+    start = time.perf_counter()
+    result = function(*args, **kwargs)
+    return result, time.perf_counter() - start
+
+
+# --- methods ------------------------------------------------------------------------------------------
+
+
+def ours(case, automatic=True):
+    options = {} if automatic else {"iterations": sharp_edges.DEFAULT_ITERATIONS}
+    result, report = core.smooth_mesh(
+        case.noisy, case.edges, faces=case.faces, weld=True, keep_sharp_edges=True, return_report=True, **options
+    )
+    return result, {"steps": report.iterations, "angle": round(math.degrees(report.sharpness_angle), 1)}
+
+
+def two_step(case, params):
+    return quality._meshlab(case, "apply_coord_two_steps_smoothing", **params)
+
+
+def preserving(case, params):
+    return quality._meshlab(case, "apply_coord_laplacian_smoothing_surface_preserving", **params)
+
+
+def meshlib_denoise(case, params):
+    import meshlib.mrmeshnumpy as mn
+    import meshlib.mrmeshpy as mm
+
+    mesh = mn.meshFromFacesVerts(case.faces.astype(np.int32), case.noisy.astype(np.float32))
+    settings = mm.DenoiseViaNormalsSettings()
+    for name, value in params.items():
+        setattr(settings, name, value)
+    mm.meshDenoiseViaNormals(mesh, settings)
+    out = mn.getNumpyVerts(mesh).astype(np.float64)
+    if out.shape != case.noisy.shape:
+        raise RuntimeError("MeshLib changed the vertex count")
+    return out
+
+
+PEERS = {  # name: (run, defaults, grid)
+    "MeshLab two-step": (two_step, {}, TWO_STEP_GRID),
+    "MeshLab surface-preserving": (preserving, {}, PRESERVING_GRID),
+    "MeshLib denoise": (meshlib_denoise, {}, MESHLIB_GRID),
+}
+
+
+def peer_cell(case, run, defaults, grid):
+    result, seconds = timed(run, case, defaults)
+    default = measure(case, result, seconds)
+    best = None
+    for params in grid:
+        measured = case.rms(run(case, params))
+        if best is None or measured < best[0]:
+            best = (measured, params)
+    best_result = run(case, best[1])
+    return default, {**measure(case, best_result), "params": best[1]}
+
+
+def measure_cell(name, set_name, kind, sigma, seed, cache, peers=True):
+    case = make_case(name, kind, sigma, seed, cache)
+    cell = {"set": set_name, "mesh": name, "kind": kind, "sigma": sigma, "vertices": len(case.noisy)}
+    cell["input"] = measure(case, case.noisy)
+    (result, chosen), seconds = timed(ours, case)
+    cell["ours"] = {**measure(case, result, seconds), **chosen}
+    (result, chosen), seconds = timed(ours, case, False)
+    cell["ours_fixed"] = {**measure(case, result, seconds), **chosen}
+    (result, chosen), seconds = timed(quality.hc_default, case)
+    cell["hc"] = {**measure(case, result, seconds), "iterations": chosen["iterations"]}
+    _, best = heldout.hc_grid(case)
+    cell["hc_best"] = {**measure(case, quality.hc_fixed(case, best["params"])), "params": best["params"]}
+    if peers:
+        for peer, (run, defaults, grid) in PEERS.items():
+            try:
+                cell[peer], cell[peer + " best"] = peer_cell(case, run, defaults, grid)
+            except ImportError as missing:
+                cell[peer] = {"missing": str(missing)}
+    return cell
+
+
+# --- report -------------------------------------------------------------------------------------------
+
+
+def pct(value, digits=3):
+    return "–" if value is None else f"{100 * value:.{digits}f}"
+
+
+COLUMNS = [
+    ("input", "input"),
+    ("ours", "**ours (auto)**"),
+    ("ours_fixed", f"ours ({sharp_edges.DEFAULT_ITERATIONS} steps)"),
+    ("hc", "HC default"),
+    ("hc_best", "HC best"),
+    ("MeshLab two-step", "two-step"),
+    ("MeshLab two-step best", "two-step best"),
+    ("MeshLab surface-preserving", "surf.-pres."),
+    ("MeshLab surface-preserving best", "surf.-pres. best"),
+    ("MeshLib denoise", "MeshLib"),
+    ("MeshLib denoise best", "MeshLib best"),
+]
+
+
+def table(cells, out, key, title, formatter):
+    present = [(k, label) for k, label in COLUMNS if any(k in cell and key in cell[k] for cell in cells)]
+    out(f"\n{title}\n")
+    out("| part | noise | " + " | ".join(label for _, label in present) + " |")
+    out("|---|---|" + "---:|" * len(present))
+    for cell in cells:
+        values = [formatter(cell[k].get(key)) if k in cell and key in cell[k] else "–" for k, _ in present]
+        out(f"| {cell['mesh']} | {cell['kind']} {100 * cell['sigma']:g} % | " + " | ".join(values) + " |")
+
+
+def targets(cells, out, name):
+    beaten = [
+        c
+        for c in cells
+        if "MeshLab two-step" in c
+        and "rms" in c["MeshLab two-step"]
+        and c["ours"]["rms"] > min(c["MeshLab two-step"]["rms"], c["MeshLab two-step best"]["rms"])
+    ]
+    above_default = [
+        c for c in cells if "rms" in c.get("MeshLab two-step", {}) and c["ours"]["rms"] > c["MeshLab two-step"]["rms"]
+    ]
+    at_target = [c for c in cells if c["sigma"] == TARGET_SIGMA and "dihedral" in c["ours"]]
+    sharp = [c for c in at_target if c["ours"]["dihedral"] <= DIHEDRAL_TARGET]
+    volume = [c for c in cells if c["ours"]["dv"] is not None and abs(c["ours"]["dv"]) <= VOLUME_TARGET]
+    closed = [c for c in cells if c["ours"]["dv"] is not None]
+    out(
+        f"\n**{name}** ({len(cells)} cells). Ours (auto) RMS ≤ MeshLab two-step's default in "
+        f"{len(cells) - len(above_default)} / {len(cells)} cells, ≤ its default and its best in "
+        f"{len(cells) - len(beaten)} / {len(cells)}; sharp edges within {DIHEDRAL_TARGET:g}° at "
+        f"{100 * TARGET_SIGMA:g} % in {len(sharp)} / {len(at_target)}; |ΔV| ≤ {100 * VOLUME_TARGET:g} % in "
+        f"{len(volume)} / {len(closed)}."
+    )
+    for c in beaten:
+        out(
+            f"- RMS above two-step's: {c['mesh']} {c['kind']} {100 * c['sigma']:g} %: ours "
+            f"{pct(c['ours']['rms'])}, two-step {pct(c['MeshLab two-step']['rms'])}, best "
+            f"{pct(c['MeshLab two-step best']['rms'])} ({c['MeshLab two-step best']['params']})"
+        )
+
+
+def report(record, out):
+    out("# Keep Sharp Edges on sharp-edged parts (bench_sharp_edges.py)\n")
+    out(
+        f"Command: `{record['command']}`; default angle {record['angle']:g}°, "
+        f"{time.strftime('%Y-%m-%d')}, load average {record['load']}."
+    )
+    for set_name in ("tuning", "heldout"):
+        cells = [c for c in record["cells"] if c["set"] == set_name]
+        if not cells:
+            continue
+        out(f"\n## {set_name} set: {', '.join(dict.fromkeys(c['mesh'] for c in cells))}")
+        table(cells, out, "rms", "RMS distance to the clean surface, % of the diagonal:", pct)
+        table(
+            cells,
+            out,
+            "dihedral",
+            f"Sharp edges: mean |dihedral error|, degrees (edges > {CREASE_DEGREES:g}°):",
+            lambda v: "–" if v is None else f"{v:.1f}",
+        )
+        table(
+            cells,
+            out,
+            "dv",
+            "Volume change against the clean part, %:",
+            lambda v: "–" if v is None else f"{100 * v:+.2f}",
+        )
+        table(cells, out, "seconds", "Time, seconds (one run):", lambda v: "–" if v is None else f"{v:.2f}")
+        out(
+            "\nOurs: steps and angle the Automatic Amount chose: "
+            + "; ".join(
+                f"{c['mesh']} {c['kind']} {100 * c['sigma']:g} %: {c['ours']['steps']} at {c['ours']['angle']:g}°"
+                for c in cells
+            )
+        )
+        targets(cells, out, set_name)
+    organic = record.get("organic", [])
+    if organic:
+        out("\n## Organic scans with Keep Sharp Edges on\n")
+        out("RMS distance to the scan, % of the diagonal (the scans' own scanner noise is in the truth):\n")
+        out("| scan | noise | input | HC default | HC best | ours (auto) | ours / HC default |")
+        out("|---|---|---:|---:|---:|---:|---:|")
+        for c in organic:
+            out(
+                f"| {c['mesh']} | {c['kind']} {100 * c['sigma']:g} % | {pct(c['input']['rms'])} | "
+                f"{pct(c['hc']['rms'])} | {pct(c['hc_best']['rms'])} | {pct(c['ours']['rms'])} | "
+                f"{c['ours']['rms'] / c['hc']['rms']:.2f} |"
+            )
+
+
+def cost(sizes, out):
+    import meshes
+
+    out("\n## Cost on big meshes\n")
+    out("| vertices | 10 HC iterations (s) | Keep Sharp Edges, Automatic Amount (s) | steps | s per step |")
+    out("|---:|---:|---:|---:|---:|")
+    for size in sizes:
+        vertices, faces = meshes.torus(size)
+        noisy = meshes.add_noise(vertices, 0.001, seed=1).astype(np.float32)
+        edges = meshes.edges_from_faces(faces)
+        _, hc = timed(core.smooth_mesh, noisy, edges, faces=faces, alpha=0.1, beta=0.6, iterations=10)
+        (_, report), ours = timed(
+            core.smooth_mesh, noisy, edges, faces=faces, keep_sharp_edges=True, return_report=True
+        )
+        steps = report.iterations
+        out(f"| {len(vertices):,} | {hc:.1f} | {ours:.1f} | {steps} | {ours / max(steps, 1):.1f} |")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--sets", default="tuning,heldout", help="tuning, heldout, or none")
+    parser.add_argument("--parts", default=None, help="only these parts of the sets")
+    parser.add_argument("--sigmas", default=SIGMAS)
+    parser.add_argument("--kinds", default="normal,iso")
+    parser.add_argument("--organic", default="", help="organic scans to run with the option on, e.g. bunny")
+    parser.add_argument("--cost", default="", help="torus sizes to time, e.g. 250k,1M")
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    sigmas = inputs.parse_list(args.sigmas, float)
+    kinds = inputs.parse_list(args.kinds)
+    only = set(inputs.parse_list(args.parts)) if args.parts else None
+    record = {
+        "command": "python bench/bench_sharp_edges.py " + " ".join(sys.argv[1:]),
+        "angle": math.degrees(sharp_edges.DEFAULT_SHARPNESS_ANGLE),
+        "load": " ".join(f"{x:.1f}" for x in __import__("os").getloadavg()),
+        "cells": [],
+        "organic": [],
+    }
+    cache = {}
+    for set_name in inputs.parse_list(args.sets):
+        for name in SETS.get(set_name, ()):
+            if only and name not in only:
+                continue
+            for kind in kinds:
+                for sigma in sigmas:
+                    record["cells"].append(measure_cell(name, set_name, kind, sigma, args.seed, cache))
+                    c = record["cells"][-1]
+                    print(
+                        f"  {name} {kind} {sigma:g}: ours {pct(c['ours']['rms'])}, two-step "
+                        f"{pct(c.get('MeshLab two-step', {}).get('rms'))}",
+                        file=sys.stderr,
+                        flush=True,
+                    )
+    for name in inputs.parse_list(args.organic):
+        for kind in kinds:
+            for sigma in sigmas:
+                record["organic"].append(measure_cell(name, "organic", kind, sigma, args.seed, cache, peers=False))
+    with Report("bench_sharp_edges") as out:
+        report(record, out)
+        if args.cost:
+            sizes = [
+                int(float(x.rstrip("kKmM")) * (1e6 if x[-1] in "mM" else 1e3 if x[-1] in "kK" else 1))
+                for x in inputs.parse_list(args.cost)
+            ]
+            cost(sizes, out)
+        out.sibling(".json").write_text(json.dumps(record, indent=1))
+
+
+if __name__ == "__main__":
+    main()

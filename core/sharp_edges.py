@@ -1,0 +1,464 @@
+"""Keep Sharp Edges: smoothing that keeps the creases of hard-surface parts (machined, cast, CAD-like).
+
+HC's umbrella averages every vertex with all its neighbours, across a crease too, so it rounds every
+edge. This mode smooths the face normals first, never across a crease, then moves the vertices to fit
+the smoothed normals: Sun, Rosin, Martin and Langbein 2007, "Fast and effective feature-preserving mesh
+denoising" (the two-step scheme MeshLab offers as "Two Step Smoothing").
+
+One step of it, with the triangles' unit normals n_f and centroids c_f:
+
+1. **Normal filtering**, ``NORMAL_ITERATIONS`` times: n_i <- normalize(sum_j w_ij n_j) over the faces j
+   sharing a vertex with face i (i itself included), w_ij = (n_i . n_j - T)^2 where n_i . n_j > T and 0
+   elsewhere, T = cos(sharpness angle). Faces meeting at more than the sharpness angle do not see each
+   other: the normals of the two sides of a crease stay apart, while the noise within each side, whose
+   normals are much closer to each other, is averaged away.
+2. **Vertex fitting**, ``FIT_ITERATIONS`` times: x_i <- x_i + 1/|F_i| sum_{f in F_i} n_f n_f^T (c_f - x_i),
+   F_i the faces around vertex i: each vertex moves towards the planes through its faces' centroids
+   with the filtered normals (a crease vertex to the line where its two planes meet, a corner to the
+   point of three).
+3. **Tangential relaxation**: a vertex whose faces all agree (no crease through it, no open border)
+   moves ``TANGENTIAL`` of the way to its neighbours' mean along its tangent plane: noise along the
+   surface (isotropic noise)
+   leaves uneven, folded triangles whose normals the filter cannot trust; this evens them out without
+   moving the surface (on the tuning parts at 0.5 % isotropic noise: 12 % less error).
+4. **HC's push-back** (paper section 4, Algorithm 1), with the step's move as the Laplacian move:
+   b_i = p_i - (alpha o_i + (1 - alpha) q_i), then p_i <- p_i - (beta b_i + (1 - beta) mean_adj(b)).
+   What the fitting moved alike over a neighbourhood (a face or a rim drifting inwards: shrinkage) is
+   taken back, what it moved vertex by vertex (the noise) is kept.
+5. The corners of triangles the step turned over (against their filtered normal or their ring's mean)
+   get half their move, up to ``FOLD_ROUNDS`` times; then the deviation limit, if any.
+
+Everything runs on all faces or vertices at once: the face rings are one sparse pattern (the faces
+sharing a vertex with each face: incidence times its transpose), a filtering pass is one sparse product
+with weights computed on that pattern, a fitting pass two products with the vertex-face incidence.
+Fixed vertices never move (their positions still place their faces' planes); ``influence`` scales each
+step's move, as core.smoothing scales an iteration's.
+"""
+
+import math
+from collections.abc import Iterator
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import ArrayLike
+
+from .adjacency import Umbrella, umbrella_operator
+from .metrics import fan_triangles
+from .slices import to_end
+from .validation import (
+    bbox_diagonal,
+    check_fixed,
+    check_influence,
+    check_iterations,
+    check_max_deviation,
+    check_positions,
+    check_tolerance,
+    check_unit_interval,
+)
+
+# Faces meeting at more than this angle are not averaged, as Blender's Auto Smooth angle: 30° keeps the 35°
+# and 45° creases of a bevelled box, 40° and more round them (bench/bench_sharp_edges.py, tuning set).
+DEFAULT_SHARPNESS_ANGLE = math.radians(30.0)
+NORMAL_ITERATIONS = 20  # filtering passes per step (MeshLab's default too)
+FIT_ITERATIONS = 20  # fitting passes per step (MeshLab's default too)
+DEFAULT_ALPHA = 0.0  # the push-back's weights (paper section 4): beta 0 takes back each step's
+DEFAULT_BETA = 0.0  # neighbourhood mean (the drift), keeps all of the vertex-by-vertex part (the noise)
+DEFAULT_ITERATIONS = 5  # steps when the caller gives no amount and no Automatic Amount runs
+# The Automatic Amount (for a noise of ``ratio`` median edge lengths, core.mesh_noise's estimate):
+# * steps: FIRST_STEPS + STEPS_PER_RATIO x ratio, at most MAX_STEPS, and at most WORK_BUDGET / triangles
+#   (each step costs NORMAL_ITERATIONS passes over ~13 ring entries per triangle): the error on the tuning
+#   parts falls with the steps up to 10 where the noise is heavy, and is flat from 4 to 6 where it is light;
+# * angle: at least NOISE_ANGLE_GAIN x atan(ratio): noise tilts neighbouring faces by about that much,
+#   and a filter that sees noisy faces as creases leaves the noise (at 1 % noise along the normals on the
+#   tuning parts, 50°-60° leave 20-50 % less error than 30°). A crease gentler than the noise is noise.
+# * QUIET_RATIO for meshes where no part has noise above core.mesh_noise's threshold (they move within
+#   its small radius).
+FIRST_STEPS = 4
+STEPS_PER_RATIO = 20.0
+MAX_STEPS = 10
+WORK_BUDGET = 12_000_000  # triangle-steps
+NOISE_ANGLE_GAIN = 2.5
+QUIET_RATIO = 0.05
+CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its progress the noise estimate takes
+TANGENTIAL = 0.5  # share of the tangential umbrella move per step on vertices off the creases (step 3)
+FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
+PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the filtering passes
+_BLOCK = 1 << 18  # faces per block of the filtering's dot products (about 13 ring entries each)
+
+
+def steps_for_noise(ratio, triangles):
+    """The Automatic Amount's steps for noise of ``ratio`` median edge lengths on ``triangles`` triangles."""
+    wanted = min(MAX_STEPS, round(FIRST_STEPS + STEPS_PER_RATIO * ratio))
+    return int(max(1, min(wanted, WORK_BUDGET // max(1, triangles))))
+
+
+def angle_for_noise(angle, ratio):
+    """The Automatic Amount's sharpness angle: ``angle``, or wider where noise of ``ratio`` median edge
+    lengths tilts neighbouring faces by more (at most 80°)."""
+    return max(angle, min(math.radians(80.0), NOISE_ANGLE_GAIN * math.atan(ratio)))
+
+
+def check_sharpness_angle(value):
+    """The sharpness angle in radians, in (0, pi), or ValueError."""
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float, np.integer, np.floating))
+        or not np.isfinite(value)
+    ):
+        raise ValueError(f"sharpness_angle must be an angle in radians, got {value!r}")
+    if not 0.0 < value < math.pi:
+        raise ValueError(
+            f"sharpness_angle must lie between 0 and pi radians (0 and 180 degrees), got {value!r} "
+            f"({math.degrees(value):g} degrees)"
+        )
+    return float(value)
+
+
+def check_triangles(faces, n_vertices):
+    """The (t, 3) triangles of ``faces`` (any polygons, fanned), indices checked; ValueError if none."""
+    if faces is None:
+        raise ValueError("Keep Sharp Edges needs the faces: it smooths the face normals (pass faces=)")
+    triangles = fan_triangles(faces)
+    if triangles.shape[0] == 0:
+        raise ValueError("Keep Sharp Edges needs faces, and the mesh has none (a point cloud or a wire mesh)")
+    if triangles.min() < 0 or triangles.max() >= n_vertices:
+        raise ValueError(f"faces must use vertex indices between 0 and {n_vertices - 1}")
+    return triangles
+
+
+class FaceRings:
+    """The sparse patterns of a triangle mesh the two steps run on.
+
+    Attributes
+    ----------
+    incidence : (n, t) CSR, 1 where vertex i is a corner of triangle f.
+    indptr, indices, counts : the faces sharing a vertex with each face, itself included (CSR, (t, t)).
+    ring : that pattern as a (t, t) CSR of ones.
+    faces_at : (n,) the number of triangles around each vertex, |F_i|.
+    border : (n,) bool, the vertices on an edge of one triangle.
+    """
+
+    def __init__(self, triangles, n_vertices):
+        t = triangles.shape[0]
+        index = np.int32 if max(t, n_vertices) < np.iinfo(np.int32).max // 4 else np.int64
+        rows = triangles.ravel().astype(index)
+        columns = np.repeat(np.arange(t, dtype=index), 3)
+        self.incidence = sp.csr_matrix((np.ones(rows.size), (rows, columns)), shape=(n_vertices, t))
+        self.incidence.sum_duplicates()
+        self.incidence.data[:] = 1.0  # a triangle with a repeated corner counts once at that vertex
+        pattern = (self.incidence.T @ self.incidence).tocsr()
+        pattern.sort_indices()
+        self.indptr, self.indices = pattern.indptr, pattern.indices
+        self.counts = np.diff(self.indptr)
+        self.ring = sp.csr_matrix((np.ones(self.indices.size), self.indices, self.indptr), shape=(t, t))
+        # Vertices on an open border (an edge of one triangle): their umbrella leans inwards.
+        pairs = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
+        keys, counts = np.unique(pairs[:, 0] * n_vertices + pairs[:, 1], return_counts=True)
+        self.border = np.zeros(n_vertices, dtype=bool)
+        self.border[np.concatenate([keys[counts == 1] // n_vertices, keys[counts == 1] % n_vertices])] = True
+        self.faces_at = np.diff(self.incidence.indptr)
+        self.triangles = triangles
+
+
+def face_normals(points, triangles):
+    """(t, 3) unit normals (right-hand rule over the corners); (0, 0, 0) for a degenerate triangle."""
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    normals = np.cross(b - a, c - a)
+    return _unit(normals)
+
+
+def _unit(vectors):
+    lengths = np.sqrt(np.einsum("ij,ij->i", vectors, vectors))
+    out = np.zeros_like(vectors)
+    good = lengths > 0.0
+    out[good] = vectors[good] / lengths[good, None]
+    return out
+
+
+def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
+    """``filter_steps`` run to its end: the filtered (t, 3) normals."""
+    return to_end(filter_steps(normals, rings, cos_threshold, iterations))
+
+
+def filter_steps(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
+    """Sun et al.'s normal filtering, ``iterations`` passes: n_i <- normalize(sum_j w_ij n_j) over the faces j
+    sharing a vertex with i (i included), w_ij = (n_i . n_j - T)^2 where n_i . n_j > T, else 0. A face with
+    no other face of its ring within the angle (noise tilted it away from all of them) takes the plain mean
+    of its ring's normals instead, where that mean is at least a tenth of a unit long (the ring is no corner
+    of its own, as a tetrahedron's is): kept as it is, it would be a crease of one face, and the fitting would
+    turn it over. A face whose sum vanishes keeps its normal. A generator: yields after each pass, returns
+    the normals."""
+    indptr, indices, counts = rings.indptr, rings.indices, rings.counts
+    t = normals.shape[0]
+    weights = sp.csr_matrix((np.empty(indices.size), indices, indptr), shape=(t, t))
+    ring = rings.ring
+    similar = np.empty(t, dtype=np.int64)
+    for _ in range(iterations):
+        columns = np.ascontiguousarray(normals.T)  # a coordinate at a time: 1-D gathers are the fast ones
+        for low in range(0, t, _BLOCK):  # blocks of faces bound the temporaries
+            faces = slice(low, low + _BLOCK)
+            entries = slice(indptr[low], indptr[min(low + _BLOCK, t)])
+            cosine = np.repeat(columns[0][faces], counts[faces]) * columns[0][indices[entries]]
+            for k in (1, 2):
+                cosine += np.repeat(columns[k][faces], counts[faces]) * columns[k][indices[entries]]
+            near = np.maximum(cosine - cos_threshold, 0.0, out=cosine)
+            weights.data[entries] = near * near
+            starts = indptr[low : min(low + _BLOCK, t)] - indptr[low]
+            similar[faces] = np.add.reduceat((near > 0.0).astype(np.int64), starts)
+        summed = weights @ normals
+        lonely = np.flatnonzero(similar <= 1)  # itself only
+        if lonely.size:
+            mean = (ring[lonely] @ normals) / counts[lonely, None]
+            agree = np.einsum("ij,ij->i", mean, mean) >= 0.01  # a ring that is no corner of its own
+            summed[lonely[agree]] = mean[agree]
+        filtered = _unit(summed)
+        lost = ~np.any(filtered != 0.0, axis=1)
+        filtered[lost] = normals[lost]
+        normals = filtered
+        yield
+    return normals
+
+
+def fit_vertices(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
+    """Sun et al.'s vertex update, ``iterations`` passes: x_i += share_i / |F_i| sum_f n_f n_f^T (c_f - x_i)
+    over the triangles f around i (``step_share``: (n,) 0 for vertices that stay, else the influence)."""
+    triangles, incidence = rings.triangles, rings.incidence
+    outer = (normals[:, :, None] * normals[:, None, :]).reshape(-1, 9)
+    scale = np.divide(step_share, rings.faces_at, out=np.zeros(step_share.size), where=rings.faces_at > 0)
+    tensor = (incidence @ outer).reshape(-1, 3, 3)  # sum_f n_f n_f^T per vertex
+    moving = np.flatnonzero(scale > 0.0)
+    tensor, scale = tensor[moving], scale[moving, None]
+    incidence_moving = incidence[moving]
+    points = points.copy()
+    for _ in range(iterations):
+        centroid = (points[triangles[:, 0]] + points[triangles[:, 1]] + points[triangles[:, 2]]) / 3.0
+        offsets = np.einsum("ij,ij->i", normals, centroid)
+        pulled = incidence_moving @ (normals * offsets[:, None])
+        here = points[moving]
+        points[moving] = here + scale * (pulled - np.einsum("ijk,ik->ij", tensor, here))
+    return points
+
+
+def _mean_of_neighbours(values, operator):
+    """mean over adj(i) of ``values`` (n, 3); a vertex without neighbours gets its own value."""
+    degree = operator.degree
+    weights = np.repeat(1.0 / np.maximum(degree, 1), degree)
+    average = sp.csr_matrix((weights, operator.indices, operator.indptr), shape=(operator.n_vertices,) * 2)
+    out = average @ values
+    lonely = degree == 0
+    out[lonely] = values[lonely]
+    return out
+
+
+class SharpSmoothing:
+    """Keep Sharp Edges in slices: everything is checked on construction; ``steps(chunk)`` runs ``chunk``
+    steps at a time (all if None) and yields the fraction done; ``result()`` gives the positions.
+
+    Parameters
+    ----------
+    positions : (n, 3) float32 or float64
+        Never modified; the result has the same shape and dtype.
+    faces : (f, k) integer array, list of faces, or (offsets, corner_verts)
+        The faces (any polygons: fanned into triangles).
+    sharpness_angle : float, radians in (0, pi)
+        Faces meeting at more than this angle keep their crease.
+    iterations : int >= 0
+        Steps (each ``NORMAL_ITERATIONS`` filtering and ``FIT_ITERATIONS`` fitting passes, one push-back).
+    alpha, beta : floats in [0, 1]
+        The push-back's weights (paper section 4).
+    fixed : bool mask or vertex indices, optional
+        Vertices that never move (bit for bit).
+    influence : (n,) floats in [0, 1], optional
+        Each vertex's share of every step's move (0 stays bit for bit).
+    max_deviation : float >= 0, or (n,) floats
+        The farthest a vertex may end a step from its input position (0: no limit).
+    tolerance : float >= 0
+        Stop once a step's largest move is below this times the bounding-box diagonal.
+    operator : Umbrella, optional
+        The mesh's core.umbrella_operator (the push-back's neighbours); built from the faces if None.
+    push_back : bool
+        False: Sun et al.'s two steps alone, without HC's push-back.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> from core.sharp_edges import SharpSmoothing
+    >>> positions = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    >>> faces = [[0, 1, 3, 2], [2, 3, 7, 6], [6, 7, 5, 4], [4, 5, 1, 0], [2, 6, 4, 0], [7, 3, 1, 5]]
+    >>> run = SharpSmoothing(positions, faces, iterations=2)
+    >>> [round(f, 2) for f in run.steps(chunk=1)]
+    [0.5, 1.0]
+    >>> bool(np.allclose(run.result(), positions))  # a cube is all planes and creases: nothing to smooth
+    True
+    """
+
+    def __init__(
+        self,
+        positions: ArrayLike,
+        faces,
+        *,
+        sharpness_angle: float = DEFAULT_SHARPNESS_ANGLE,
+        iterations: int = 1,
+        alpha: float = DEFAULT_ALPHA,
+        beta: float = DEFAULT_BETA,
+        fixed: ArrayLike | None = None,
+        influence: ArrayLike | None = None,
+        max_deviation: float | np.ndarray = 0.0,
+        tolerance: float = 0.0,
+        operator: Umbrella | None = None,
+        push_back: bool = True,
+    ) -> None:
+        self.positions = check_positions(positions)
+        n = self.positions.shape[0]
+        self.triangles = check_triangles(faces, n)
+        self.cos_threshold = math.cos(check_sharpness_angle(sharpness_angle))
+        self.iterations = check_iterations(iterations)
+        self.alpha = check_unit_interval(alpha, "alpha")
+        self.beta = check_unit_interval(beta, "beta")
+        self.fixed = check_fixed(fixed, n)
+        self.influence = check_influence(influence, n)
+        self.max_deviation = check_max_deviation(max_deviation, n)
+        self.tolerance = check_tolerance(tolerance)
+        self.push_back = bool(push_back)
+        if operator is None:
+            edges = self.triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+            operator = umbrella_operator(edges, n)
+        elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
+            raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
+        self.operator = operator
+        share = np.ones(n) if self.influence is None else self.influence.copy()
+        share[self.fixed] = 0.0
+        self.share = share
+        self.still = share <= 0.0
+        self.moving = (~self.still).astype(np.float64)  # the fitting moves these fully; the step's end scales
+        self.original = self.positions.astype(np.float64)
+        self.current = self.original.copy()
+        self.rings = None
+        self.done = 0
+        self.stopped_early = False
+
+    def steps(self, chunk: int | None = None) -> Iterator[float]:
+        """Run the steps left, ``chunk`` at a time, yielding the fraction done after each slice; on meshes of
+        ``PASS_SLICES_FROM`` triangles or more also after each filtering pass (a step takes seconds there)."""
+        if self.rings is None:
+            self.rings = FaceRings(self.triangles, self.positions.shape[0])
+        chunk = self.iterations if chunk is None else max(1, int(chunk))
+        passes = self.triangles.shape[0] >= PASS_SLICES_FROM
+        while self.done < self.iterations and not self.stopped_early:
+            for _ in range(min(chunk, self.iterations - self.done)):
+                for k in self._step():
+                    if passes:
+                        yield (self.done + k / (NORMAL_ITERATIONS + 1)) / self.iterations
+                if self.stopped_early:
+                    break
+            yield self.done / self.iterations
+        if self.iterations == 0:
+            yield 1.0
+
+    def advance(self):
+        """One step: filter the normals, fit the vertices, relax, push back, unfold, keep to the limit."""
+        to_end(self._step())
+
+    def _step(self):
+        """``advance`` as a generator, yielding the passes done (of NORMAL_ITERATIONS + 1) between them."""
+        if self.rings is None:
+            self.rings = FaceRings(self.triangles, self.positions.shape[0])
+        start = self.current
+        filtering = filter_steps(face_normals(start, self.triangles), self.rings, self.cos_threshold, NORMAL_ITERATIONS)
+        normals = yield from _counted(filtering)
+        moved = fit_vertices(start, normals, self.rings, self.moving, FIT_ITERATIONS)
+        if TANGENTIAL:
+            _relax(moved, normals, self.rings, self.operator, self.cos_threshold, self.still)
+        if self.push_back:
+            pushed = moved - (self.alpha * self.original + (1.0 - self.alpha) * start)
+            pushed[self.still] = 0.0
+            moved -= self.beta * pushed + (1.0 - self.beta) * _mean_of_neighbours(pushed, self.operator)
+        if self.influence is not None:  # vertex i ends the step at q_i + w_i (p_i - q_i), as in core.smoothing
+            moved = start + self.share[:, None] * (moved - start)
+        moved[self.still] = start[self.still]
+        _unfold(moved, start, self.triangles, normals, _unit(self.rings.ring @ normals))
+        if np.any(self.max_deviation):
+            _within(moved, self.original, self.max_deviation)
+        self.done += 1
+        if self.tolerance:
+            largest = float(np.sqrt(np.max(np.einsum("ij,ij->i", moved - start, moved - start), initial=0.0)))
+            self.stopped_early = largest < self.tolerance * bbox_diagonal(self.original)
+        self.current = moved
+
+    def result(self) -> np.ndarray:
+        """The positions after the steps run so far, in the input's dtype; still vertices bit for bit."""
+        out = self.current.astype(self.positions.dtype)
+        out[self.still] = self.positions[self.still]
+        return out
+
+
+def _relax(points, normals, rings, operator, cos_threshold, still):
+    """Move, in place, each vertex off the open borders whose faces all agree (their mean filtered normal
+    within half the angle of every one: no crease) ``TANGENTIAL`` of the way to its neighbours' mean
+    along its tangent plane: evens out the triangles that noise along the surface made uneven, without
+    moving the surface."""
+    around = rings.incidence @ normals
+    length = np.sqrt(np.einsum("ij,ij->i", around, around))
+    counts = np.maximum(rings.faces_at, 1)
+    flat = (length / counts > math.sqrt((1.0 + cos_threshold) / 2.0)) & ~still & ~rings.border
+    normal = around[flat] / length[flat, None]
+    umbrella = _mean_of_neighbours(points, operator)[flat] - points[flat]
+    umbrella -= np.einsum("ij,ij->i", umbrella, normal)[:, None] * normal
+    points[flat] += TANGENTIAL * umbrella
+
+
+def _counted(generator):
+    """``yield from _counted(g)``: g's value, yielding 1, 2, ... for its slices."""
+    count = 0
+    while True:
+        try:
+            next(generator)
+        except StopIteration as done:
+            return done.value
+        count += 1
+        yield count
+
+
+def _unfold(points, start, triangles, normals, around, rounds=FOLD_ROUNDS):
+    """Halve, in place, the step's move of the corners of every triangle it turned over (its normal now more
+    than 90° from its filtered normal, or from the mean ``around`` of its ring's), ``rounds`` times at most:
+    the fitting moves along the faces' normals, and on curved parts those moves add up along the surface."""
+    for _ in range(rounds):
+        now = face_normals(points, triangles)
+        turned = (np.einsum("ij,ij->i", now, normals) < 0.0) | (np.einsum("ij,ij->i", now, around) < 0.0)
+        if not turned.any():
+            return
+        corners = np.unique(triangles[turned])
+        points[corners] = start[corners] + 0.5 * (points[corners] - start[corners])
+
+
+def _within(points, start, radius):
+    """``points`` projected, in place, onto the balls of ``radius`` (one distance, or one per row) around ``start``."""
+    away = points - start
+    lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
+    bound = np.broadcast_to(radius, lengths.shape)
+    over = np.flatnonzero(lengths > bound)
+    if over.size:
+        points[over] = start[over] + away[over] * (bound[over] / lengths[over])[:, None]
+
+
+def sharp_smooth(positions: ArrayLike, faces, **options) -> np.ndarray:
+    """Keep Sharp Edges run to the end: ``SharpSmoothing(positions, faces, **options)``'s result.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core.sharp_edges import sharp_smooth
+    >>> u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 12))
+    >>> grid = np.arange(144).reshape(12, 12)
+    >>> quads = np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:], grid[1:, :-1]], -1).reshape(-1, 4)
+    >>> flat = np.c_[u.ravel(), v.ravel(), np.zeros(144)]
+    >>> noisy = flat + [0, 0, 0.01] * np.random.default_rng(1).normal(size=(144, 1))
+    >>> smoothed = sharp_smooth(noisy, quads, iterations=3)
+    >>> bool(smoothed[:, 2].std() < 0.3 * noisy[:, 2].std())
+    True
+    """
+    run = SharpSmoothing(positions, faces, **options)
+    for _ in run.steps():
+        pass
+    return run.result()

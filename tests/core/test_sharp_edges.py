@@ -1,0 +1,317 @@
+"""Keep Sharp Edges (core.sharp_edges and its option in core.smooth_mesh / core.MeshSmoother)."""
+
+import math
+
+import numpy as np
+import pytest
+from primitives import CAD, PRIMITIVES, TINY
+
+import core
+from core import sharp_edges
+from core.sharp_edges import FaceRings, SharpSmoothing, face_normals, filter_normals, fit_vertices, sharp_smooth
+
+
+def box(cells=12, size=2.0):
+    """A closed cube of side ``size``, each side a grid of ``cells`` x ``cells`` squares split into
+    triangles, outward, vertices shared along the edges: 12 sharp edges of 90 degrees."""
+    points, triangles, offset = [], [], 0
+    ticks = np.arange(cells + 1)
+    for axis in range(3):
+        u, v = (axis + 1) % 3, (axis + 2) % 3
+        iu, iv = (a.ravel() for a in np.meshgrid(ticks, ticks, indexing="ij"))
+        a = (iu * (cells + 1) + iv).reshape(cells + 1, cells + 1)[:-1, :-1].ravel()
+        b, c, d = a + cells + 1, a + cells + 2, a + 1
+        quads = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+        for side in (0, cells):
+            lattice = np.zeros((iu.size, 3), np.int64)
+            lattice[:, u], lattice[:, v], lattice[:, axis] = iu, iv, side
+            points.append(lattice)
+            triangles.append((quads if side else quads[:, ::-1]) + offset)
+            offset += iu.size
+    lattice = np.concatenate(points)
+    unique, inverse = np.unique(lattice, axis=0, return_inverse=True)
+    faces = inverse.reshape(-1)[np.concatenate(triangles)]
+    return unique * (size / cells) - size / 2.0, faces
+
+
+def edges_of(faces):
+    return faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+
+
+def vertex_normals(points, faces):
+    a, b, c = (points[faces[:, k]] for k in range(3))
+    summed = np.zeros_like(points)
+    for k in range(3):
+        np.add.at(summed, faces[:, k], np.cross(b - a, c - a))
+    return summed / np.linalg.norm(summed, axis=1, keepdims=True)
+
+
+def volume(points, faces):
+    a, b, c = (points[faces[:, k]] for k in range(3))
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+def crease_pairs(points, faces, degrees=30.0):
+    """(face a, face b, dihedral angle in degrees) of every edge whose faces meet at more than ``degrees``."""
+    seen, pairs = {}, []
+    for f, face in enumerate(faces):
+        for k in range(3):
+            key = tuple(sorted((int(face[k]), int(face[(k + 1) % 3]))))
+            if key in seen:
+                pairs.append((seen[key], f))
+            else:
+                seen[key] = f
+    a, b = np.array(pairs).T
+    angles = dihedral(points, faces, a, b)
+    sharp = angles > degrees
+    return a[sharp], b[sharp], angles[sharp]
+
+
+def dihedral(points, faces, a, b):
+    n = face_normals(points, faces)
+    return np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n[a], n[b]), -1.0, 1.0)))
+
+
+def noisy_box(share=0.005, kind="normal", seed=3, cells=16):
+    clean, faces = box(cells)
+    sigma = share * np.linalg.norm(clean.max(0) - clean.min(0))
+    rng = np.random.default_rng(seed)
+    if kind == "normal":
+        noisy = clean + vertex_normals(clean, faces) * rng.normal(0.0, sigma, (len(clean), 1))
+    else:
+        noisy = clean + rng.normal(0.0, sigma, clean.shape)
+    return clean, noisy, faces
+
+
+@pytest.mark.parametrize("kind", ["normal", "iso"])
+def test_box_keeps_its_sharp_edges_and_volume(kind):
+    clean, noisy, faces = noisy_box(0.005, kind)
+    a, b, angles = crease_pairs(clean, faces)
+    assert a.size == 12 * 16  # every mesh edge along the 12 creases
+    smoothed = core.smooth_mesh(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True, iterations=3)
+    noisy_error = np.abs(dihedral(noisy, faces, a, b) - angles).mean()
+    error = np.abs(dihedral(smoothed, faces, a, b) - angles).mean()
+    assert error < 5.0 < noisy_error
+    assert abs(volume(smoothed, faces) / volume(clean, faces) - 1.0) <= 0.005
+    assert off_the_cube(smoothed) < 0.5 * off_the_cube(noisy)
+    turned = np.einsum("ij,ij->i", face_normals(smoothed, faces), face_normals(clean, faces)) < 0.0
+    assert not turned.any()
+
+
+def off_the_cube(points, half=1.0):
+    """RMS distance of points near the surface of the cube [-half, half]^3 to it."""
+    return float(np.sqrt(np.mean((np.abs(points).max(axis=1) - half) ** 2)))
+
+
+def test_hc_rounds_the_edges_that_keep_sharp_edges_keeps():
+    clean, noisy, faces = noisy_box(0.005, "normal")
+    a, b, angles = crease_pairs(clean, faces)
+    edges = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    hc = core.hc_smooth(noisy, edges, alpha=0.1, beta=0.6, iterations=10)
+    sharp = sharp_smooth(noisy, faces, iterations=3)
+    assert (
+        np.abs(dihedral(sharp, faces, a, b) - angles).mean() < 0.5 * np.abs(dihedral(hc, faces, a, b) - angles).mean()
+    )
+
+
+def test_flat_plane_with_noise_along_its_normal_gets_flat():
+    side = 21
+    u, v = np.meshgrid(np.linspace(0, 1, side), np.linspace(0, 1, side))
+    grid = np.arange(side * side).reshape(side, side)
+    a, b, c, d = grid[:-1, :-1].ravel(), grid[:-1, 1:].ravel(), grid[1:, 1:].ravel(), grid[1:, :-1].ravel()
+    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    noisy = np.c_[u.ravel(), v.ravel(), np.random.default_rng(5).normal(0.0, 0.005, side * side)]
+    interior = (u.ravel() > 0) & (u.ravel() < 1) & (v.ravel() > 0) & (v.ravel() < 1)
+    smoothed = sharp_smooth(noisy, faces, iterations=5)
+    assert smoothed[interior, 2].std() < 0.25 * noisy[interior, 2].std()  # a fifth of the noise: its smooth bumps
+    assert np.abs(smoothed[interior, :2] - noisy[interior, :2]).max() < 0.005  # along the normal, not the plane
+
+
+def test_fixed_and_zero_influence_vertices_stay_bit_for_bit():
+    _, noisy, faces = noisy_box(0.005, "iso", cells=8)
+    noisy = noisy.astype(np.float32)
+    fixed = np.zeros(len(noisy), bool)
+    fixed[::7] = True
+    influence = np.ones(len(noisy))
+    influence[3::11] = 0.0
+    smoothed = sharp_smooth(noisy, faces, iterations=2, fixed=fixed, influence=influence)
+    still = fixed | (influence == 0.0)
+    assert smoothed.dtype == np.float32
+    assert np.array_equal(smoothed[still], noisy[still])
+    assert np.all(np.any(smoothed[~still] != noisy[~still], axis=1))
+    run = core.smooth_mesh(
+        noisy, edges_of(faces), faces=faces, keep_sharp_edges=True, iterations=2, fixed=np.flatnonzero(fixed)
+    )
+    assert np.array_equal(run[fixed], noisy[fixed])
+
+
+def test_half_influence_moves_less():
+    _, noisy, faces = noisy_box(0.005, "iso", cells=8)
+    full = sharp_smooth(noisy, faces, iterations=1)
+    half = sharp_smooth(noisy, faces, iterations=1, influence=np.full(len(noisy), 0.5))
+    assert 0.3 < np.linalg.norm(half - noisy) / np.linalg.norm(full - noisy) < 0.8
+
+
+def _loop_filter(normals, faces, threshold, iterations):
+    """Sun et al.'s normal filtering written from the paper, face by face, with core.sharp_edges' rule for
+    a face that no other face of its ring is within the angle of: the plain mean of its ring (if that is
+    at least a tenth of a unit long)."""
+    around = {}
+    for f, face in enumerate(faces):
+        for v in face:
+            around.setdefault(int(v), set()).add(f)
+    lonely_seen = 0
+    for _ in range(iterations):
+        new = np.empty_like(normals)
+        for i, face in enumerate(faces):
+            ring = set().union(*(around[int(v)] for v in face))
+            total, similar = np.zeros(3), 0
+            for j in ring:
+                cosine = float(normals[i] @ normals[j])
+                if cosine > threshold:
+                    total += (cosine - threshold) ** 2 * normals[j]
+                    similar += j != i
+            mean = sum(normals[j] for j in ring) / len(ring)
+            if not similar and mean @ mean >= 0.01:
+                total = mean
+                lonely_seen += 1
+            new[i] = total / np.linalg.norm(total) if np.linalg.norm(total) > 0 else normals[i]
+        normals = new
+    return normals, lonely_seen
+
+
+def _loop_fit(points, faces, normals, iterations):
+    """Sun et al.'s vertex update written from the paper, vertex by vertex."""
+    points = points.copy()
+    for _ in range(iterations):
+        new = points.copy()
+        for i in range(len(points)):
+            around = [f for f, face in enumerate(faces) if i in face]
+            move = np.zeros(3)
+            for f in around:
+                centroid = points[faces[f]].mean(axis=0)
+                move += normals[f] * (normals[f] @ (centroid - points[i]))
+            new[i] = points[i] + move / len(around)
+        points = new
+    return points
+
+
+@pytest.mark.parametrize("share", [0.02, 0.1])
+def test_vectorised_filter_and_fit_equal_the_papers_loops(share):
+    _, noisy, faces = noisy_box(share, "iso", cells=3)
+    rings = FaceRings(faces, len(noisy))
+    normals = face_normals(noisy, faces)
+    threshold = math.cos(math.radians(40.0))
+    filtered = filter_normals(normals, rings, threshold, iterations=4)
+    expected, lonely = _loop_filter(normals, faces, threshold, 4)
+    assert np.allclose(filtered, expected, atol=1e-12)
+    assert (lonely > 0) == (share > 0.05)  # heavy noise leaves faces without a similar neighbour
+    assert not np.allclose(filtered, normals, atol=1e-3)  # it did filter
+    fitted = fit_vertices(noisy, filtered, rings, np.ones(len(noisy)), iterations=3)
+    assert np.allclose(fitted, _loop_fit(noisy, faces, filtered, 3), atol=1e-12)
+
+
+def test_off_is_bit_identical():
+    _, noisy, faces = noisy_box(0.005, "iso", cells=8)
+    edges = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    for options in ({}, {"alpha": 0.1, "beta": 0.6, "iterations": 10}, {"weld": True}):
+        plain = core.smooth_mesh(noisy, edges, faces=faces, **options)
+        off = core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=False, sharpness_angle=0.3, **options)
+        assert np.array_equal(plain, off)
+    on = core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=True)
+    assert not np.array_equal(on, core.smooth_mesh(noisy, edges, faces=faces))
+
+
+def test_bad_input_raises_clear_errors():
+    clean, faces = box(4)
+    edges = faces[:, :2]
+    with pytest.raises(ValueError, match="needs the faces"):
+        core.smooth_mesh(clean, edges, keep_sharp_edges=True)
+    with pytest.raises(ValueError, match="has none"):
+        core.smooth_mesh(clean, edges, faces=np.zeros((0, 3), int), keep_sharp_edges=True)
+    with pytest.raises(ValueError, match="has none"):
+        sharp_smooth(clean, np.zeros((0, 3), int))
+    for angle in (0.0, -0.1, math.pi, 4.0, float("nan"), "45"):
+        with pytest.raises(ValueError, match="sharpness_angle"):
+            core.smooth_mesh(clean, edges, faces=faces, keep_sharp_edges=True, sharpness_angle=angle)
+    with pytest.raises(ValueError, match="keep_sharp_edges"):
+        core.smooth_mesh(clean, edges, faces=faces, keep_sharp_edges="yes")
+    with pytest.raises(ValueError, match="between 0 and"):
+        sharp_smooth(clean, faces + len(clean))
+
+
+def test_slices_progress_and_cancel():
+    _, noisy, faces = noisy_box(0.005, "iso", cells=8)
+    before = noisy.copy()
+    run = core.MeshSmoother(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True, iterations=4)
+    fractions = list(run.steps(chunk=1))
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0 and len(fractions) >= 4
+    assert run.report.keep_sharp_edges and run.report.iterations == 4
+    assert np.array_equal(run.result, sharp_smooth(noisy, faces, iterations=4))
+    with pytest.raises(core.Cancelled):
+        core.smooth_mesh(
+            noisy, edges_of(faces), faces=faces, keep_sharp_edges=True, iterations=4, progress=lambda f: f < 0.3
+        )
+    abandoned = core.MeshSmoother(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True).steps(chunk=1)
+    next(abandoned)
+    abandoned.close()
+    assert np.array_equal(noisy, before)
+
+
+def test_welding_runs_a_soup_like_its_welded_mesh():
+    _, noisy, faces = noisy_box(0.005, "iso", cells=6)
+    soup = noisy[faces.ravel()]
+    soup_faces = np.arange(soup.shape[0]).reshape(-1, 3)
+    soup_edges = soup_faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    welded = core.smooth_mesh(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True, iterations=2)
+    from_soup = core.smooth_mesh(soup, soup_edges, faces=soup_faces, keep_sharp_edges=True, iterations=2, weld=True)
+    assert np.allclose(from_soup, welded[faces.ravel()], atol=1e-12)
+
+
+def test_automatic_amount_leaves_a_clean_part_and_smooths_a_noisy_one():
+    clean, faces = box(12)
+    diagonal = np.linalg.norm(clean.max(0) - clean.min(0))
+    still, report = core.smooth_mesh(clean, edges_of(faces), faces=faces, keep_sharp_edges=True, return_report=True)
+    assert np.linalg.norm(still - clean, axis=1).max() <= 0.001 * diagonal
+    assert report.keep_sharp_edges and report.amount is not None
+    _, noisy, faces = noisy_box(0.005, "normal", cells=16)
+    clean16, _ = box(16)
+    smoothed, report = core.smooth_mesh(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True, return_report=True)
+    assert report.amount.noise_found and report.iterations > 0
+    assert off_the_cube(smoothed) < 0.5 * off_the_cube(noisy)
+    assert abs(volume(smoothed, faces) / volume(clean16, faces) - 1.0) <= 0.005
+
+
+def test_default_angle_is_in_range():
+    assert math.radians(20) <= sharp_edges.DEFAULT_SHARPNESS_ANGLE <= math.radians(60)
+    assert (
+        core.MeshSmoother(box(2)[0], edges_of(box(2)[1]), faces=box(2)[1], keep_sharp_edges=True).sharpness_angle
+        == sharp_edges.DEFAULT_SHARPNESS_ANGLE
+    )
+
+
+CLEAN_WITH_FACES = {name: make for name, make in {**PRIMITIVES, **CAD, **TINY}.items() if make().faces}
+
+
+@pytest.mark.parametrize("name", CLEAN_WITH_FACES)
+def test_noise_free_meshes_stay_with_the_automatic_amount(name):
+    """Blender's primitives, CAD-like parts and tiny parts, noise-free: Keep Sharp Edges at the Automatic
+    Amount moves them by at most 0.1 % of the diagonal, as HC's default contract says."""
+    part = CLEAN_WITH_FACES[name]()
+    result = core.smooth_mesh(part.positions, part.edges, faces=part.faces, keep_sharp_edges=True, weld=True)
+    diagonal = np.linalg.norm(np.ptp(part.positions, axis=0))
+    assert np.linalg.norm(result - part.positions, axis=1).max() <= 1e-3 * diagonal
+
+
+def test_big_meshes_yield_between_filtering_passes(monkeypatch):
+    """From PASS_SLICES_FROM triangles a step is sliced at every filtering pass (a cancel waits for one
+    pass, not a step); the result is the same."""
+    _, noisy, faces = noisy_box(0.005, "iso", cells=6)
+    whole = SharpSmoothing(noisy, faces, iterations=2)
+    coarse = list(whole.steps(chunk=1))
+    monkeypatch.setattr(sharp_edges, "PASS_SLICES_FROM", 10)
+    sliced = SharpSmoothing(noisy, faces, iterations=2)
+    fine = list(sliced.steps(chunk=1))
+    assert coarse == [0.5, 1.0]
+    assert len(fine) == 2 * (sharp_edges.NORMAL_ITERATIONS + 1) and fine == sorted(fine) and fine[-1] == 1.0
+    assert np.array_equal(sliced.result(), whole.result())
