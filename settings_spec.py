@@ -11,6 +11,7 @@ loads anything and tests/core can check it on its own. Plain Python only, and no
 of the package.
 """
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields, make_dataclass, replace
 
@@ -81,8 +82,10 @@ def settings_class(name, settings, doc):
 
 def automatic(values):
     """HC with Automatic Amount: Alpha and Iterations are chosen for each mesh, not taken as set. ``values``:
-    {name: value} of mesh settings (the modifier's have no Automatic Amount)."""
-    return values["method"] == "HC" and values.get("auto_amount", False)
+    {name: value} of mesh settings (the modifier's have no Automatic Amount). Keep Sharp Edges has its own
+    Automatic Amount, whatever the method."""
+    smoother = values["method"] == "HC" or values.get("keep_sharp_edges", False)
+    return smoother and values.get("auto_amount", False)
 
 
 METHOD = Setting(
@@ -127,6 +130,38 @@ METHOD = Setting(
     help="smoothing algorithm",
     argument="method",
     points_keep="HC",
+    active=lambda values: not values.get("keep_sharp_edges", False),  # Keep Sharp Edges smooths its own way
+)
+KEEP_SHARP_EDGES = Setting(
+    "keep_sharp_edges",
+    "bool",
+    "Keep Sharp Edges",
+    "For hard-surface scans (machined, cast, CAD parts): smooth the face normals without averaging across "
+    "edges sharper than Sharpness, then fit the vertices to them with HC's push-back (Sun et al. 2007). "
+    "Replaces the method; Iterations count its steps. Slower than HC, and worse on organic shapes",
+    False,
+    flag="keep-sharp-edges",
+    help="keep sharp edges (hard-surface scans): normals are not averaged across edges sharper than "
+    "--sharpness-angle; replaces --method",
+    argument="keep_sharp_edges",
+)
+SHARPNESS_ANGLE = Setting(
+    "sharpness_angle",
+    "float",
+    "Sharpness",
+    "Keep Sharp Edges: faces meeting at more than this angle stay apart, as Blender's Auto Smooth angle. "
+    "The Automatic Amount may widen it to the angle the noise alone tilts faces by",
+    math.radians(30.0),
+    min=math.radians(1.0),
+    max=math.radians(179.0),
+    step=100,
+    precision=1,
+    subtype="ANGLE",
+    flag="sharpness-angle",
+    metavar="DEGREES",
+    help="with --keep-sharp-edges: faces meeting at more than this angle, in degrees, stay apart",
+    argument="sharpness_angle",
+    active=lambda values: values.get("keep_sharp_edges", False),
 )
 MESH_AUTO_AMOUNT = Setting(
     "auto_amount",
@@ -135,7 +170,7 @@ MESH_AUTO_AMOUNT = Setting(
     "HC: choose Iterations (with Alpha 0) from the noise the mesh itself shows, by cross-validating what the "
     "iterations remove, and give closed parts back the volume they had. Off: use Alpha and Iterations as set",
     True,
-    active=lambda values: values["method"] == "HC",
+    active=lambda values: values["method"] == "HC" or values.get("keep_sharp_edges", False),
 )
 ALPHA = Setting(
     "alpha",
@@ -153,7 +188,9 @@ ALPHA = Setting(
     help="pull towards the original",
     cli_default="{default}; HC: chosen with the iterations unless --alpha or --iterations is given",
     # Plain Laplacian has no alpha; with the Automatic Amount, alpha applies once it is off.
-    active=lambda values: values["method"] != "LAPLACIAN" and not automatic(values),
+    active=lambda values: (
+        (values["method"] != "LAPLACIAN" or values.get("keep_sharp_edges", False)) and not automatic(values)
+    ),
     text=lambda values: (
         "Alpha (keep current)" if values["method"] == "LAPLACIAN_CENTRAL" else "Alpha (pull to original)"
     ),
@@ -173,7 +210,7 @@ BETA = Setting(
     precision=3,
     flag="beta",
     help="HC correction weight",
-    active=lambda values: values["method"] == "HC",
+    active=lambda values: values["method"] == "HC" or values.get("keep_sharp_edges", False),
     argument="beta",
     chosen=True,
 )
@@ -330,7 +367,18 @@ MAX_DEVIATION = Setting(
     chosen=True,
 )
 
-MESH_SMOOTHING = (METHOD, MESH_AUTO_AMOUNT, ALPHA, BETA, ITERATIONS, MODE, TOLERANCE, MAX_DEVIATION)
+MESH_SMOOTHING = (
+    METHOD,
+    KEEP_SHARP_EDGES,
+    SHARPNESS_ANGLE,
+    MESH_AUTO_AMOUNT,
+    ALPHA,
+    BETA,
+    ITERATIONS,
+    MODE,
+    TOLERANCE,
+    MAX_DEVIATION,
+)
 # Which vertices move, and how far (the N-panel's Fixed Vertices): they belong to one mesh, so presets leave them.
 MESH_VERTICES = (VERTEX_GROUP, INVERT_VERTEX_GROUP, PIN_BOUNDARY, INFLUENCE_GROUP, INVERT_INFLUENCE_GROUP)
 MESH_RESULT = (OUTPUT, DEVIATION_MAP)

@@ -132,7 +132,8 @@ def run(plan, settings, console, outcomes):
     if plan.points:
         message = point_cloud.convergence_note(settings)
     else:
-        message = core.convergence_message(settings.alpha, settings.beta) if settings.method == "HC" else None
+        hc = settings.method == "HC" and not settings.keep_sharp_edges  # Theorem 5.2 is about HC's umbrella
+        message = core.convergence_message(settings.alpha, settings.beta) if hc else None
     if message:
         console.say(f"hc_smooth: warning: {message}")
     cleaned = set()

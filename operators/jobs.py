@@ -4,6 +4,7 @@ Shared by the Object-mode and Edit-mode operators (and the command line): every 
 validated before any mesh is written, so a failure leaves every mesh as it was.
 """
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -67,7 +68,7 @@ def core_options(props, given=frozenset()):
 def convergence_warning(jobs):
     """The convergence-region warning for what ran, or None. The Automatic Amount runs alpha 0 for the few
     iterations it chooses (no drift): only its beta can warn."""
-    reports = [job.report for job in jobs if job.report.method == "hc"]
+    reports = [job.report for job in jobs if job.report.method == "hc" and not job.report.keep_sharp_edges]
     messages = {core.convergence_message(1.0 if r.amount else r.alpha, r.beta) for r in reports} - {None}
     return min(messages) if messages else None
 
@@ -244,7 +245,8 @@ def summary(jobs, props, length=None):
         changed = measure(jobs[0]).summary()
     else:
         changed = "; ".join(f"'{job.obj.name}': {measure(job).summary()}" for job in jobs)
-    text = f"{METHOD_LABEL[props.method]} on {names}{where}: {ran}, {seconds:.2f} s; {changed}"
+    smoother = "Keep Sharp Edges" if any(report.keep_sharp_edges for report in reports) else METHOD_LABEL[props.method]
+    text = f"{smoother} on {names}{where}: {ran}, {seconds:.2f} s; {changed}"
     if props.deviation_map:
         legends = [deviation_map(job).legend(length) for job in jobs]
         text += "; " + (
@@ -255,7 +257,16 @@ def summary(jobs, props, length=None):
 
 def amount_words(reports):
     """What ran: '12 iterations' or, chosen, 'automatic amount: noise 0.45x edge length, 12 iterations,
-    alpha 0, beta 0.6, volume kept, moves at most 0.0123'."""
+    alpha 0, beta 0.6, volume kept, moves at most 0.0123'; with Keep Sharp Edges, 'sharpness 30°, ' first,
+    and steps for iterations."""
+    words = _amount_words(reports)
+    angles = sorted({round(math.degrees(r.sharpness_angle)) for r in reports if r.keep_sharp_edges})
+    if not angles:
+        return words
+    return f"sharpness {'/'.join(map(str, angles))}\u00b0, " + words.replace(" iteration", " step")
+
+
+def _amount_words(reports):
     amounts = [report for report in reports if report.amount is not None]
     iterations = "/".join(str(report.iterations) for report in reports) if amounts else None
     if not amounts:

@@ -66,8 +66,8 @@ def draw_mesh_convergence(layout, props, always=False):
     """The convergence lines of mesh settings. In a redo panel (not ``always``) only HC's warning: the
     Laplacian variants shrink by design."""
     values = values_of(props, settings_spec.MESH)
-    if values["method"] != "HC" and not always:
-        return
+    if values["keep_sharp_edges"] or (values["method"] != "HC" and not always):
+        return  # Keep Sharp Edges is not HC's umbrella step: Theorem 5.2 says nothing about it
     # The automatic amount runs alpha 0 for the few iterations it chooses (no drift): only beta can warn.
     alpha = 1.0 if settings_spec.automatic(values) else values["alpha"]
     draw_convergence(layout, values["method"], alpha, values["beta"], always)
@@ -76,6 +76,8 @@ def draw_mesh_convergence(layout, props, always=False):
 def modifier_differences(settings):
     """Why a smoothing with these mesh settings is not what the modifier gives: short lines, none if it is."""
     lines = []
+    if settings.keep_sharp_edges:
+        lines.append("The modifier has no Keep Sharp Edges: it runs the method")
     if settings_spec.automatic(values_of(settings, settings_spec.MESH)):
         lines.append("The modifier takes Alpha, Iterations and Deviation Limit as set")
     if settings.iterations > settings_spec.MODIFIER_MAX_ITERATIONS:

@@ -7,6 +7,7 @@ registers Blender classes), as Blender loads it, so cli/arguments' relative impo
 import importlib
 import importlib.machinery
 import importlib.util
+import math
 import os
 import subprocess
 import sys
@@ -130,13 +131,15 @@ def test_options_are_built_from_the_declarations(tmp_path, monkeypatch):
             assert tuple(action.choices) == setting.identifiers
         # The declared limits: accepted on the limit, refused beyond it (--gap's minimum with a reach that fits).
         extra = extra + ["--reach", str(setting.min)] if flag == "gap" else extra
+        degrees = setting.subtype == "ANGLE"  # given in degrees, held in radians
         for bound, beyond in ((setting.min, -1), (setting.max, 1)):
             if bound is None:
                 continue
-            plan = arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", str(bound)])
+            shown = round(math.degrees(bound), 9) if degrees else bound
+            plan = arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", f"{shown:g}" if degrees else str(bound)])
             given = plan.point_options if extra else vars(plan.settings)
-            assert given[setting.name] == bound, flag
+            assert given[setting.name] == pytest.approx(bound, rel=1e-12), flag
             with pytest.raises(arguments.UsageError):
-                arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", str(bound + beyond)])
+                arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", str(shown + beyond)])
     assert set(arguments.MESH_ONLY) == {name.replace("-", "_") for name in declared_options() if name not in points}
     assert vars(arguments.Settings()) == {s.name: s.default for s in spec.MESH}

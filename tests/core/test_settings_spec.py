@@ -33,6 +33,8 @@ def test_identifiers_users_rely_on():
     # Users' scripts, presets and the command line name these: they must not change.
     assert [s.name for s in spec.MESH] == [
         "method",
+        "keep_sharp_edges",
+        "sharpness_angle",
         "auto_amount",
         "alpha",
         "beta",
@@ -68,6 +70,8 @@ def test_identifiers_users_rely_on():
     assert spec.OUTPUT.identifiers == ("MESH", "SHAPE_KEY")
     assert {s.flag: s.name for s in spec.MESH + spec.POINTS if s.flag} == {
         "method": "method",
+        "keep-sharp-edges": "keep_sharp_edges",
+        "sharpness-angle": "sharpness_angle",
         "alpha": "alpha",
         "beta": "beta",
         "iterations": "iterations",
@@ -226,3 +230,14 @@ def test_every_core_argument_is_an_argument_of_the_mesh_pipeline():
         assert (parameters[setting.argument].default == core.AUTO) == setting.chosen, setting.name
         for choice in setting.items:
             assert choice.core, (setting.name, choice.identifier)
+
+
+def test_keep_sharp_edges_defaults_are_cores():
+    """The add-on's Sharpness starts where core's does (settings_spec cannot import core)."""
+    from core import sharp_edges
+
+    assert spec.SHARPNESS_ANGLE.default == sharp_edges.DEFAULT_SHARPNESS_ANGLE
+    assert spec.KEEP_SHARP_EDGES.default is False
+    values = {s.name: s.default for s in spec.MESH}
+    assert spec.automatic(values) and spec.automatic({**values, "method": "LAPLACIAN", "keep_sharp_edges": True})
+    assert not spec.automatic({**values, "method": "LAPLACIAN"})

@@ -3,6 +3,8 @@ import bpy
 settings = bpy.context.scene.hc_smooth
 
 settings.method = "HC"
+settings.keep_sharp_edges = False
+settings.sharpness_angle = 0.5235987901687622
 settings.auto_amount = False
 settings.alpha = 0.02
 settings.beta = 0.6
