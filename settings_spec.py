@@ -301,6 +301,18 @@ PIN_BOUNDARY = Setting(
     flag="pin-boundary",
     help="keep open-boundary vertices fixed",
 )
+KEEP_OUTLINE = Setting(
+    "keep_outline",
+    "bool",
+    "Keep Outline",
+    "Smooth open boundaries along themselves, as curves, instead of pulling them into the surface: a "
+    "range scan's outline and its holes stay in place (corners where boundaries meet stay fixed). Leaves "
+    "a little more noise next to ragged outlines",
+    False,
+    flag="keep-outline",
+    help="smooth open boundaries as curves instead of pulling them in (--pin-boundary wins)",
+    active=lambda values: not values["pin_boundary"],
+)
 INFLUENCE_GROUP = Setting(
     "influence_group",
     "string",
@@ -380,7 +392,14 @@ MESH_SMOOTHING = (
     MAX_DEVIATION,
 )
 # Which vertices move, and how far (the N-panel's Fixed Vertices): they belong to one mesh, so presets leave them.
-MESH_VERTICES = (VERTEX_GROUP, INVERT_VERTEX_GROUP, PIN_BOUNDARY, INFLUENCE_GROUP, INVERT_INFLUENCE_GROUP)
+MESH_VERTICES = (
+    VERTEX_GROUP,
+    INVERT_VERTEX_GROUP,
+    PIN_BOUNDARY,
+    KEEP_OUTLINE,
+    INFLUENCE_GROUP,
+    INVERT_INFLUENCE_GROUP,
+)
 MESH_RESULT = (OUTPUT, DEVIATION_MAP)
 MESH = MESH_SMOOTHING + MESH_VERTICES + MESH_RESULT
 # What the Automatic Amount chooses unless the caller sets it; either of the second set given switches it off

@@ -59,9 +59,11 @@ def core_options(props, given=frozenset()):
             value = as_property(value)
         options[setting.argument] = value
     # The add-on smooths split vertices (UV seams, soups) as one, on the welded mesh, where a seam is no
-    # border. Open borders: the paper's rule (Pin Boundary: held). core's "curve" rule keeps outlines
-    # in place but leaves more noise on open scans (bench/bench_default_heldout.py): not the default.
-    options.update(weld=True, border="fixed" if props.pin_boundary else "free")
+    # border. Open borders: the paper's rule unless Pin Boundary holds them or Keep Outline smooths them as
+    # curves (core.borders); the curve rule keeps outlines in place but measures more error to ragged scan
+    # outlines (bench/README.md, "Open borders"): not the default.
+    border = "fixed" if props.pin_boundary else "curve" if props.keep_outline else "free"
+    options.update(weld=True, border=border)
     return options
 
 

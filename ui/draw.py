@@ -88,4 +88,6 @@ def modifier_differences(settings):
         lines.append("The modifier runs every iteration")
     if settings.deviation_map:
         lines.append("The modifier stores hc_deviation without its colours")
+    if settings.keep_outline and not settings.pin_boundary:
+        lines.append("The modifier has no Keep Outline: open boundaries are pulled in")
     return lines

@@ -30,6 +30,7 @@ def _key(obj, settings):
         None if group is None else group.index,
         settings.invert_vertex_group,
         settings.pin_boundary,
+        settings.keep_outline,  # its rule holds the corners where boundaries meet
     )
 
 

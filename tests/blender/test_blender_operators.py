@@ -173,6 +173,33 @@ def test_pin_boundary_keeps_open_edges_in_place(scene):
     assert np.all(np.linalg.norm(after[~boundary] - before[~boundary], axis=1) > 0)
 
 
+def test_keep_outline_runs_cores_curve_rule_and_keeps_the_outline(scene, capfd):
+    """Keep Outline: open boundaries smoothed as curves (core border="curve"), so the grid's outline stays
+    where the paper's rule pulls it in; Pin Boundary wins when both are on. The panel's count includes the
+    corners the rule holds."""
+    obj = noisy_grid()
+    before = positions_of(obj.data)
+    assert bpy.ops.object.hc_smooth(keep_outline=True, iterations=20) == {"FINISHED"}
+    triangles = core.metrics.fan_triangles(np.array(faces_of(obj.data)))
+    expected = core.smooth_mesh(
+        before, edges_of(obj.data), faces=triangles, weld=True, border="curve", alpha=ALPHA, beta=BETA, iterations=20
+    )
+    assert np.array_equal(positions_of(obj.data), expected)
+    curve_box = np.ptp(positions_of(obj.data)[:, :2], axis=0)
+    obj.data.vertices.foreach_set("co", before.ravel())
+    obj.data.update()
+    bpy.ops.object.hc_smooth(iterations=20)
+    free_box = np.ptp(positions_of(obj.data)[:, :2], axis=0)
+    start_box = np.ptp(before[:, :2], axis=0)
+    assert np.all(free_box < start_box - 0.06)  # the paper's rule pulls the outline in by 3.5 %
+    assert np.abs(curve_box - start_box).max() < 0.5 * np.abs(free_box - start_box).max()
+    obj.data.vertices.foreach_set("co", before.ravel())
+    obj.data.update()
+    bpy.ops.object.hc_smooth(keep_outline=True, pin_boundary=True, iterations=5)
+    boundary = np.isclose(np.abs(before[:, :2]), 1.0, atol=1e-5).any(axis=1)
+    assert np.array_equal(bits(positions_of(obj.data)[boundary]), bits(before[boundary]))
+
+
 def test_shape_keys_smooth_the_active_key_without_desyncing_the_basis(scene):
     obj = noisy_sphere()
     basis = obj.shape_key_add(name="Basis", from_mix=False)
