@@ -83,7 +83,7 @@ CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its 
 TANGENTIAL = 0.5  # share of the tangential umbrella move per step on vertices off the creases (step 3)
 FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
 PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the filtering passes
-_BLOCK = 1 << 18  # faces per block of the filtering's dot products (about 13 ring entries each)
+_BLOCK = 1 << 16  # face pairs per block of the filtering's dot products: its temporaries stay in cache
 
 
 def steps_for_noise(ratio, triangles):
@@ -134,13 +134,16 @@ class FaceRings:
     incidence : (n, t) CSR, 1 where vertex i is a corner of triangle f.
     indptr, indices, counts : the faces sharing a vertex with each face, itself included (CSR, (t, t)).
     ring : that pattern as a (t, t) CSR of ones.
+    upper_rows, upper_indptr, upper_indices : the pairs i < j of that pattern (CSR, (t, t), and each
+        entry's row): the filtering's weights are symmetric, so a pass computes each pair once.
+    corner_columns : (9 t,) the columns 3 v + k of each triangle's corners v and coordinates k.
     faces_at : (n,) the number of triangles around each vertex, |F_i|.
     border : (n,) bool, the vertices on an edge of one triangle.
     """
 
     def __init__(self, triangles, n_vertices):
         t = triangles.shape[0]
-        index = np.int32 if max(t, n_vertices) < np.iinfo(np.int32).max // 4 else np.int64
+        index = np.int32 if max(t, n_vertices) < np.iinfo(np.int32).max // 9 else np.int64
         rows = triangles.ravel().astype(index)
         columns = np.repeat(np.arange(t, dtype=index), 3)
         self.incidence = sp.csr_matrix((np.ones(rows.size), (rows, columns)), shape=(n_vertices, t))
@@ -151,6 +154,12 @@ class FaceRings:
         self.indptr, self.indices = pattern.indptr, pattern.indices
         self.counts = np.diff(self.indptr)
         self.ring = sp.csr_matrix((np.ones(self.indices.size), self.indices, self.indptr), shape=(t, t))
+        self.upper_rows = np.repeat(np.arange(t, dtype=self.indices.dtype), self.counts)
+        above = self.indices > self.upper_rows
+        self.upper_rows, self.upper_indices = self.upper_rows[above], self.indices[above]
+        self.upper_indptr = np.zeros(t + 1, dtype=self.indptr.dtype)
+        np.cumsum(np.bincount(self.upper_rows, minlength=t), out=self.upper_indptr[1:])
+        self.corner_columns = (3 * triangles.astype(index)[:, :, None] + np.arange(3, dtype=index)).ravel()
         # Vertices on an open border (an edge of one triangle): their umbrella leans inwards.
         pairs = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
         keys, counts = np.unique(pairs[:, 0] * n_vertices + pairs[:, 1], return_counts=True)
@@ -167,12 +176,13 @@ def face_normals(points, triangles):
     return _unit(normals)
 
 
-def _unit(vectors):
+def _unit(vectors, good=None):
+    """(k, 3) unit vectors, (0, 0, 0) for a zero one; fills the bool mask ``good`` of the non-zero ones."""
     lengths = np.sqrt(np.einsum("ij,ij->i", vectors, vectors))
-    out = np.zeros_like(vectors)
-    good = lengths > 0.0
-    out[good] = vectors[good] / lengths[good, None]
-    return out
+    good = np.greater(lengths, 0.0, out=good)
+    np.divide(1.0, lengths, out=lengths, where=good)
+    lengths[~good] = 0.0
+    return vectors * lengths[:, None]
 
 
 def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
@@ -187,52 +197,94 @@ def filter_steps(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
     of its ring's normals instead, where that mean is at least a tenth of a unit long (the ring is no corner
     of its own, as a tetrahedron's is): kept as it is, it would be a crease of one face, and the fitting would
     turn it over. A face whose sum vanishes keeps its normal. A generator: yields after each pass, returns
-    the normals."""
-    indptr, indices, counts = rings.indptr, rings.indices, rings.counts
+    the normals.
+
+    w_ij = w_ji: a pass computes the weights of the pairs i < j only, in blocks that stay in cache, and
+    sums them both ways (the upper triangle's CSR and the same arrays read as the lower's CSC). A fourth
+    column of ones gives each face's sum of the weights of the others: 0 exactly when none is within
+    the angle."""
     t = normals.shape[0]
-    weights = sp.csr_matrix((np.empty(indices.size), indices, indptr), shape=(t, t))
-    ring = rings.ring
-    similar = np.empty(t, dtype=np.int64)
+    rows, columns, indptr = rings.upper_rows, rings.upper_indices, rings.upper_indptr
+    upper = sp.csr_matrix((np.empty(columns.size), columns, indptr), shape=(t, t))
+    lower = sp.csc_matrix((upper.data, columns, indptr), shape=(t, t))
+    m = columns.size
+    planar = np.empty((4, t))
+    planar[3] = 1.0
+    stacked = np.empty((t, 4))
+    stacked[:, 3] = 1.0
+    buffer = np.empty((2, min(m, _BLOCK)))
+    good = np.empty(t, dtype=bool)
     for _ in range(iterations):
-        columns = np.ascontiguousarray(normals.T)  # a coordinate at a time: 1-D gathers are the fast ones
-        for low in range(0, t, _BLOCK):  # blocks of faces bound the temporaries
-            faces = slice(low, low + _BLOCK)
-            entries = slice(indptr[low], indptr[min(low + _BLOCK, t)])
-            cosine = np.repeat(columns[0][faces], counts[faces]) * columns[0][indices[entries]]
+        planar[:3] = normals.T  # a coordinate at a time: 1-D gathers are the fast ones
+        stacked[:, :3] = normals
+        for low in range(0, m, _BLOCK):  # blocks of pairs that stay in cache
+            block = slice(low, min(low + _BLOCK, m))
+            r, c = rows[block], columns[block]
+            cosine, product = buffer[0, : r.size], buffer[1, : r.size]
+            np.multiply(planar[0].take(r), planar[0].take(c), out=cosine)
             for k in (1, 2):
-                cosine += np.repeat(columns[k][faces], counts[faces]) * columns[k][indices[entries]]
-            near = np.maximum(cosine - cos_threshold, 0.0, out=cosine)
-            weights.data[entries] = near * near
-            starts = indptr[low : min(low + _BLOCK, t)] - indptr[low]
-            similar[faces] = np.add.reduceat((near > 0.0).astype(np.int64), starts)
-        summed = weights @ normals
-        lonely = np.flatnonzero(similar <= 1)  # itself only
+                cosine += np.multiply(planar[k].take(r), planar[k].take(c), out=product)
+            cosine -= cos_threshold
+            np.maximum(cosine, 0.0, out=cosine)
+            np.multiply(cosine, cosine, out=upper.data[block])
+        diagonal = normals[:, 0] * normals[:, 0]
+        diagonal += normals[:, 1] * normals[:, 1]
+        diagonal += normals[:, 2] * normals[:, 2]
+        near = np.maximum(diagonal - cos_threshold, 0.0)
+        summed = upper @ stacked
+        summed += lower @ stacked
+        others = summed[:, 3]
+        summed = summed[:, :3] + (near * near)[:, None] * normals
+        lonely = _lonely(normals, rings, cos_threshold, near > 0.0, others)
         if lonely.size:
-            mean = (ring[lonely] @ normals) / counts[lonely, None]
+            mean = (rings.ring[lonely] @ normals) / rings.counts[lonely, None]
             agree = np.einsum("ij,ij->i", mean, mean) >= 0.01  # a ring that is no corner of its own
             summed[lonely[agree]] = mean[agree]
-        filtered = _unit(summed)
-        lost = ~np.any(filtered != 0.0, axis=1)
+        filtered = _unit(summed, good)
+        lost = ~good
         filtered[lost] = normals[lost]
         normals = filtered
         yield
     return normals
 
 
+def _lonely(normals, rings, cos_threshold, similar_self, others):
+    """The faces with at most one face of their ring (itself included) within the angle: those within it
+    of themselves with a zero sum of the others' weights, and those that are not (a zero normal, or an
+    angle so small that its cosine rounds to 1) with at most one other face within it."""
+    lonely = similar_self & (others == 0.0)
+    odd = np.flatnonzero(~similar_self)
+    if odd.size:
+        ring = rings.ring[odd]
+        mine, theirs = np.repeat(normals[odd], np.diff(ring.indptr), axis=0), normals[ring.indices]
+        cosine = mine[:, 0] * theirs[:, 0]  # in the order of the pairs' cosines
+        for k in (1, 2):
+            cosine += mine[:, k] * theirs[:, k]
+        similar = np.add.reduceat((cosine > cos_threshold).astype(np.int64), ring.indptr[:-1])
+        lonely[odd] = similar <= 1
+    return np.flatnonzero(lonely)
+
+
 def fit_vertices(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     """Sun et al.'s vertex update, ``iterations`` passes: x_i += share_i / |F_i| sum_f n_f n_f^T (c_f - x_i)
-    over the triangles f around i (``step_share``: (n,) 0 for vertices that stay, else the influence)."""
+    over the triangles f around i (``step_share``: (n,) 0 for vertices that stay, else the influence).
+    n_f . c_f is one product with the (t, 3n) matrix of each triangle's normal at its corners' coordinates."""
     triangles, incidence = rings.triangles, rings.incidence
+    t, n = triangles.shape[0], points.shape[0]
     outer = (normals[:, :, None] * normals[:, None, :]).reshape(-1, 9)
     scale = np.divide(step_share, rings.faces_at, out=np.zeros(step_share.size), where=rings.faces_at > 0)
     tensor = (incidence @ outer).reshape(-1, 3, 3)  # sum_f n_f n_f^T per vertex
     moving = np.flatnonzero(scale > 0.0)
     tensor, scale = tensor[moving], scale[moving, None]
     incidence_moving = incidence[moving]
+    dots = sp.csr_matrix(
+        (np.tile(normals, (1, 3)).ravel(), rings.corner_columns, np.arange(0, 9 * t + 1, 9)), shape=(t, 3 * n)
+    )
     points = points.copy()
+    flat = points.reshape(-1)
     for _ in range(iterations):
-        centroid = (points[triangles[:, 0]] + points[triangles[:, 1]] + points[triangles[:, 2]]) / 3.0
-        offsets = np.einsum("ij,ij->i", normals, centroid)
+        offsets = dots @ flat
+        offsets /= 3.0
         pulled = incidence_moving @ (normals * offsets[:, None])
         here = points[moving]
         points[moving] = here + scale * (pulled - np.einsum("ijk,ik->ij", tensor, here))
