@@ -40,10 +40,17 @@ from collections.abc import Iterator
 
 import numpy as np
 import scipy.sparse as sp
+
+try:  # the kernels behind ``csr_matrix @ (n, k) array`` (y += A x) and the CSC's; private: a public fallback
+    from scipy.sparse._sparsetools import csc_matvecs as _csc_matvecs
+    from scipy.sparse._sparsetools import csr_matvecs as _csr_matvecs
+except ImportError:  # SciPy without the private kernels
+    _csr_matvecs = _csc_matvecs = None
 from numpy.typing import ArrayLike
 
 from .adjacency import Umbrella, umbrella_operator
 from .metrics import fan_triangles
+from .parallel import run_blocks
 from .slices import to_end
 from .validation import (
     bbox_diagonal,
@@ -83,7 +90,7 @@ CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its 
 TANGENTIAL = 0.5  # share of the tangential umbrella move per step on vertices off the creases (step 3)
 FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
 PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the filtering passes
-_BLOCK = 1 << 16  # face pairs per block of the filtering's dot products: its temporaries stay in cache
+_BLOCK = 1 << 14  # face pairs per block of the filtering's dot products: its temporaries stay in cache
 
 
 def steps_for_noise(ratio, triangles):
@@ -181,7 +188,8 @@ def _unit(vectors, good=None):
     lengths = np.sqrt(np.einsum("ij,ij->i", vectors, vectors))
     good = np.greater(lengths, 0.0, out=good)
     np.divide(1.0, lengths, out=lengths, where=good)
-    lengths[~good] = 0.0
+    if not good.all():  # zero, or not a number
+        lengths[~good] = 0.0
     return vectors * lengths[:, None]
 
 
@@ -205,50 +213,84 @@ def filter_steps(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
     the angle."""
     t = normals.shape[0]
     rows, columns, indptr = rings.upper_rows, rings.upper_indices, rings.upper_indptr
-    upper = sp.csr_matrix((np.empty(columns.size), columns, indptr), shape=(t, t))
-    lower = sp.csc_matrix((upper.data, columns, indptr), shape=(t, t))
     m = columns.size
-    planar = np.empty((4, t))
-    planar[3] = 1.0
-    stacked = np.empty((t, 4))
+    weights = np.empty(m)
+    upper = sp.csr_matrix((weights, columns, indptr), shape=(t, t))
+    lower = sp.csc_matrix((weights, columns, indptr), shape=(t, t))
+    stacked = np.empty((t, 4))  # the normals and a column of ones
+    stacked[:, :3] = normals
     stacked[:, 3] = 1.0
-    buffer = np.empty((2, min(m, _BLOCK)))
-    good = np.empty(t, dtype=bool)
-    for _ in range(iterations):
-        planar[:3] = normals.T  # a coordinate at a time: 1-D gathers are the fast ones
-        stacked[:, :3] = normals
-        for low in range(0, m, _BLOCK):  # blocks of pairs that stay in cache
-            block = slice(low, min(low + _BLOCK, m))
+    normals = stacked[:, :3]
+    planar = np.empty((3, t))  # a coordinate at a time: 1-D gathers are the fast ones
+    summed = np.empty((t, 4))
+
+    def weigh(first, last):  # the weights of pairs first..last, in blocks that stay in cache
+        buffer = np.empty((4, min(last - first, _BLOCK)))
+        for low in range(first, last, _BLOCK):
+            block = slice(low, min(low + _BLOCK, last))
             r, c = rows[block], columns[block]
-            cosine, product = buffer[0, : r.size], buffer[1, : r.size]
-            np.multiply(planar[0].take(r), planar[0].take(c), out=cosine)
+            cosine, product, mine, theirs = buffer[:, : r.size]
+            # mode="clip" (the indices are in range) lets take fill ``out`` without a copy of its own
+            np.multiply(
+                planar[0].take(r, out=mine, mode="clip"), planar[0].take(c, out=theirs, mode="clip"), out=cosine
+            )
             for k in (1, 2):
-                cosine += np.multiply(planar[k].take(r), planar[k].take(c), out=product)
+                np.multiply(
+                    planar[k].take(r, out=mine, mode="clip"), planar[k].take(c, out=theirs, mode="clip"), out=product
+                )
+                cosine += product
             cosine -= cos_threshold
             np.maximum(cosine, 0.0, out=cosine)
-            np.multiply(cosine, cosine, out=upper.data[block])
-        diagonal = normals[:, 0] * normals[:, 0]
-        diagonal += normals[:, 1] * normals[:, 1]
-        diagonal += normals[:, 2] * normals[:, 2]
-        near = np.maximum(diagonal - cos_threshold, 0.0)
-        summed = upper @ stacked
-        summed += lower @ stacked
-        others = summed[:, 3]
-        summed = summed[:, :3] + (near * near)[:, None] * normals
-        lonely = _lonely(normals, rings, cos_threshold, near > 0.0, others)
+            np.multiply(cosine, cosine, out=weights[block])
+
+    for _ in range(iterations):
+        planar[:] = normals.T
+        run_blocks(weigh, m)
+        diagonal = planar[0] * planar[0]
+        diagonal += planar[1] * planar[1]
+        diagonal += planar[2] * planar[2]
+        near = np.maximum(diagonal - cos_threshold, 0.0, out=diagonal)
+        _pair_sums(upper, lower, stacked, summed)
+        lonely = _lonely(planar, rings, cos_threshold, near > 0.0, summed[:, 3])
+        near *= near
+        total = summed[:, :3].T.copy()  # coordinate rows: element-wise work on (t, 3) columns is slow
+        total += near * planar
         if lonely.size:
-            mean = (rings.ring[lonely] @ normals) / rings.counts[lonely, None]
+            ring = rings.ring[lonely] @ stacked  # the sums of the ring's normals, and its size
+            mean = ring[:, :3] / ring[:, 3:]
             agree = np.einsum("ij,ij->i", mean, mean) >= 0.01  # a ring that is no corner of its own
-            summed[lonely[agree]] = mean[agree]
-        filtered = _unit(summed, good)
-        lost = ~good
-        filtered[lost] = normals[lost]
-        normals = filtered
+            total[:, lonely[agree]] = mean[agree].T
+        lengths = total[0] * total[0]
+        lengths += total[1] * total[1]
+        lengths += total[2] * total[2]
+        np.sqrt(lengths, out=lengths)
+        good = lengths > 0.0  # else the face keeps its normal
+        np.divide(1.0, lengths, out=lengths, where=good)
+        total *= lengths
+        if not good.all():
+            total[:, ~good] = planar[:, ~good]
+        normals[:] = total.T
         yield
-    return normals
+    return normals.copy()
 
 
-def _lonely(normals, rings, cos_threshold, similar_self, others):
+def _pair_sums(upper, lower, stacked, out):
+    """``out`` = (upper + lower) @ ``stacked``, (t, 4): by SciPy's private kernels into ``out`` (no fresh
+    (t, 4) arrays each pass), or by the public products where they are missing or refuse the call."""
+    out[...] = 0.0
+    if _csr_matvecs is not None:
+        t, k = stacked.shape
+        try:
+            for matrix, kernel in ((upper, _csr_matvecs), (lower, _csc_matvecs)):
+                kernel(t, t, k, matrix.indptr, matrix.indices, matrix.data, stacked.reshape(-1), out.reshape(-1))
+            return
+        except (TypeError, ValueError):
+            out[...] = 0.0
+    out += upper @ stacked
+    out += lower @ stacked
+
+
+def _lonely(planar, rings, cos_threshold, similar_self, others):
     """The faces with at most one face of their ring (itself included) within the angle: those within it
     of themselves with a zero sum of the others' weights, and those that are not (a zero normal, or an
     angle so small that its cosine rounds to 1) with at most one other face within it."""
@@ -256,10 +298,10 @@ def _lonely(normals, rings, cos_threshold, similar_self, others):
     odd = np.flatnonzero(~similar_self)
     if odd.size:
         ring = rings.ring[odd]
-        mine, theirs = np.repeat(normals[odd], np.diff(ring.indptr), axis=0), normals[ring.indices]
-        cosine = mine[:, 0] * theirs[:, 0]  # in the order of the pairs' cosines
+        mine, theirs = np.repeat(odd, np.diff(ring.indptr)), ring.indices
+        cosine = planar[0, mine] * planar[0, theirs]  # in the order of the pairs' cosines
         for k in (1, 2):
-            cosine += mine[:, k] * theirs[:, k]
+            cosine += planar[k, mine] * planar[k, theirs]
         similar = np.add.reduceat((cosine > cos_threshold).astype(np.int64), ring.indptr[:-1])
         lonely[odd] = similar <= 1
     return np.flatnonzero(lonely)
@@ -282,12 +324,18 @@ def fit_vertices(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     )
     points = points.copy()
     flat = points.reshape(-1)
+    everyone = moving.size == points.shape[0]  # no gathers and scatters of the moving rows then
     for _ in range(iterations):
         offsets = dots @ flat
         offsets /= 3.0
         pulled = incidence_moving @ (normals * offsets[:, None])
-        here = points[moving]
-        points[moving] = here + scale * (pulled - np.einsum("ijk,ik->ij", tensor, here))
+        here = points if everyone else points[moving]
+        pulled -= np.einsum("ijk,ik->ij", tensor, here)
+        pulled *= scale
+        if everyone:
+            points += pulled
+        else:
+            points[moving] = here + pulled
     return points
 
 
@@ -475,13 +523,21 @@ def _unfold(points, start, triangles, normals, around, rounds=FOLD_ROUNDS):
     """Halve, in place, the step's move of the corners of every triangle it turned over (its normal now more
     than 90° from its filtered normal, or from the mean ``around`` of its ring's), ``rounds`` times at most:
     the fitting moves along the faces' normals, and on curved parts those moves add up along the surface."""
+    faces = slice(None)  # the triangles whose corners moved: all at first, then those of the halved corners
+    turned = np.zeros(triangles.shape[0], dtype=bool)
+    halved = np.zeros(points.shape[0], dtype=bool)
     for _ in range(rounds):
-        now = face_normals(points, triangles)
-        turned = (np.einsum("ij,ij->i", now, normals) < 0.0) | (np.einsum("ij,ij->i", now, around) < 0.0)
+        now = face_normals(points, triangles[faces])
+        turned[faces] = (np.einsum("ij,ij->i", now, normals[faces]) < 0.0) | (
+            np.einsum("ij,ij->i", now, around[faces]) < 0.0
+        )
         if not turned.any():
             return
-        corners = np.unique(triangles[turned])
+        halved[:] = False
+        halved[triangles[turned]] = True
+        corners = np.flatnonzero(halved)
         points[corners] = start[corners] + 0.5 * (points[corners] - start[corners])
+        faces = np.flatnonzero(halved[triangles].any(axis=1))
 
 
 def _within(points, start, radius):
