@@ -43,9 +43,10 @@ import scipy.sparse as sp
 
 try:  # the kernels behind ``csr_matrix @ (n, k) array`` (y += A x) and the CSC's; private: a public fallback
     from scipy.sparse._sparsetools import csc_matvecs as _csc_matvecs
+    from scipy.sparse._sparsetools import csr_matvec as _csr_matvec
     from scipy.sparse._sparsetools import csr_matvecs as _csr_matvecs
 except ImportError:  # SciPy without the private kernels
-    _csr_matvecs = _csc_matvecs = None
+    _csr_matvec = _csr_matvecs = _csc_matvecs = None
 from numpy.typing import ArrayLike
 
 from .adjacency import Umbrella, umbrella_operator
@@ -144,6 +145,8 @@ class FaceRings:
     upper_rows, upper_indptr, upper_indices : the pairs i < j of that pattern (CSR, (t, t), and each
         entry's row): the filtering's weights are symmetric, so a pass computes each pair once.
     corner_columns : (9 t,) the columns 3 v + k of each triangle's corners v and coordinates k.
+    pull_pattern : (indptr, indices, entries) of the fitting's (3n, t) matrix, and each entry's index
+        in the flattened (t, 3) normals.
     faces_at : (n,) the number of triangles around each vertex, |F_i|.
     border : (n,) bool, the vertices on an edge of one triangle.
     """
@@ -174,6 +177,14 @@ class FaceRings:
         self.border[np.concatenate([keys[counts == 1] // n_vertices, keys[counts == 1] % n_vertices])] = True
         self.faces_at = np.diff(self.incidence.indptr)
         self.triangles = triangles
+        # The fitting's (3n, t) pattern: row 3 i + k holds vertex i's triangles f, at entry 3 f + k of the normals.
+        lengths = np.repeat(self.faces_at, 3)
+        indptr = np.zeros(3 * n_vertices + 1, dtype=self.incidence.indptr.dtype)
+        np.cumsum(lengths, out=indptr[1:])
+        within = np.arange(indptr[-1], dtype=index) - np.repeat(indptr[:-1], lengths).astype(index)
+        faces = self.incidence.indices[np.repeat(np.repeat(self.incidence.indptr[:-1], 3), lengths) + within]
+        coordinate = np.repeat(np.tile(np.arange(3, dtype=index), n_vertices), lengths)
+        self.pull_pattern = (indptr, faces, 3 * faces + coordinate)
 
 
 def face_normals(points, triangles):
@@ -310,33 +321,50 @@ def _lonely(planar, rings, cos_threshold, similar_self, others):
 def fit_vertices(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     """Sun et al.'s vertex update, ``iterations`` passes: x_i += share_i / |F_i| sum_f n_f n_f^T (c_f - x_i)
     over the triangles f around i (``step_share``: (n,) 0 for vertices that stay, else the influence).
-    n_f . c_f is one product with the (t, 3n) matrix of each triangle's normal at its corners' coordinates."""
+
+    On the flattened (3n,) coordinates a pass is three products with matrices fixed for the step: the
+    (t, 3n) one of each triangle's normal at its corners' coordinates (3 n_f . c_f), the (3n, t) one of
+    n_f share_i / (3 |F_i|) at each vertex's triangles, and the block diagonal of -share_i / |F_i| sum_f
+    n_f n_f^T."""
     triangles, incidence = rings.triangles, rings.incidence
     t, n = triangles.shape[0], points.shape[0]
-    outer = (normals[:, :, None] * normals[:, None, :]).reshape(-1, 9)
     scale = np.divide(step_share, rings.faces_at, out=np.zeros(step_share.size), where=rings.faces_at > 0)
+    outer = (normals[:, :, None] * normals[:, None, :]).reshape(-1, 9)
     tensor = (incidence @ outer).reshape(-1, 3, 3)  # sum_f n_f n_f^T per vertex
-    moving = np.flatnonzero(scale > 0.0)
-    tensor, scale = tensor[moving], scale[moving, None]
-    incidence_moving = incidence[moving]
     dots = sp.csr_matrix(
         (np.tile(normals, (1, 3)).ravel(), rings.corner_columns, np.arange(0, 9 * t + 1, 9)), shape=(t, 3 * n)
     )
-    points = points.copy()
-    flat = points.reshape(-1)
-    everyone = moving.size == points.shape[0]  # no gathers and scatters of the moving rows then
+    indptr, faces, entries = rings.pull_pattern
+    pull = normals.reshape(-1).take(entries) * np.repeat(scale / 3.0, 3 * rings.faces_at)
+    pull = sp.csr_matrix((pull, faces, indptr), shape=(3 * n, t))
+    block = np.arange(3 * n).reshape(n, 3)
+    own = sp.csr_matrix(
+        ((-scale[:, None, None] * tensor).ravel(), np.repeat(block, 3, axis=0).ravel(), np.arange(0, 9 * n + 1, 3)),
+        shape=(3 * n, 3 * n),
+    )
+    flat = np.array(points, dtype=np.float64).reshape(-1)
+    offsets = np.empty(t)
     for _ in range(iterations):
-        offsets = dots @ flat
-        offsets /= 3.0
-        pulled = incidence_moving @ (normals * offsets[:, None])
-        here = points if everyone else points[moving]
-        pulled -= np.einsum("ijk,ik->ij", tensor, here)
-        pulled *= scale
-        if everyone:
-            points += pulled
-        else:
-            points[moving] = here + pulled
-    return points
+        offsets[:] = 0.0
+        _add_product(dots, flat, offsets)
+        moved = flat.copy()
+        _add_product(pull, offsets, moved)
+        _add_product(own, flat, moved)
+        flat = moved
+    return flat.reshape(n, 3)
+
+
+def _add_product(matrix, x, y):
+    """y += matrix @ x for a CSR matrix and vectors: by SciPy's private kernel (no fresh array), or the
+    public product where it is missing or refuses the call."""
+    global _csr_matvec
+    if _csr_matvec is not None:
+        try:
+            _csr_matvec(*matrix.shape, matrix.indptr, matrix.indices, matrix.data, x, y)
+            return
+        except (TypeError, ValueError):  # the private kernel changed its signature
+            _csr_matvec = None
+    y += matrix @ x
 
 
 def _mean_of_neighbours(values, operator):
