@@ -90,7 +90,9 @@ QUIET_RATIO = 0.05
 CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its progress the noise estimate takes
 TANGENTIAL = 0.5  # share of the tangential umbrella move per step on vertices off the creases (step 3)
 FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
-PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the filtering passes
+PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the passes of a step
+FIT_SLICE = 5  # fitting passes between two of those yields
+STEP_SLICES = NORMAL_ITERATIONS + (FIT_ITERATIONS - 1) // FIT_SLICE + 1  # a step's slices on such meshes
 _BLOCK = 1 << 14  # face pairs per block of the filtering's dot products: its temporaries stay in cache
 
 
@@ -319,13 +321,18 @@ def _lonely(planar, rings, cos_threshold, similar_self, others):
 
 
 def fit_vertices(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
+    """``fit_steps`` run to its end: the fitted (n, 3) positions."""
+    return to_end(fit_steps(points, normals, rings, step_share, iterations))
+
+
+def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     """Sun et al.'s vertex update, ``iterations`` passes: x_i += share_i / |F_i| sum_f n_f n_f^T (c_f - x_i)
     over the triangles f around i (``step_share``: (n,) 0 for vertices that stay, else the influence).
 
     On the flattened (3n,) coordinates a pass is three products with matrices fixed for the step: the
     (t, 3n) one of each triangle's normal at its corners' coordinates (3 n_f . c_f), the (3n, t) one of
     n_f share_i / (3 |F_i|) at each vertex's triangles, and the block diagonal of -share_i / |F_i| sum_f
-    n_f n_f^T."""
+    n_f n_f^T. A generator: yields after every ``FIT_SLICE`` passes but the last, returns the positions."""
     triangles, incidence = rings.triangles, rings.incidence
     t, n = triangles.shape[0], points.shape[0]
     scale = np.divide(step_share, rings.faces_at, out=np.zeros(step_share.size), where=rings.faces_at > 0)
@@ -344,13 +351,15 @@ def fit_vertices(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     )
     flat = np.array(points, dtype=np.float64).reshape(-1)
     offsets = np.empty(t)
-    for _ in range(iterations):
+    for done in range(1, iterations + 1):
         offsets[:] = 0.0
         _add_product(dots, flat, offsets)
         moved = flat.copy()
         _add_product(pull, offsets, moved)
         _add_product(own, flat, moved)
         flat = moved
+        if done % FIT_SLICE == 0 and done < iterations:
+            yield
     return flat.reshape(n, 3)
 
 
@@ -467,7 +476,8 @@ class SharpSmoothing:
 
     def steps(self, chunk: int | None = None) -> Iterator[float]:
         """Run the steps left, ``chunk`` at a time, yielding the fraction done after each slice; on meshes of
-        ``PASS_SLICES_FROM`` triangles or more also after each filtering pass (a step takes seconds there)."""
+        ``PASS_SLICES_FROM`` triangles or more also within a step (``STEP_SLICES`` slices: after each filtering
+        pass and every ``FIT_SLICE`` fitting passes; a step takes seconds there)."""
         if self.rings is None:
             self.rings = FaceRings(self.triangles, self.positions.shape[0])
         chunk = self.iterations if chunk is None else max(1, int(chunk))
@@ -476,7 +486,7 @@ class SharpSmoothing:
             for _ in range(min(chunk, self.iterations - self.done)):
                 for k in self._step():
                     if passes:
-                        yield (self.done + k / (NORMAL_ITERATIONS + 1)) / self.iterations
+                        yield (self.done + k / STEP_SLICES) / self.iterations
                 if self.stopped_early:
                     break
             yield self.done / self.iterations
@@ -488,13 +498,14 @@ class SharpSmoothing:
         to_end(self._step())
 
     def _step(self):
-        """``advance`` as a generator, yielding the passes done (of NORMAL_ITERATIONS + 1) between them."""
+        """``advance`` as a generator, yielding the slices done (of ``STEP_SLICES``) between them."""
         if self.rings is None:
             self.rings = FaceRings(self.triangles, self.positions.shape[0])
         start = self.current
         filtering = filter_steps(face_normals(start, self.triangles), self.rings, self.cos_threshold, NORMAL_ITERATIONS)
         normals = yield from _counted(filtering)
-        moved = fit_vertices(start, normals, self.rings, self.moving, FIT_ITERATIONS)
+        fitting = fit_steps(start, normals, self.rings, self.moving, FIT_ITERATIONS)
+        moved = yield from _counted(fitting, NORMAL_ITERATIONS)
         if TANGENTIAL:
             _relax(moved, normals, self.rings, self.operator, self.cos_threshold, self.still)
         if self.push_back:
@@ -535,9 +546,8 @@ def _relax(points, normals, rings, operator, cos_threshold, still):
     points[flat] += TANGENTIAL * umbrella
 
 
-def _counted(generator):
-    """``yield from _counted(g)``: g's value, yielding 1, 2, ... for its slices."""
-    count = 0
+def _counted(generator, count=0):
+    """``yield from _counted(g, count)``: g's value, yielding count + 1, count + 2, ... for its slices."""
     while True:
         try:
             next(generator)
