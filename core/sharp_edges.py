@@ -191,8 +191,14 @@ class FaceRings:
 
 def face_normals(points, triangles):
     """(t, 3) unit normals (right-hand rule over the corners); (0, 0, 0) for a degenerate triangle."""
-    a, b, c = (points[triangles[:, k]] for k in range(3))
-    normals = np.cross(b - a, c - a)
+    coordinates = np.ascontiguousarray(points.T)  # coordinate rows: 1-D gathers and element-wise work
+    first, second, third = (np.ascontiguousarray(triangles[:, k]) for k in range(3))
+    u = [row.take(second) - row.take(first) for row in coordinates]
+    v = [row.take(third) - row.take(first) for row in coordinates]
+    normals = np.empty((triangles.shape[0], 3), dtype=u[0].dtype)
+    for k in range(3):  # u x v, as np.cross computes it
+        i, j = (k + 1) % 3, (k + 2) % 3
+        normals[:, k] = u[i] * v[j] - u[j] * v[i]
     return _unit(normals)
 
 
