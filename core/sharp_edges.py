@@ -41,17 +41,23 @@ from collections.abc import Iterator
 import numpy as np
 import scipy.sparse as sp
 
-try:  # the kernels behind ``csr_matrix @ (n, k) array`` (y += A x) and the CSC's; private: a public fallback
+try:  # the kernels behind ``csr_matrix @ x`` (y += A x) and the CSC's; private: a public fallback
     from scipy.sparse._sparsetools import csc_matvecs as _csc_matvecs
     from scipy.sparse._sparsetools import csr_matvec as _csr_matvec
     from scipy.sparse._sparsetools import csr_matvecs as _csr_matvecs
-except ImportError:  # SciPy without the private kernels
+
+    _probe = (np.array([0, 1], dtype=np.int32), np.zeros(1, dtype=np.int32), np.ones(1), np.ones(1), np.zeros(1))
+    _csr_matvec(1, 1, *_probe)
+    _csr_matvecs(1, 1, 1, *_probe)
+    _csc_matvecs(1, 1, 1, *_probe)
+    if _probe[-1][0] != 3.0:
+        raise ValueError("y += A x expected")
+except (ImportError, TypeError, ValueError):  # SciPy without these kernels, or with other signatures
     _csr_matvec = _csr_matvecs = _csc_matvecs = None
 from numpy.typing import ArrayLike
 
 from .adjacency import Umbrella, umbrella_operator
 from .metrics import fan_triangles
-from .parallel import run_blocks
 from .slices import to_end
 from .validation import (
     bbox_diagonal,
@@ -93,7 +99,7 @@ FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step
 PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the passes of a step
 FIT_SLICE = 5  # fitting passes between two of those yields
 STEP_SLICES = NORMAL_ITERATIONS + (FIT_ITERATIONS - 1) // FIT_SLICE + 1  # a step's slices on such meshes
-_BLOCK = 1 << 14  # face pairs per block of the filtering's dot products: its temporaries stay in cache
+_BLOCK = 1 << 16  # face pairs per block of the filtering's dot products: its temporaries stay in cache
 
 
 def steps_for_noise(ratio, triangles):
@@ -169,7 +175,7 @@ class FaceRings:
         self.upper_rows = np.repeat(np.arange(t, dtype=self.indices.dtype), self.counts)
         above = self.indices > self.upper_rows
         self.upper_rows, self.upper_indices = self.upper_rows[above], self.indices[above]
-        self.upper_indptr = np.zeros(t + 1, dtype=self.indptr.dtype)
+        self.upper_indptr = np.zeros(t + 1, dtype=self.indices.dtype)  # one index type, as SciPy's kernels need
         np.cumsum(np.bincount(self.upper_rows, minlength=t), out=self.upper_indptr[1:])
         self.corner_columns = (3 * triangles.astype(index)[:, :, None] + np.arange(3, dtype=index)).ravel()
         # Vertices on an open border (an edge of one triangle): their umbrella leans inwards.
@@ -226,95 +232,103 @@ def filter_steps(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
     turn it over. A face whose sum vanishes keeps its normal. A generator: yields after each pass, returns
     the normals.
 
-    w_ij = w_ji: a pass computes the weights of the pairs i < j only, in blocks that stay in cache, and
-    sums them both ways (the upper triangle's CSR and the same arrays read as the lower's CSC). A fourth
+    w_ij = w_ji: a pass computes the weights of the pairs i < j only, in blocks of rows that stay in cache,
+    and sums each block both ways at once (its rows of the upper triangle's CSR, and the same arrays read
+    as columns of the lower's CSC). A fourth
     column of ones gives each face's sum of the weights of the others: 0 exactly when none is within
     the angle."""
     t = normals.shape[0]
     rows, columns, indptr = rings.upper_rows, rings.upper_indices, rings.upper_indptr
     m = columns.size
     weights = np.empty(m)
-    upper = sp.csr_matrix((weights, columns, indptr), shape=(t, t))
-    lower = sp.csc_matrix((weights, columns, indptr), shape=(t, t))
     stacked = np.empty((t, 4))  # the normals and a column of ones
     stacked[:, :3] = normals
     stacked[:, 3] = 1.0
-    normals = stacked[:, :3]
-    planar = np.empty((3, t))  # a coordinate at a time: 1-D gathers are the fast ones
-    summed = np.empty((t, 4))
+    planar = np.ascontiguousarray(normals.T, dtype=np.float64)  # a coordinate at a time: 1-D gathers are fast
+    # Every face-sized array of a pass is allocated once: fresh ones of millions of entries cost page faults.
+    summed, total = np.empty((t, 4)), np.empty((3, t))
+    near, product = np.empty(t), np.empty(t)
+    similar, good = np.empty(t, dtype=bool), np.empty(t, dtype=bool)
+    # Blocks of whole rows (faces) with about _BLOCK pairs each: a block's weights are summed both ways
+    # while they are in cache.
+    cuts = np.searchsorted(indptr, np.arange(_BLOCK, m, _BLOCK))
+    bounds = np.unique(np.concatenate([[0], cuts, [t]]))
+    blocks = [(int(a), int(b), slice(int(indptr[a]), int(indptr[b]))) for a, b in zip(bounds[:-1], bounds[1:])]
+    local = [indptr[a : b + 1] - indptr[a] for a, b, _ in blocks]
+    widest = max((block.stop - block.start for _, _, block in blocks), default=0)
+    buffer = np.empty((4, widest))
 
-    def weigh(first, last):  # the weights of pairs first..last, in blocks that stay in cache
-        buffer = np.empty((4, min(last - first, _BLOCK)))
-        for low in range(first, last, _BLOCK):
-            block = slice(low, min(low + _BLOCK, last))
-            r, c = rows[block], columns[block]
-            cosine, product, mine, theirs = buffer[:, : r.size]
-            # mode="clip" (the indices are in range) lets take fill ``out`` without a copy of its own
+    def weigh(block):  # the weights of a block of pairs
+        r, c = rows[block], columns[block]
+        cosine, product, mine, theirs = buffer[:, : r.size]
+        # mode="clip" (the indices are in range) lets take fill ``out`` without a copy of its own
+        np.multiply(planar[0].take(r, out=mine, mode="clip"), planar[0].take(c, out=theirs, mode="clip"), out=cosine)
+        for k in (1, 2):
             np.multiply(
-                planar[0].take(r, out=mine, mode="clip"), planar[0].take(c, out=theirs, mode="clip"), out=cosine
+                planar[k].take(r, out=mine, mode="clip"), planar[k].take(c, out=theirs, mode="clip"), out=product
             )
-            for k in (1, 2):
-                np.multiply(
-                    planar[k].take(r, out=mine, mode="clip"), planar[k].take(c, out=theirs, mode="clip"), out=product
-                )
-                cosine += product
-            cosine -= cos_threshold
-            np.maximum(cosine, 0.0, out=cosine)
-            np.multiply(cosine, cosine, out=weights[block])
+            cosine += product
+        cosine -= cos_threshold
+        np.maximum(cosine, 0.0, out=cosine)
+        np.multiply(cosine, cosine, out=weights[block])
+
+    def pair_sums():  # summed = (W + W^T) @ stacked, W the weights of the pairs i < j
+        summed[...] = 0.0
+        if _csr_matvecs is None:  # the public products, on the whole matrices
+            for _, _, block in blocks:
+                weigh(block)
+            summed[...] += sp.csr_matrix((weights, columns, indptr), shape=(t, t)) @ stacked
+            summed[...] += sp.csc_matrix((weights, columns, indptr), shape=(t, t)) @ stacked
+            return
+        into, read = summed.reshape(-1), stacked.reshape(-1)
+        for (a, b, block), block_indptr in zip(blocks, local):
+            weigh(block)
+            # y += A x for the block's rows of W, and for its columns of W^T (the same arrays read as CSC)
+            _csr_matvecs(b - a, t, 4, block_indptr, columns[block], weights[block], read, summed[a:b].reshape(-1))
+            _csc_matvecs(t, b - a, 4, block_indptr, columns[block], weights[block], stacked[a:b].reshape(-1), into)
+
+    def squares(vectors, out):  # x^2 + y^2 + z^2 of coordinate rows, in the order of the pairs' cosines
+        np.multiply(vectors[0], vectors[0], out=out)
+        for k in (1, 2):
+            out += np.multiply(vectors[k], vectors[k], out=product)
+        return out
 
     for _ in range(iterations):
-        planar[:] = normals.T
-        run_blocks(weigh, m)
-        diagonal = planar[0] * planar[0]
-        diagonal += planar[1] * planar[1]
-        diagonal += planar[2] * planar[2]
-        near = np.maximum(diagonal - cos_threshold, 0.0, out=diagonal)
-        _pair_sums(upper, lower, stacked, summed)
-        lonely = _lonely(planar, rings, cos_threshold, near > 0.0, summed[:, 3])
+        pair_sums()
+        squares(planar, near)  # each face's cosine with itself
+        near -= cos_threshold
+        np.maximum(near, 0.0, out=near)
+        np.greater(near, 0.0, out=similar)
+        lonely = _lonely(planar, rings, cos_threshold, similar, summed[:, 3])
         near *= near
-        total = summed[:, :3].T.copy()  # coordinate rows: element-wise work on (t, 3) columns is slow
-        total += near * planar
+        total[:] = summed[:, :3].T  # coordinate rows: element-wise work on (t, 3) columns is slow
+        for k in range(3):
+            total[k] += np.multiply(near, planar[k], out=product)
         if lonely.size:
             ring = rings.ring[lonely] @ stacked  # the sums of the ring's normals, and its size
             mean = ring[:, :3] / ring[:, 3:]
             agree = np.einsum("ij,ij->i", mean, mean) >= 0.01  # a ring that is no corner of its own
             total[:, lonely[agree]] = mean[agree].T
-        lengths = total[0] * total[0]
-        lengths += total[1] * total[1]
-        lengths += total[2] * total[2]
-        np.sqrt(lengths, out=lengths)
-        good = lengths > 0.0  # else the face keeps its normal
-        np.divide(1.0, lengths, out=lengths, where=good)
-        total *= lengths
-        if not good.all():
-            total[:, ~good] = planar[:, ~good]
-        normals[:] = total.T
+        lengths = np.sqrt(squares(total, near), out=near)
+        np.greater(lengths, 0.0, out=good)  # else the face keeps its normal
+        if good.all():
+            np.divide(1.0, lengths, out=lengths)
+            np.multiply(total, lengths, out=planar)
+        else:
+            np.divide(1.0, lengths, out=lengths, where=good)
+            np.multiply(total, lengths, out=planar, where=good)
+        stacked[:, :3] = planar.T
         yield
-    return normals.copy()
-
-
-def _pair_sums(upper, lower, stacked, out):
-    """``out`` = (upper + lower) @ ``stacked``, (t, 4): by SciPy's private kernels into ``out`` (no fresh
-    (t, 4) arrays each pass), or by the public products where they are missing or refuse the call."""
-    out[...] = 0.0
-    if _csr_matvecs is not None:
-        t, k = stacked.shape
-        try:
-            for matrix, kernel in ((upper, _csr_matvecs), (lower, _csc_matvecs)):
-                kernel(t, t, k, matrix.indptr, matrix.indices, matrix.data, stacked.reshape(-1), out.reshape(-1))
-            return
-        except (TypeError, ValueError):
-            out[...] = 0.0
-    out += upper @ stacked
-    out += lower @ stacked
+    return planar.T.copy()
 
 
 def _lonely(planar, rings, cos_threshold, similar_self, others):
     """The faces with at most one face of their ring (itself included) within the angle: those within it
     of themselves with a zero sum of the others' weights, and those that are not (a zero normal, or an
-    angle so small that its cosine rounds to 1) with at most one other face within it."""
-    lonely = similar_self & (others == 0.0)
+    angle so small that its cosine rounds to 1) with at most one other face within it. Overwrites
+    ``similar_self``."""
     odd = np.flatnonzero(~similar_self)
+    lonely = np.logical_and(similar_self, others == 0.0, out=similar_self)
     if odd.size:
         ring = rings.ring[odd]
         mine, theirs = np.repeat(odd, np.diff(ring.indptr)), ring.indices
@@ -356,14 +370,14 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
         shape=(3 * n, 3 * n),
     )
     flat = np.array(points, dtype=np.float64).reshape(-1)
-    offsets = np.empty(t)
+    moved, offsets = np.empty_like(flat), np.empty(t)  # allocated once, as the filtering's
     for done in range(1, iterations + 1):
         offsets[:] = 0.0
         _add_product(dots, flat, offsets)
-        moved = flat.copy()
+        moved[:] = flat
         _add_product(pull, offsets, moved)
         _add_product(own, flat, moved)
-        flat = moved
+        flat, moved = moved, flat
         if done % FIT_SLICE == 0 and done < iterations:
             yield
     return flat.reshape(n, 3)
@@ -371,15 +385,11 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
 
 def _add_product(matrix, x, y):
     """y += matrix @ x for a CSR matrix and vectors: by SciPy's private kernel (no fresh array), or the
-    public product where it is missing or refuses the call."""
-    global _csr_matvec
-    if _csr_matvec is not None:
-        try:
-            _csr_matvec(*matrix.shape, matrix.indptr, matrix.indices, matrix.data, x, y)
-            return
-        except (TypeError, ValueError):  # the private kernel changed its signature
-            _csr_matvec = None
-    y += matrix @ x
+    public product where it is missing."""
+    if _csr_matvec is None:
+        y += matrix @ x
+    else:
+        _csr_matvec(*matrix.shape, matrix.indptr, matrix.indices, matrix.data, x, y)
 
 
 def _mean_of_neighbours(values, operator):
