@@ -211,6 +211,21 @@ def test_vectorised_filter_and_fit_equal_the_papers_loops(share):
     assert np.allclose(fitted, _loop_fit(noisy, faces, filtered, 3), atol=1e-12)
 
 
+@pytest.mark.parametrize("degrees", [40.0, 100.0])
+def test_faces_without_a_normal_filter_as_in_the_papers_loop(degrees):
+    """A zero normal (a degenerate triangle) is not within an angle below 90 degrees of itself: such a face
+    is counted apart from the others' weights, and takes its ring's mean as the loop does."""
+    _, noisy, faces = noisy_box(0.02, "iso", cells=3)
+    rings = FaceRings(faces, len(noisy))
+    normals = face_normals(noisy, faces)
+    normals[[3, 17]] = 0.0
+    threshold = math.cos(math.radians(degrees))
+    filtered = filter_normals(normals, rings, threshold, iterations=3)
+    expected, _ = _loop_filter(normals, faces, threshold, 3)
+    assert np.allclose(filtered, expected, atol=1e-12)
+    assert np.all(np.linalg.norm(filtered[[3, 17]], axis=1) > 0.99)  # they took their rings' normals
+
+
 def test_off_is_bit_identical():
     _, noisy, faces = noisy_box(0.005, "iso", cells=8)
     edges = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
