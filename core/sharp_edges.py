@@ -592,6 +592,8 @@ def _unfold(points, start, triangles, normals, around, rounds=FOLD_ROUNDS):
         corners = np.flatnonzero(halved)
         points[corners] = start[corners] + 0.5 * (points[corners] - start[corners])
         faces = np.flatnonzero(halved[triangles].any(axis=1))
+        if faces.size > triangles.shape[0] // 4:  # gathering most of them costs more than measuring all
+            faces = slice(None)
 
 
 def _within(points, start, radius):
