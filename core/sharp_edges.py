@@ -29,8 +29,9 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    get half their move, up to ``FOLD_ROUNDS`` times; then the deviation limit, if any.
 
 Everything runs on all faces or vertices at once: the face rings are one sparse pattern (the faces
-sharing a vertex with each face: incidence times its transpose), a filtering pass is one sparse product
-with weights computed on that pattern, a fitting pass two products with the vertex-face incidence.
+sharing a vertex with each face: incidence times its transpose), built once per run; a filtering pass
+computes the weight of each pair of faces in it once (about 6 per triangle) and sums it both ways, a
+fitting pass is three sparse products on the flattened coordinates.
 Fixed vertices never move (their positions still place their faces' planes); ``influence`` scales each
 step's move, as core.smoothing scales an iteration's.
 """
@@ -80,7 +81,7 @@ DEFAULT_BETA = 0.0  # neighbourhood mean (the drift), keeps all of the vertex-by
 DEFAULT_ITERATIONS = 5  # steps when the caller gives no amount and no Automatic Amount runs
 # The Automatic Amount (for a noise of ``ratio`` median edge lengths, core.mesh_noise's estimate):
 # * steps: FIRST_STEPS + STEPS_PER_RATIO x ratio, at most MAX_STEPS, and at most WORK_BUDGET / triangles
-#   (each step costs NORMAL_ITERATIONS passes over ~13 ring entries per triangle): the error on the tuning
+#   (each step costs NORMAL_ITERATIONS passes over ~6 face pairs per triangle): the error on the tuning
 #   parts falls with the steps up to 10 where the noise is heavy, and is flat from 4 to 6 where it is light;
 # * angle: at least NOISE_ANGLE_GAIN x atan(ratio): noise tilts neighbouring faces by about that much,
 #   and a filter that sees noisy faces as creases leaves the noise (at 1 % noise along the normals on the
