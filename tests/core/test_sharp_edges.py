@@ -226,6 +226,17 @@ def test_faces_without_a_normal_filter_as_in_the_papers_loop(degrees):
     assert np.all(np.linalg.norm(filtered[[3, 17]], axis=1) > 0.99)  # they took their rings' normals
 
 
+def test_public_products_give_what_scipys_kernels_give(monkeypatch):
+    """Without SciPy's private kernels (another SciPy), the public products run the same passes."""
+    _, noisy, faces = noisy_box(0.02, "iso", cells=4)
+    with_kernels = sharp_smooth(noisy, faces, iterations=2)
+    for name in ("_csr_matvec", "_csr_matvecs", "_csc_matvecs"):
+        monkeypatch.setattr(sharp_edges, name, None)
+    public = sharp_smooth(noisy, faces, iterations=2)
+    assert np.allclose(public, with_kernels, rtol=0.0, atol=1e-12)
+    assert not np.allclose(public, noisy, atol=1e-4)  # it did smooth
+
+
 def test_off_is_bit_identical():
     _, noisy, faces = noisy_box(0.005, "iso", cells=8)
     edges = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
