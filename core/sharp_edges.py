@@ -99,7 +99,8 @@ TANGENTIAL = 0.5  # share of the tangential umbrella move per step on vertices o
 FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
 PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the passes of a step
 FIT_SLICE = 5  # fitting passes between two of those yields
-STEP_SLICES = NORMAL_ITERATIONS + (FIT_ITERATIONS - 1) // FIT_SLICE + 1  # a step's slices on such meshes
+FIT_SLICES = -(-FIT_ITERATIONS // FIT_SLICE)
+STEP_SLICES = NORMAL_ITERATIONS + FIT_SLICES + FOLD_ROUNDS  # a step's slices on such meshes, at most
 _BLOCK = 1 << 16  # face pairs per block of the filtering's dot products: its temporaries stay in cache
 
 
@@ -153,9 +154,7 @@ class FaceRings:
     ring : that pattern as a (t, t) CSR of ones.
     upper_rows, upper_indptr, upper_indices : the pairs i < j of that pattern (CSR, (t, t), and each
         entry's row): the filtering's weights are symmetric, so a pass computes each pair once.
-    corner_columns : (9 t,) the columns 3 v + k of each triangle's corners v and coordinates k.
-    pull_pattern : (indptr, indices, entries) of the fitting's (3n, t) matrix, and each entry's index
-        in the flattened (t, 3) normals.
+    corner_columns : (9 t,) the columns k n + v of each triangle's corners v and coordinates k.
     faces_at : (n,) the number of triangles around each vertex, |F_i|.
     border : (n,) bool, the vertices on an edge of one triangle.
     """
@@ -178,7 +177,7 @@ class FaceRings:
         self.upper_rows, self.upper_indices = self.upper_rows[above], self.indices[above]
         self.upper_indptr = np.zeros(t + 1, dtype=self.indices.dtype)  # one index type, as SciPy's kernels need
         np.cumsum(np.bincount(self.upper_rows, minlength=t), out=self.upper_indptr[1:])
-        self.corner_columns = (3 * triangles.astype(index)[:, :, None] + np.arange(3, dtype=index)).ravel()
+        self.corner_columns = (triangles.astype(index)[:, :, None] + n_vertices * np.arange(3, dtype=index)).ravel()
         # Vertices on an open border (an edge of one triangle): their umbrella leans inwards.
         pairs = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
         keys, counts = np.unique(pairs[:, 0] * n_vertices + pairs[:, 1], return_counts=True)
@@ -186,14 +185,6 @@ class FaceRings:
         self.border[np.concatenate([keys[counts == 1] // n_vertices, keys[counts == 1] % n_vertices])] = True
         self.faces_at = np.diff(self.incidence.indptr)
         self.triangles = triangles
-        # The fitting's (3n, t) pattern: row 3 i + k holds vertex i's triangles f, at entry 3 f + k of the normals.
-        lengths = np.repeat(self.faces_at, 3)
-        indptr = np.zeros(3 * n_vertices + 1, dtype=self.incidence.indptr.dtype)
-        np.cumsum(lengths, out=indptr[1:])
-        within = np.arange(indptr[-1], dtype=index) - np.repeat(indptr[:-1], lengths).astype(index)
-        faces = self.incidence.indices[np.repeat(np.repeat(self.incidence.indptr[:-1], 3), lengths) + within]
-        coordinate = np.repeat(np.tile(np.arange(3, dtype=index), n_vertices), lengths)
-        self.pull_pattern = (indptr, faces, 3 * faces + coordinate)
 
 
 def face_normals(points, triangles):
@@ -350,10 +341,11 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     """Sun et al.'s vertex update, ``iterations`` passes: x_i += share_i / |F_i| sum_f n_f n_f^T (c_f - x_i)
     over the triangles f around i (``step_share``: (n,) 0 for vertices that stay, else the influence).
 
-    On the flattened (3n,) coordinates a pass is three products with matrices fixed for the step: the
-    (t, 3n) one of each triangle's normal at its corners' coordinates (3 n_f . c_f), the (3n, t) one of
-    n_f share_i / (3 |F_i|) at each vertex's triangles, and the block diagonal of -share_i / |F_i| sum_f
-    n_f n_f^T. A generator: yields after every ``FIT_SLICE`` passes but the last, returns the positions."""
+    On the coordinates as one (3n,) vector (x's, then y's, then z's) a pass is five products with matrices
+    fixed for the step: the (t, 3n) one of each triangle's normal at its corners' coordinates (3 n_f . c_f),
+    per coordinate k the (n, t) one of n_f[k] share_i / (3 |F_i|) at each vertex's triangles, and the
+    (3n, 3n) one of -share_i / |F_i| sum_f n_f n_f^T at each vertex's coordinates. A generator: yields once
+    the matrices are built and after every ``FIT_SLICE`` passes but the last, returns the positions."""
     triangles, incidence = rings.triangles, rings.incidence
     t, n = triangles.shape[0], points.shape[0]
     scale = np.divide(step_share, rings.faces_at, out=np.zeros(step_share.size), where=rings.faces_at > 0)
@@ -362,26 +354,34 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     dots = sp.csr_matrix(
         (np.tile(normals, (1, 3)).ravel(), rings.corner_columns, np.arange(0, 9 * t + 1, 9)), shape=(t, 3 * n)
     )
-    indptr, faces, entries = rings.pull_pattern
-    pull = normals.reshape(-1).take(entries) * np.repeat(scale / 3.0, 3 * rings.faces_at)
-    pull = sp.csr_matrix((pull, faces, indptr), shape=(3 * n, t))
-    block = np.arange(3 * n).reshape(n, 3)
+    share = np.repeat(scale / 3.0, rings.faces_at)  # at each of the incidence's entries
+    pulls = [
+        sp.csr_matrix((row.take(incidence.indices) * share, incidence.indices, incidence.indptr), shape=(n, t))
+        for row in np.ascontiguousarray(normals.T)
+    ]
+    columns = np.arange(n)[None, :, None] + n * np.arange(3)[None, None, :]  # vertex i's x, y, z
     own = sp.csr_matrix(
-        ((-scale[:, None, None] * tensor).ravel(), np.repeat(block, 3, axis=0).ravel(), np.arange(0, 9 * n + 1, 3)),
+        (
+            (-scale[None, :, None] * tensor.transpose(1, 0, 2)).ravel(),
+            np.broadcast_to(columns, (3, n, 3)).ravel(),
+            np.arange(0, 9 * n + 1, 3),
+        ),
         shape=(3 * n, 3 * n),
     )
-    flat = np.array(points, dtype=np.float64).reshape(-1)
+    flat = np.array(points.T, dtype=np.float64).reshape(-1)
     moved, offsets = np.empty_like(flat), np.empty(t)  # allocated once, as the filtering's
+    yield  # building the matrices takes as long as a few passes
     for done in range(1, iterations + 1):
         offsets[:] = 0.0
         _add_product(dots, flat, offsets)
         moved[:] = flat
-        _add_product(pull, offsets, moved)
+        for k, pull in enumerate(pulls):
+            _add_product(pull, offsets, moved[k * n : (k + 1) * n])
         _add_product(own, flat, moved)
         flat, moved = moved, flat
         if done % FIT_SLICE == 0 and done < iterations:
             yield
-    return flat.reshape(n, 3)
+    return np.ascontiguousarray(flat.reshape(3, n).T)
 
 
 def _add_product(matrix, x, y):
@@ -493,8 +493,9 @@ class SharpSmoothing:
 
     def steps(self, chunk: int | None = None) -> Iterator[float]:
         """Run the steps left, ``chunk`` at a time, yielding the fraction done after each slice; on meshes of
-        ``PASS_SLICES_FROM`` triangles or more also within a step (``STEP_SLICES`` slices: after each filtering
-        pass and every ``FIT_SLICE`` fitting passes; a step takes seconds there)."""
+        ``PASS_SLICES_FROM`` triangles or more also within a step (at most ``STEP_SLICES`` slices: after each
+        filtering pass, the fitting's set-up, every ``FIT_SLICE`` fitting passes and each unfolding round
+        but the last; a step takes seconds there)."""
         if self.rings is None:
             self.rings = FaceRings(self.triangles, self.positions.shape[0])
         chunk = self.iterations if chunk is None else max(1, int(chunk))
@@ -532,7 +533,8 @@ class SharpSmoothing:
         if self.influence is not None:  # vertex i ends the step at q_i + w_i (p_i - q_i), as in core.smoothing
             moved = start + self.share[:, None] * (moved - start)
         moved[self.still] = start[self.still]
-        _unfold(moved, start, self.triangles, normals, _unit(self.rings.ring @ normals))
+        unfolding = _unfold(moved, start, self.triangles, normals, _unit(self.rings.ring @ normals))
+        yield from _counted(unfolding, NORMAL_ITERATIONS + FIT_SLICES)
         if np.any(self.max_deviation):
             _within(moved, self.original, self.max_deviation)
         self.done += 1
@@ -577,11 +579,12 @@ def _counted(generator, count=0):
 def _unfold(points, start, triangles, normals, around, rounds=FOLD_ROUNDS):
     """Halve, in place, the step's move of the corners of every triangle it turned over (its normal now more
     than 90° from its filtered normal, or from the mean ``around`` of its ring's), ``rounds`` times at most:
-    the fitting moves along the faces' normals, and on curved parts those moves add up along the surface."""
+    the fitting moves along the faces' normals, and on curved parts those moves add up along the surface.
+    A generator: yields after each round that leaves rounds to go."""
     faces = slice(None)  # the triangles whose corners moved: all at first, then those of the halved corners
     turned = np.zeros(triangles.shape[0], dtype=bool)
     halved = np.zeros(points.shape[0], dtype=bool)
-    for _ in range(rounds):
+    for round_ in range(rounds):
         now = face_normals(points, triangles[faces])
         turned[faces] = (np.einsum("ij,ij->i", now, normals[faces]) < 0.0) | (
             np.einsum("ij,ij->i", now, around[faces]) < 0.0
@@ -595,6 +598,8 @@ def _unfold(points, start, triangles, normals, around, rounds=FOLD_ROUNDS):
         faces = np.flatnonzero(halved[triangles].any(axis=1))
         if faces.size > triangles.shape[0] // 4:  # gathering most of them costs more than measuring all
             faces = slice(None)
+        if round_ + 1 < rounds:
+            yield
 
 
 def _within(points, start, radius):
