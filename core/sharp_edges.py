@@ -29,8 +29,9 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    get half their move, up to ``FOLD_ROUNDS`` times; then the deviation limit, if any.
 
 Everything runs on all faces or vertices at once: the face rings are one sparse pattern (the faces
-sharing a vertex with each face: incidence times its transpose), a filtering pass is one sparse product
-with weights computed on that pattern, a fitting pass two products with the vertex-face incidence.
+sharing a vertex with each face: incidence times its transpose), built once per run; a filtering pass
+computes the weight of each pair of faces in it once (about 6 per triangle) and sums it both ways, a
+fitting pass is three sparse products on the flattened coordinates.
 Fixed vertices never move (their positions still place their faces' planes); ``influence`` scales each
 step's move, as core.smoothing scales an iteration's.
 """
@@ -40,6 +41,20 @@ from collections.abc import Iterator
 
 import numpy as np
 import scipy.sparse as sp
+
+try:  # the kernels behind ``csr_matrix @ x`` (y += A x) and the CSC's; private: a public fallback
+    from scipy.sparse._sparsetools import csc_matvecs as _csc_matvecs
+    from scipy.sparse._sparsetools import csr_matvec as _csr_matvec
+    from scipy.sparse._sparsetools import csr_matvecs as _csr_matvecs
+
+    _probe = (np.array([0, 1], dtype=np.int32), np.zeros(1, dtype=np.int32), np.ones(1), np.ones(1), np.zeros(1))
+    _csr_matvec(1, 1, *_probe)
+    _csr_matvecs(1, 1, 1, *_probe)
+    _csc_matvecs(1, 1, 1, *_probe)
+    if _probe[-1][0] != 3.0:
+        raise ValueError("y += A x expected")
+except (ImportError, TypeError, ValueError):  # SciPy without these kernels, or with other signatures
+    _csr_matvec = _csr_matvecs = _csc_matvecs = None
 from numpy.typing import ArrayLike
 
 from .adjacency import Umbrella, umbrella_operator
@@ -66,7 +81,7 @@ DEFAULT_BETA = 0.0  # neighbourhood mean (the drift), keeps all of the vertex-by
 DEFAULT_ITERATIONS = 5  # steps when the caller gives no amount and no Automatic Amount runs
 # The Automatic Amount (for a noise of ``ratio`` median edge lengths, core.mesh_noise's estimate):
 # * steps: FIRST_STEPS + STEPS_PER_RATIO x ratio, at most MAX_STEPS, and at most WORK_BUDGET / triangles
-#   (each step costs NORMAL_ITERATIONS passes over ~13 ring entries per triangle): the error on the tuning
+#   (each step costs NORMAL_ITERATIONS passes over ~6 face pairs per triangle): the error on the tuning
 #   parts falls with the steps up to 10 where the noise is heavy, and is flat from 4 to 6 where it is light;
 # * angle: at least NOISE_ANGLE_GAIN x atan(ratio): noise tilts neighbouring faces by about that much,
 #   and a filter that sees noisy faces as creases leaves the noise (at 1 % noise along the normals on the
@@ -82,8 +97,11 @@ QUIET_RATIO = 0.05
 CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its progress the noise estimate takes
 TANGENTIAL = 0.5  # share of the tangential umbrella move per step on vertices off the creases (step 3)
 FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
-PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the filtering passes
-_BLOCK = 1 << 18  # faces per block of the filtering's dot products (about 13 ring entries each)
+PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the passes of a step
+FIT_SLICE = 5  # fitting passes between two of those yields
+FIT_SLICES = -(-FIT_ITERATIONS // FIT_SLICE)
+STEP_SLICES = NORMAL_ITERATIONS + FIT_SLICES + FOLD_ROUNDS  # a step's slices on such meshes, at most
+_BLOCK = 1 << 16  # face pairs per block of the filtering's dot products: its temporaries stay in cache
 
 
 def steps_for_noise(ratio, triangles):
@@ -134,13 +152,16 @@ class FaceRings:
     incidence : (n, t) CSR, 1 where vertex i is a corner of triangle f.
     indptr, indices, counts : the faces sharing a vertex with each face, itself included (CSR, (t, t)).
     ring : that pattern as a (t, t) CSR of ones.
+    upper_rows, upper_indptr, upper_indices : the pairs i < j of that pattern (CSR, (t, t), and each
+        entry's row): the filtering's weights are symmetric, so a pass computes each pair once.
+    corner_columns : (9 t,) the columns k n + v of each triangle's corners v and coordinates k.
     faces_at : (n,) the number of triangles around each vertex, |F_i|.
     border : (n,) bool, the vertices on an edge of one triangle.
     """
 
     def __init__(self, triangles, n_vertices):
         t = triangles.shape[0]
-        index = np.int32 if max(t, n_vertices) < np.iinfo(np.int32).max // 4 else np.int64
+        index = np.int32 if max(t, n_vertices) < np.iinfo(np.int32).max // 9 else np.int64
         rows = triangles.ravel().astype(index)
         columns = np.repeat(np.arange(t, dtype=index), 3)
         self.incidence = sp.csr_matrix((np.ones(rows.size), (rows, columns)), shape=(n_vertices, t))
@@ -151,6 +172,12 @@ class FaceRings:
         self.indptr, self.indices = pattern.indptr, pattern.indices
         self.counts = np.diff(self.indptr)
         self.ring = sp.csr_matrix((np.ones(self.indices.size), self.indices, self.indptr), shape=(t, t))
+        self.upper_rows = np.repeat(np.arange(t, dtype=self.indices.dtype), self.counts)
+        above = self.indices > self.upper_rows
+        self.upper_rows, self.upper_indices = self.upper_rows[above], self.indices[above]
+        self.upper_indptr = np.zeros(t + 1, dtype=self.indices.dtype)  # one index type, as SciPy's kernels need
+        np.cumsum(np.bincount(self.upper_rows, minlength=t), out=self.upper_indptr[1:])
+        self.corner_columns = (triangles.astype(index)[:, :, None] + n_vertices * np.arange(3, dtype=index)).ravel()
         # Vertices on an open border (an edge of one triangle): their umbrella leans inwards.
         pairs = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
         keys, counts = np.unique(pairs[:, 0] * n_vertices + pairs[:, 1], return_counts=True)
@@ -162,17 +189,25 @@ class FaceRings:
 
 def face_normals(points, triangles):
     """(t, 3) unit normals (right-hand rule over the corners); (0, 0, 0) for a degenerate triangle."""
-    a, b, c = (points[triangles[:, k]] for k in range(3))
-    normals = np.cross(b - a, c - a)
+    coordinates = np.ascontiguousarray(points.T)  # coordinate rows: 1-D gathers and element-wise work
+    first, second, third = (np.ascontiguousarray(triangles[:, k]) for k in range(3))
+    u = [row.take(second) - row.take(first) for row in coordinates]
+    v = [row.take(third) - row.take(first) for row in coordinates]
+    normals = np.empty((triangles.shape[0], 3), dtype=u[0].dtype)
+    for k in range(3):  # u x v, as np.cross computes it
+        i, j = (k + 1) % 3, (k + 2) % 3
+        normals[:, k] = u[i] * v[j] - u[j] * v[i]
     return _unit(normals)
 
 
-def _unit(vectors):
+def _unit(vectors, good=None):
+    """(k, 3) unit vectors, (0, 0, 0) for a zero one; fills the bool mask ``good`` of the non-zero ones."""
     lengths = np.sqrt(np.einsum("ij,ij->i", vectors, vectors))
-    out = np.zeros_like(vectors)
-    good = lengths > 0.0
-    out[good] = vectors[good] / lengths[good, None]
-    return out
+    good = np.greater(lengths, 0.0, out=good)
+    np.divide(1.0, lengths, out=lengths, where=good)
+    if not good.all():  # zero, or not a number
+        lengths[~good] = 0.0
+    return vectors * lengths[:, None]
 
 
 def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
@@ -187,56 +222,175 @@ def filter_steps(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS):
     of its ring's normals instead, where that mean is at least a tenth of a unit long (the ring is no corner
     of its own, as a tetrahedron's is): kept as it is, it would be a crease of one face, and the fitting would
     turn it over. A face whose sum vanishes keeps its normal. A generator: yields after each pass, returns
-    the normals."""
-    indptr, indices, counts = rings.indptr, rings.indices, rings.counts
+    the normals.
+
+    w_ij = w_ji: a pass computes the weights of the pairs i < j only, in blocks of rows that stay in cache,
+    and sums each block both ways at once (its rows of the upper triangle's CSR, and the same arrays read
+    as columns of the lower's CSC). A fourth
+    column of ones gives each face's sum of the weights of the others: 0 exactly when none is within
+    the angle."""
     t = normals.shape[0]
-    weights = sp.csr_matrix((np.empty(indices.size), indices, indptr), shape=(t, t))
-    ring = rings.ring
-    similar = np.empty(t, dtype=np.int64)
+    rows, columns, indptr = rings.upper_rows, rings.upper_indices, rings.upper_indptr
+    m = columns.size
+    weights = np.empty(m)
+    stacked = np.empty((t, 4))  # the normals and a column of ones
+    stacked[:, :3] = normals
+    stacked[:, 3] = 1.0
+    planar = np.ascontiguousarray(normals.T, dtype=np.float64)  # a coordinate at a time: 1-D gathers are fast
+    # Every face-sized array of a pass is allocated once: fresh ones of millions of entries cost page faults.
+    summed, total = np.empty((t, 4)), np.empty((3, t))
+    near, product = np.empty(t), np.empty(t)
+    similar, good = np.empty(t, dtype=bool), np.empty(t, dtype=bool)
+    # Blocks of whole rows (faces) with about _BLOCK pairs each: a block's weights are summed both ways
+    # while they are in cache.
+    cuts = np.searchsorted(indptr, np.arange(_BLOCK, m, _BLOCK))
+    bounds = np.unique(np.concatenate([[0], cuts, [t]]))
+    blocks = [(int(a), int(b), slice(int(indptr[a]), int(indptr[b]))) for a, b in zip(bounds[:-1], bounds[1:])]
+    local = [indptr[a : b + 1] - indptr[a] for a, b, _ in blocks]
+    widest = max((block.stop - block.start for _, _, block in blocks), default=0)
+    buffer = np.empty((4, widest))
+
+    def weigh(block):  # the weights of a block of pairs
+        r, c = rows[block], columns[block]
+        cosine, product, mine, theirs = buffer[:, : r.size]
+        # mode="clip" (the indices are in range) lets take fill ``out`` without a copy of its own
+        np.multiply(planar[0].take(r, out=mine, mode="clip"), planar[0].take(c, out=theirs, mode="clip"), out=cosine)
+        for k in (1, 2):
+            np.multiply(
+                planar[k].take(r, out=mine, mode="clip"), planar[k].take(c, out=theirs, mode="clip"), out=product
+            )
+            cosine += product
+        cosine -= cos_threshold
+        np.maximum(cosine, 0.0, out=cosine)
+        np.multiply(cosine, cosine, out=weights[block])
+
+    def pair_sums():  # summed = (W + W^T) @ stacked, W the weights of the pairs i < j
+        summed[...] = 0.0
+        if _csr_matvecs is None:  # the public products, on the whole matrices
+            for _, _, block in blocks:
+                weigh(block)
+            summed[...] += sp.csr_matrix((weights, columns, indptr), shape=(t, t)) @ stacked
+            summed[...] += sp.csc_matrix((weights, columns, indptr), shape=(t, t)) @ stacked
+            return
+        into, read = summed.reshape(-1), stacked.reshape(-1)
+        for (a, b, block), block_indptr in zip(blocks, local):
+            weigh(block)
+            # y += A x for the block's rows of W, and for its columns of W^T (the same arrays read as CSC)
+            _csr_matvecs(b - a, t, 4, block_indptr, columns[block], weights[block], read, summed[a:b].reshape(-1))
+            _csc_matvecs(t, b - a, 4, block_indptr, columns[block], weights[block], stacked[a:b].reshape(-1), into)
+
+    def squares(vectors, out):  # x^2 + y^2 + z^2 of coordinate rows, in the order of the pairs' cosines
+        np.multiply(vectors[0], vectors[0], out=out)
+        for k in (1, 2):
+            out += np.multiply(vectors[k], vectors[k], out=product)
+        return out
+
     for _ in range(iterations):
-        columns = np.ascontiguousarray(normals.T)  # a coordinate at a time: 1-D gathers are the fast ones
-        for low in range(0, t, _BLOCK):  # blocks of faces bound the temporaries
-            faces = slice(low, low + _BLOCK)
-            entries = slice(indptr[low], indptr[min(low + _BLOCK, t)])
-            cosine = np.repeat(columns[0][faces], counts[faces]) * columns[0][indices[entries]]
-            for k in (1, 2):
-                cosine += np.repeat(columns[k][faces], counts[faces]) * columns[k][indices[entries]]
-            near = np.maximum(cosine - cos_threshold, 0.0, out=cosine)
-            weights.data[entries] = near * near
-            starts = indptr[low : min(low + _BLOCK, t)] - indptr[low]
-            similar[faces] = np.add.reduceat((near > 0.0).astype(np.int64), starts)
-        summed = weights @ normals
-        lonely = np.flatnonzero(similar <= 1)  # itself only
+        pair_sums()
+        squares(planar, near)  # each face's cosine with itself
+        near -= cos_threshold
+        np.maximum(near, 0.0, out=near)
+        np.greater(near, 0.0, out=similar)
+        lonely = _lonely(planar, rings, cos_threshold, similar, summed[:, 3])
+        near *= near
+        total[:] = summed[:, :3].T  # coordinate rows: element-wise work on (t, 3) columns is slow
+        for k in range(3):
+            total[k] += np.multiply(near, planar[k], out=product)
         if lonely.size:
-            mean = (ring[lonely] @ normals) / counts[lonely, None]
+            ring = rings.ring[lonely] @ stacked  # the sums of the ring's normals, and its size
+            mean = ring[:, :3] / ring[:, 3:]
             agree = np.einsum("ij,ij->i", mean, mean) >= 0.01  # a ring that is no corner of its own
-            summed[lonely[agree]] = mean[agree]
-        filtered = _unit(summed)
-        lost = ~np.any(filtered != 0.0, axis=1)
-        filtered[lost] = normals[lost]
-        normals = filtered
+            total[:, lonely[agree]] = mean[agree].T
+        lengths = np.sqrt(squares(total, near), out=near)
+        np.greater(lengths, 0.0, out=good)  # else the face keeps its normal
+        if good.all():
+            np.divide(1.0, lengths, out=lengths)
+            np.multiply(total, lengths, out=planar)
+        else:
+            np.divide(1.0, lengths, out=lengths, where=good)
+            np.multiply(total, lengths, out=planar, where=good)
+        stacked[:, :3] = planar.T
         yield
-    return normals
+    return planar.T.copy()
+
+
+def _lonely(planar, rings, cos_threshold, similar_self, others):
+    """The faces with at most one face of their ring (itself included) within the angle: those within it
+    of themselves with a zero sum of the others' weights, and those that are not (a zero normal, or an
+    angle so small that its cosine rounds to 1) with at most one other face within it. Overwrites
+    ``similar_self``."""
+    odd = np.flatnonzero(~similar_self)
+    lonely = np.logical_and(similar_self, others == 0.0, out=similar_self)
+    if odd.size:
+        ring = rings.ring[odd]
+        mine, theirs = np.repeat(odd, np.diff(ring.indptr)), ring.indices
+        cosine = planar[0, mine] * planar[0, theirs]  # in the order of the pairs' cosines
+        for k in (1, 2):
+            cosine += planar[k, mine] * planar[k, theirs]
+        similar = np.add.reduceat((cosine > cos_threshold).astype(np.int64), ring.indptr[:-1])
+        lonely[odd] = similar <= 1
+    return np.flatnonzero(lonely)
 
 
 def fit_vertices(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
+    """``fit_steps`` run to its end: the fitted (n, 3) positions."""
+    return to_end(fit_steps(points, normals, rings, step_share, iterations))
+
+
+def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     """Sun et al.'s vertex update, ``iterations`` passes: x_i += share_i / |F_i| sum_f n_f n_f^T (c_f - x_i)
-    over the triangles f around i (``step_share``: (n,) 0 for vertices that stay, else the influence)."""
+    over the triangles f around i (``step_share``: (n,) 0 for vertices that stay, else the influence).
+
+    On the coordinates as one (3n,) vector (x's, then y's, then z's) a pass is five products with matrices
+    fixed for the step: the (t, 3n) one of each triangle's normal at its corners' coordinates (3 n_f . c_f),
+    per coordinate k the (n, t) one of n_f[k] share_i / (3 |F_i|) at each vertex's triangles, and the
+    (3n, 3n) one of -share_i / |F_i| sum_f n_f n_f^T at each vertex's coordinates. A generator: yields once
+    the matrices are built and after every ``FIT_SLICE`` passes but the last, returns the positions."""
     triangles, incidence = rings.triangles, rings.incidence
-    outer = (normals[:, :, None] * normals[:, None, :]).reshape(-1, 9)
+    t, n = triangles.shape[0], points.shape[0]
     scale = np.divide(step_share, rings.faces_at, out=np.zeros(step_share.size), where=rings.faces_at > 0)
+    outer = (normals[:, :, None] * normals[:, None, :]).reshape(-1, 9)
     tensor = (incidence @ outer).reshape(-1, 3, 3)  # sum_f n_f n_f^T per vertex
-    moving = np.flatnonzero(scale > 0.0)
-    tensor, scale = tensor[moving], scale[moving, None]
-    incidence_moving = incidence[moving]
-    points = points.copy()
-    for _ in range(iterations):
-        centroid = (points[triangles[:, 0]] + points[triangles[:, 1]] + points[triangles[:, 2]]) / 3.0
-        offsets = np.einsum("ij,ij->i", normals, centroid)
-        pulled = incidence_moving @ (normals * offsets[:, None])
-        here = points[moving]
-        points[moving] = here + scale * (pulled - np.einsum("ijk,ik->ij", tensor, here))
-    return points
+    dots = sp.csr_matrix(
+        (np.tile(normals, (1, 3)).ravel(), rings.corner_columns, np.arange(0, 9 * t + 1, 9)), shape=(t, 3 * n)
+    )
+    share = np.repeat(scale / 3.0, rings.faces_at)  # at each of the incidence's entries
+    pulls = [
+        sp.csr_matrix((row.take(incidence.indices) * share, incidence.indices, incidence.indptr), shape=(n, t))
+        for row in np.ascontiguousarray(normals.T)
+    ]
+    columns = np.arange(n)[None, :, None] + n * np.arange(3)[None, None, :]  # vertex i's x, y, z
+    own = sp.csr_matrix(
+        (
+            (-scale[None, :, None] * tensor.transpose(1, 0, 2)).ravel(),
+            np.broadcast_to(columns, (3, n, 3)).ravel(),
+            np.arange(0, 9 * n + 1, 3),
+        ),
+        shape=(3 * n, 3 * n),
+    )
+    flat = np.array(points.T, dtype=np.float64).reshape(-1)
+    moved, offsets = np.empty_like(flat), np.empty(t)  # allocated once, as the filtering's
+    yield  # building the matrices takes as long as a few passes
+    for done in range(1, iterations + 1):
+        offsets[:] = 0.0
+        _add_product(dots, flat, offsets)
+        moved[:] = flat
+        for k, pull in enumerate(pulls):
+            _add_product(pull, offsets, moved[k * n : (k + 1) * n])
+        _add_product(own, flat, moved)
+        flat, moved = moved, flat
+        if done % FIT_SLICE == 0 and done < iterations:
+            yield
+    return np.ascontiguousarray(flat.reshape(3, n).T)
+
+
+def _add_product(matrix, x, y):
+    """y += matrix @ x for a CSR matrix and vectors: by SciPy's private kernel (no fresh array), or the
+    public product where it is missing."""
+    if _csr_matvec is None:
+        y += matrix @ x
+    else:
+        _csr_matvec(*matrix.shape, matrix.indptr, matrix.indices, matrix.data, x, y)
 
 
 def _mean_of_neighbours(values, operator):
@@ -339,7 +493,9 @@ class SharpSmoothing:
 
     def steps(self, chunk: int | None = None) -> Iterator[float]:
         """Run the steps left, ``chunk`` at a time, yielding the fraction done after each slice; on meshes of
-        ``PASS_SLICES_FROM`` triangles or more also after each filtering pass (a step takes seconds there)."""
+        ``PASS_SLICES_FROM`` triangles or more also within a step (at most ``STEP_SLICES`` slices: after each
+        filtering pass, the fitting's set-up, every ``FIT_SLICE`` fitting passes and each unfolding round
+        but the last; a step takes seconds there)."""
         if self.rings is None:
             self.rings = FaceRings(self.triangles, self.positions.shape[0])
         chunk = self.iterations if chunk is None else max(1, int(chunk))
@@ -348,7 +504,7 @@ class SharpSmoothing:
             for _ in range(min(chunk, self.iterations - self.done)):
                 for k in self._step():
                     if passes:
-                        yield (self.done + k / (NORMAL_ITERATIONS + 1)) / self.iterations
+                        yield (self.done + k / STEP_SLICES) / self.iterations
                 if self.stopped_early:
                     break
             yield self.done / self.iterations
@@ -360,13 +516,14 @@ class SharpSmoothing:
         to_end(self._step())
 
     def _step(self):
-        """``advance`` as a generator, yielding the passes done (of NORMAL_ITERATIONS + 1) between them."""
+        """``advance`` as a generator, yielding the slices done (of ``STEP_SLICES``) between them."""
         if self.rings is None:
             self.rings = FaceRings(self.triangles, self.positions.shape[0])
         start = self.current
         filtering = filter_steps(face_normals(start, self.triangles), self.rings, self.cos_threshold, NORMAL_ITERATIONS)
         normals = yield from _counted(filtering)
-        moved = fit_vertices(start, normals, self.rings, self.moving, FIT_ITERATIONS)
+        fitting = fit_steps(start, normals, self.rings, self.moving, FIT_ITERATIONS)
+        moved = yield from _counted(fitting, NORMAL_ITERATIONS)
         if TANGENTIAL:
             _relax(moved, normals, self.rings, self.operator, self.cos_threshold, self.still)
         if self.push_back:
@@ -376,7 +533,8 @@ class SharpSmoothing:
         if self.influence is not None:  # vertex i ends the step at q_i + w_i (p_i - q_i), as in core.smoothing
             moved = start + self.share[:, None] * (moved - start)
         moved[self.still] = start[self.still]
-        _unfold(moved, start, self.triangles, normals, _unit(self.rings.ring @ normals))
+        unfolding = _unfold(moved, start, self.triangles, normals, _unit(self.rings.ring @ normals))
+        yield from _counted(unfolding, NORMAL_ITERATIONS + FIT_SLICES)
         if np.any(self.max_deviation):
             _within(moved, self.original, self.max_deviation)
         self.done += 1
@@ -407,9 +565,8 @@ def _relax(points, normals, rings, operator, cos_threshold, still):
     points[flat] += TANGENTIAL * umbrella
 
 
-def _counted(generator):
-    """``yield from _counted(g)``: g's value, yielding 1, 2, ... for its slices."""
-    count = 0
+def _counted(generator, count=0):
+    """``yield from _counted(g, count)``: g's value, yielding count + 1, count + 2, ... for its slices."""
     while True:
         try:
             next(generator)
@@ -422,14 +579,27 @@ def _counted(generator):
 def _unfold(points, start, triangles, normals, around, rounds=FOLD_ROUNDS):
     """Halve, in place, the step's move of the corners of every triangle it turned over (its normal now more
     than 90° from its filtered normal, or from the mean ``around`` of its ring's), ``rounds`` times at most:
-    the fitting moves along the faces' normals, and on curved parts those moves add up along the surface."""
-    for _ in range(rounds):
-        now = face_normals(points, triangles)
-        turned = (np.einsum("ij,ij->i", now, normals) < 0.0) | (np.einsum("ij,ij->i", now, around) < 0.0)
+    the fitting moves along the faces' normals, and on curved parts those moves add up along the surface.
+    A generator: yields after each round that leaves rounds to go."""
+    faces = slice(None)  # the triangles whose corners moved: all at first, then those of the halved corners
+    turned = np.zeros(triangles.shape[0], dtype=bool)
+    halved = np.zeros(points.shape[0], dtype=bool)
+    for round_ in range(rounds):
+        now = face_normals(points, triangles[faces])
+        turned[faces] = (np.einsum("ij,ij->i", now, normals[faces]) < 0.0) | (
+            np.einsum("ij,ij->i", now, around[faces]) < 0.0
+        )
         if not turned.any():
             return
-        corners = np.unique(triangles[turned])
+        halved[:] = False
+        halved[triangles[turned]] = True
+        corners = np.flatnonzero(halved)
         points[corners] = start[corners] + 0.5 * (points[corners] - start[corners])
+        faces = np.flatnonzero(halved[triangles].any(axis=1))
+        if faces.size > triangles.shape[0] // 4:  # gathering most of them costs more than measuring all
+            faces = slice(None)
+        if round_ + 1 < rounds:
+            yield
 
 
 def _within(points, start, radius):

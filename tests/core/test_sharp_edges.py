@@ -211,6 +211,32 @@ def test_vectorised_filter_and_fit_equal_the_papers_loops(share):
     assert np.allclose(fitted, _loop_fit(noisy, faces, filtered, 3), atol=1e-12)
 
 
+@pytest.mark.parametrize("degrees", [40.0, 100.0])
+def test_faces_without_a_normal_filter_as_in_the_papers_loop(degrees):
+    """A zero normal (a degenerate triangle) is not within an angle below 90 degrees of itself: such a face
+    is counted apart from the others' weights, and takes its ring's mean as the loop does."""
+    _, noisy, faces = noisy_box(0.02, "iso", cells=3)
+    rings = FaceRings(faces, len(noisy))
+    normals = face_normals(noisy, faces)
+    normals[[3, 17]] = 0.0
+    threshold = math.cos(math.radians(degrees))
+    filtered = filter_normals(normals, rings, threshold, iterations=3)
+    expected, _ = _loop_filter(normals, faces, threshold, 3)
+    assert np.allclose(filtered, expected, atol=1e-12)
+    assert np.all(np.linalg.norm(filtered[[3, 17]], axis=1) > 0.99)  # they took their rings' normals
+
+
+def test_public_products_give_what_scipys_kernels_give(monkeypatch):
+    """Without SciPy's private kernels (another SciPy), the public products run the same passes."""
+    _, noisy, faces = noisy_box(0.02, "iso", cells=4)
+    with_kernels = sharp_smooth(noisy, faces, iterations=2)
+    for name in ("_csr_matvec", "_csr_matvecs", "_csc_matvecs"):
+        monkeypatch.setattr(sharp_edges, name, None)
+    public = sharp_smooth(noisy, faces, iterations=2)
+    assert np.allclose(public, with_kernels, rtol=0.0, atol=1e-12)
+    assert not np.allclose(public, noisy, atol=1e-4)  # it did smooth
+
+
 def test_off_is_bit_identical():
     _, noisy, faces = noisy_box(0.005, "iso", cells=8)
     edges = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
@@ -304,8 +330,8 @@ def test_noise_free_meshes_stay_with_the_automatic_amount(name):
 
 
 def test_big_meshes_yield_between_filtering_passes(monkeypatch):
-    """From PASS_SLICES_FROM triangles a step is sliced at every filtering pass (a cancel waits for one
-    pass, not a step); the result is the same."""
+    """From PASS_SLICES_FROM triangles a step is sliced at every filtering pass, every FIT_SLICE fitting
+    passes and between unfolding rounds (a cancel waits for one slice, not a step); the result is the same."""
     _, noisy, faces = noisy_box(0.005, "iso", cells=6)
     whole = SharpSmoothing(noisy, faces, iterations=2)
     coarse = list(whole.steps(chunk=1))
@@ -313,5 +339,6 @@ def test_big_meshes_yield_between_filtering_passes(monkeypatch):
     sliced = SharpSmoothing(noisy, faces, iterations=2)
     fine = list(sliced.steps(chunk=1))
     assert coarse == [0.5, 1.0]
-    assert len(fine) == 2 * (sharp_edges.NORMAL_ITERATIONS + 1) and fine == sorted(fine) and fine[-1] == 1.0
+    fewest = sharp_edges.NORMAL_ITERATIONS + sharp_edges.FIT_SLICES + 1
+    assert 2 * fewest <= len(fine) <= 2 * sharp_edges.STEP_SLICES and fine == sorted(fine) and fine[-1] == 1.0
     assert np.array_equal(sliced.result(), whole.result())
