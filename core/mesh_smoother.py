@@ -229,7 +229,7 @@ class MeshSmoother:
             yield 0.0
         edges = None if self.surface is None else self.surface.border
         # The Automatic Amount chooses on the surface's own umbrella: its noise test and GCV read a
-        # vertex's 1-ring, which a border vertex's curve row no longer is.
+        # vertex's 1-ring, which a border vertex's curve row is not.
         self.surface_operator = operator
         self.operator, self.fixed = apply_border(self.border, operator, self.faces, self.fixed, edges)
         self.prepared = True
