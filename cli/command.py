@@ -46,6 +46,7 @@ class Outcome:
     objects: int = 0
     vertices: int = 0
     iterations: int = 0  # meshes: the most iterations any mesh ran
+    sharp: bool = False  # meshes: Keep Sharp Edges ran (its iterations are steps)
     rounds: list = field(default_factory=list)  # point clouds: (rounds, steps per round) per cloud
     seconds: float = 0.0
     changes: list = field(default_factory=list)  # core.Change per smoothed mesh
@@ -65,6 +66,8 @@ class Outcome:
 
     def amount_text(self):
         """How much smoothing ran: '10 iterations', or for point clouds '3 rounds of 15 steps (45 steps)'."""
+        if self.sharp:
+            return f"Keep Sharp Edges, {plural(self.iterations, 'step')}"
         if not self.rounds:
             return plural(self.iterations, "iteration")
         kinds = sorted(set(self.rounds))
@@ -423,6 +426,7 @@ def smooth_jobs(jobs, settings, outcome, given):
             outcome.legends.append(f"'{job.obj.name}': {legend}" if len(jobs) > 1 else legend)
         outcome.vertices += len(job.positions)
         outcome.iterations = max(outcome.iterations, job.report.iterations)
+        outcome.sharp = outcome.sharp or job.report.keep_sharp_edges
 
 
 def smooth_point_clouds(objects, settings, outcome):

@@ -129,7 +129,7 @@ def cli(addon):
     return sys.modules[ADDON + ".cli"]
 
 
-def test_command_line_takes_the_angle_in_degrees(cli, scene, tmp_path):
+def test_command_line_takes_the_angle_in_degrees(cli, scene, tmp_path, capsys):
     positions, quads = box_surface()
     positions = positions + np.random.default_rng(5).normal(scale=0.01, size=positions.shape)
     source = tmp_path / "box.obj"
@@ -138,6 +138,7 @@ def test_command_line_takes_the_angle_in_degrees(cli, scene, tmp_path):
     source.write_text("\n".join(lines) + "\n")
     argv = [str(source), "-o", str(tmp_path / "out"), "--keep-sharp-edges", "--sharpness-angle", "40"]
     assert cli.main(argv) == 0
+    assert "Keep Sharp Edges, " in capsys.readouterr().out  # what ran: steps, not HC's iterations
     out = tmp_path / "out" / "box.obj"
     smoothed = np.array([line.split()[1:] for line in out.read_text().splitlines() if line.startswith("v ")], float)
     triangles = core.metrics.fan_triangles(quads)
