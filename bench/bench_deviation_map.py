@@ -28,40 +28,12 @@ from extension_session import ADDON, install_extension, run_and_exit  # noqa: E4
 # isort: split
 
 import bpy  # noqa: E402
-import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(ROOT / "bench"))
-import meshes  # noqa: E402
+from bench_blender import closed_torus, count  # noqa: E402  (a noisy torus, as the other Blender benchmarks use)
 from report import Report  # noqa: E402
 
 TARGET = 0.10  # the map's cost, a share of the run without it
-NOISE = 0.002  # of the bounding-box diagonal
-
-
-def count(text):
-    """'1M' -> 1_000_000, '250k' -> 250_000."""
-    scale = {"k": 1_000, "M": 1_000_000}.get(text[-1], 1)
-    return int(float(text[:-1] if scale > 1 else text) * scale)
-
-
-def noisy_torus(n_vertices, seed=0):
-    """A noisy closed triangle torus as the selected, active mesh object; returns (object, positions)."""
-    vertices, faces = meshes.torus(n_vertices)
-    diagonal = np.linalg.norm(np.ptp(vertices, axis=0))
-    vertices = (vertices + np.random.default_rng(seed).normal(0.0, NOISE * diagonal, vertices.shape)).astype(np.float32)
-    mesh = bpy.data.meshes.new("Scan")
-    mesh.vertices.add(len(vertices))
-    mesh.vertices.foreach_set("co", vertices.ravel())
-    mesh.loops.add(faces.size)
-    mesh.loops.foreach_set("vertex_index", faces.astype(np.int32).ravel())
-    mesh.polygons.add(len(faces))
-    mesh.polygons.foreach_set("loop_start", np.arange(0, faces.size, 3, dtype=np.int32))
-    mesh.update(calc_edges=True)
-    obj = bpy.data.objects.new("Scan", mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    obj.select_set(True)
-    bpy.context.view_layer.objects.active = obj
-    return obj, vertices
 
 
 def restore(obj, points, mesh_io):
@@ -97,7 +69,7 @@ def main():
     mesh_io = sys.modules[ADDON + ".operators.mesh_io"]
     core = sys.modules[ADDON + ".core"]
     bpy.ops.wm.read_homefile(use_empty=True)
-    obj, points = noisy_torus(count(args.vertices))
+    obj, points = closed_torus(count(args.vertices), shuffle=False)
     n = len(points)
 
     def reset():
@@ -156,8 +128,8 @@ def main():
         out()
         out(
             f"Blender {bpy.app.version_string}, {platform.python_implementation()} {platform.python_version()}; "
-            f"closed triangle torus of {n:,} vertices, isotropic noise {NOISE:.1%} of the diagonal; object.hc_smooth "
-            f"end to end, median of {args.repeats} alternating runs each."
+            f"closed triangle torus of {n:,} vertices, isotropic noise 0.2% of the diagonal "
+            f"(bench_blender.closed_torus); object.hc_smooth end to end, median of {args.repeats} alternating runs."
         )
         out()
         out("| run (object.hc_smooth unless named) | map off (s) | map on (s) | map's cost | share of the run |")

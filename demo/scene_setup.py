@@ -261,7 +261,6 @@ def render_error_figure(
     """Render ``panels`` [(object, label text)] (objects placed along +X, each with the point attribute
     ERROR_ATTRIBUTE) facing the camera, coloured on one scale [-limit, limit], a label under each, a
     legend under all, and the ``outline`` segments (from outline_segments) over the objects in ``outlined``."""
-    scene = bpy.context.scene
     surface = _material("Distance to clean", limit=limit)
     label_material = _material("Label", emission=(0.92, 0.92, 0.92))
     for obj, _label in panels:
@@ -278,10 +277,18 @@ def render_error_figure(
     for obj in outlined:
         _outline(outline, obj.location, 0.018, line)
 
+    render_front(filepath, centre_x, width, 1.12, samples=samples, resolution=resolution, percentage=percentage)
+
+
+def render_front(filepath, centre_x, width, top, *, samples=8, resolution=(1300, 471), percentage=100):
+    """Render the scene from the front (looking along +Y) with an orthographic camera ``width`` wide, centred
+    on ``centre_x`` with its top edge at height ``top``, under the figures' key and fill lights and dark
+    background, with Cycles on the CPU, to the PNG ``filepath`` (no stamps)."""
+    scene = bpy.context.scene
     camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
     camera.data.type = "ORTHO"
     camera.data.ortho_scale = width
-    camera.location = (centre_x, -10.0, 1.12 - width * resolution[1] / resolution[0] / 2)  # heads' tops: 1
+    camera.location = (centre_x, -10.0, top - width * resolution[1] / resolution[0] / 2)
     camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
     scene.collection.objects.link(camera)
     scene.camera = camera

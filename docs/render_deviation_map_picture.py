@@ -12,7 +12,6 @@ through a material's Attribute node, and the legend bar holds the same ramp (cor
 """
 
 import argparse
-import math
 import pathlib
 import sys
 
@@ -115,38 +114,7 @@ def legend(core, centre_x, top, width, extent, length, label_material):
 
 
 def render(filepath, centre_x, width, samples, resolution):
-    scene = bpy.context.scene
-    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    camera.data.type = "ORTHO"
-    camera.data.ortho_scale = width
-    camera.location = (centre_x, -10.0, 1.5 - width * resolution[1] / resolution[0] / 2)
-    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
-    scene.collection.objects.link(camera)
-    scene.camera = camera
-    for name, energy, rotation in (("Key", 3.0, (0.9, 0.2, -0.6)), ("Fill", 1.2, (1.2, -0.3, 0.9))):
-        light = bpy.data.objects.new(name, bpy.data.lights.new(name, "SUN"))
-        light.data.energy = energy
-        light.rotation_euler = rotation
-        scene.collection.objects.link(light)
-    world = bpy.data.worlds.new("World")
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.045, 0.047, 0.052, 1.0)
-    scene.world = world
-    scene.view_settings.view_transform = "Standard"  # the ramp's colours as stored, no tone mapping
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = samples
-    scene.cycles.use_denoising = True
-    scene.cycles.max_bounces, scene.cycles.diffuse_bounces, scene.cycles.glossy_bounces = 2, 1, 1
-    scene.cycles.transmission_bounces = scene.cycles.volume_bounces = 0
-    scene.render.resolution_x, scene.render.resolution_y = resolution
-    scene.render.image_settings.file_format = "PNG"
-    scene.render.image_settings.color_mode = "RGB"
-    scene.render.image_settings.compression = 100
-    scene.render.dither_intensity = 0.0
-    scene.render.use_stamp = False
-    scene.render.filepath = str(filepath)
-    bpy.ops.render.render(write_still=True)
+    scene_setup.render_front(filepath, centre_x, width, 1.5, samples=samples, resolution=resolution)
 
 
 def main():
