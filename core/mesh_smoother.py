@@ -285,11 +285,7 @@ class MeshSmoother:
             amount, fixed = chooser.amount, chooser.fixed  # the Automatic Amount holds parts without noise
             alpha, beta, iterations = amount.alpha, amount.beta, amount.iterations
             if self.max_deviation == AUTO:
-                limit = DEVIATION_IN_NOISE * amount.sigma
-                limited = chooser.noise.limited  # quiet and light-noise parts: their own radius (core.mesh_noise)
-                if limited.any():
-                    quiet = chooser.noise.quiet_radius(self.positions, DEVIATION_IN_NOISE)
-                    limit = np.where(limited, quiet, limit)
+                limit = self._noise_limit(chooser.noise, amount.sigma)
             unlimited = not isinstance(limit, np.ndarray) and not limit
             same = self.operator is self.surface_operator
             if same and self.influence is None and self.mode == "simultaneous" and not self.tolerance and unlimited:
@@ -306,16 +302,31 @@ class MeshSmoother:
             smoothed = smoothing.result()
             del smoothing
             result, ran = smoothed.positions, smoothed.iterations
-        offset = 0.0
-        if restoring and ran > 0:
-            limited = volume.NOISE_OFFSETS * amount.sigma
-            result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), end)
-            if np.any(limit):  # the offset keeps to the limit too
-                _within(result, self.positions, limit)
-        self.result = result if self.welding is None else self.welding.scatter(result)
+        offset = yield from self._finish(result, ran, amount, fixed, limit, measuring if restoring else None, end)
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, largest, time.perf_counter() - start)
         yield 1.0
+
+    def _noise_limit(self, noise, sigma):
+        """The Automatic Amount's deviation limit: DEVIATION_IN_NOISE times the noise, and on the parts
+        core.mesh_noise limits (quiet ones, light noise) their own radius."""
+        limit = DEVIATION_IN_NOISE * sigma
+        if noise.limited.any():
+            limit = np.where(noise.limited, noise.quiet_radius(self.positions, DEVIATION_IN_NOISE), limit)
+        return limit
+
+    def _finish(self, result, ran, amount, fixed, limit, measuring, progress):
+        """Give closed parts their volume back (when ``measuring`` holds the input's measure: the Automatic
+        Amount) within the deviation limit, and set ``result`` in the caller's numbering; returns the
+        largest offset, yielding ``progress`` between the restore's slices."""
+        offset = 0.0
+        if measuring is not None and ran > 0:
+            limited = volume.NOISE_OFFSETS * amount.sigma
+            result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), progress)
+            if np.any(limit):  # the offset keeps to the limit too
+                _within(result, self.positions, limit)
+        self.result = result if self.welding is None else self.welding.scatter(result)
+        return offset
 
     def _sharp_steps(self, chunk, start):
         """``steps`` with Keep Sharp Edges (core.sharp_edges): with the Automatic Amount the steps, and an
@@ -328,8 +339,8 @@ class MeshSmoother:
             measuring = parallel.in_background(lambda: volume.measure_before(self.positions, self.faces, self.surface))
         if self.automatic:
             share = sharp_edges.CHOOSING_SHARE
-            noise = yield from as_fraction(noise_steps(self.positions, self.operator), 0.0)
-            edge = welding.median_edge_length(self.positions, self.operator)
+            noise = yield from as_fraction(noise_steps(self.positions, self.surface_operator), 0.0)
+            edge = welding.median_edge_length(self.positions, self.surface_operator)
             sigma = noise.level()
             ratio = sigma / edge if edge > 0 else 0.0
             if not noise.found:  # light noise at most: smoothed within a small radius (below)
@@ -339,12 +350,9 @@ class MeshSmoother:
             fixed = fixed | noise.held()
             if fixed.all():  # nothing to smooth (clean parts only)
                 iterations = 0
-            quiet = noise.quiet
             amount = MeshAmount(self.alpha, self.beta, iterations, sigma, edge, 0, noise.found)
             if self.max_deviation == AUTO:
-                limit = DEVIATION_IN_NOISE * sigma
-                if quiet.any():
-                    limit = np.where(quiet, noise.quiet_radius(self.positions, DEVIATION_IN_NOISE), limit)
+                limit = self._noise_limit(noise, sigma)
             yield share
         end = 1.0 - RESTORE_SHARE if restoring else 1.0
         run = SharpSmoothing(
@@ -365,13 +373,7 @@ class MeshSmoother:
                 yield share + (end - share) * fraction
         result, ran = run.result(), run.done
         del run
-        offset = 0.0
-        if restoring and ran > 0:
-            limited = volume.NOISE_OFFSETS * amount.sigma
-            result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), end)
-            if np.any(limit):
-                _within(result, self.positions, limit)
-        self.result = result if self.welding is None else self.welding.scatter(result)
+        offset = yield from self._finish(result, ran, amount, fixed, limit, measuring if restoring else None, end)
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         seconds = time.perf_counter() - start
         self.report = MeshReport(self.method, self.alpha, self.beta, ran, amount, offset, largest, seconds, True, angle)
