@@ -285,6 +285,7 @@ def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome, grou
         if np.any(sizes >= 3):
             raise FileError(f"'{name}' has edges: it is a mesh, not a point cloud (smooth it without --points)")
         check_point_groups(plan.settings)
+        point_cloud.check_settings(settings)  # as read_clouds checks an object's
         cloud = point_cloud.Cloud.of_arrays(name, positions, fixed)
         smooth_clouds([cloud], settings, outcome)
         outcome.objects = 1
@@ -441,7 +442,6 @@ def smooth_point_clouds(objects, settings, outcome):
 
 def smooth_clouds(clouds, settings, outcome):
     """Run the point operator's clouds and count what they did into ``outcome``; writes nothing."""
-    point_cloud.check_settings(settings)
     for _ in point_cloud.run(clouds, settings):
         pass
     for cloud in clouds:

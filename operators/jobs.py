@@ -261,26 +261,25 @@ def amount_words(reports):
     """What ran: '12 iterations' or, chosen, 'automatic amount: noise 0.45x edge length, 12 iterations,
     alpha 0, beta 0.6, volume kept, moves at most 0.0123'; with Keep Sharp Edges, 'sharpness 30°, ' first,
     and steps for iterations."""
-    words = _amount_words(reports)
     angles = sorted({round(math.degrees(r.sharpness_angle)) for r in reports if r.keep_sharp_edges})
     if not angles:
-        return words
-    return f"sharpness {'/'.join(map(str, angles))}\u00b0, " + words.replace(" iteration", " step")
+        return _amount_words(reports, "iteration")
+    return f"sharpness {'/'.join(map(str, angles))}\u00b0, " + _amount_words(reports, "step")
 
 
-def _amount_words(reports):
+def _amount_words(reports, unit):
     amounts = [report for report in reports if report.amount is not None]
     iterations = "/".join(str(report.iterations) for report in reports) if amounts else None
     if not amounts:
         count = max(report.iterations for report in reports)
-        return f"{count} iteration" + ("" if count == 1 else "s")
+        return f"{count} {unit}" + ("" if count == 1 else "s")
     if not any(report.amount.noise_found for report in amounts):
         if not any(report.iterations for report in reports):
             return "automatic amount: no noise found, nothing to smooth"
         most = max(report.max_deviation for report in reports)
-        return f"automatic amount: light noise or none found, {iterations} iterations, moves at most {most:.3g}"
+        return f"automatic amount: light noise or none found, {iterations} {unit}s, moves at most {most:.3g}"
     noise = "/".join(f"{report.amount.ratio:.2f}" if report.amount.noise_found else "none" for report in amounts)
-    words = f"automatic amount: noise {noise}x edge length, {iterations} iterations, alpha 0"
+    words = f"automatic amount: noise {noise}x edge length, {iterations} {unit}s, alpha 0"
     words += ", beta " + "/".join(sorted({f"{report.beta:.3g}" for report in amounts}))
     if any(report.volume_offset for report in reports):
         words += ", volume kept"
