@@ -1,0 +1,170 @@
+"""Where the error of an open border goes: the border rules of core.borders and two candidates, measured
+against the scan's own surface, on the held-out open scans of bench_default_heldout.py.
+
+Issue 22 asks for borders that neither pull in nor lose accuracy (item 5) and for a default within 15 % of
+the best HC setting on the held-out scans (item 8), with the RMS distance of all vertices to the clean
+surface as the measure. This benchmark shows what that measure rewards. Every rule runs the same plain
+HC loop (paper, Algorithm 1, simultaneous; no welding, volume restoration or deviation limit: those are
+the same for all rules) at the (α, β, iterations) the Automatic Amount chooses on the cell:
+
+* free: every vertex averages all its neighbours (the paper's rule; the add-on's default);
+* curve: a border vertex averages its two border neighbours (``border="curve"``, Keep Outline);
+* hybrid (candidate): a border vertex's move along its normal from all its neighbours, its move in
+  the tangent plane from its border neighbours;
+* slide (candidate): a border vertex's move from all its neighbours without its part across the
+  border curve in the tangent plane (no pull-in, no outline smoothing).
+
+Per cell, in % of the diagonal: RMS distance to the clean surface of all vertices, of the interior ones,
+and of the border ones split at the nearest point of the surface into height (along that face's
+normal) and overhang (in its plane: past the outline); the border vertices' RMS distance to their own
+clean positions (a pull-in slides along the surface, which the surface distance does not see); the
+border/interior RMS move ratio (item 5: ≤ 1.5) and the bounding-box diagonal's change.
+
+    python bench/bench_border_rules.py                                  # 4 open scans, ~3 min
+    python bench/bench_border_rules.py --meshes planar_scan --kinds normal --sigmas 0.005
+"""
+
+import argparse
+import pathlib
+import sys
+
+import numpy as np
+import scipy.sparse as sp
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
+import bench_default_heldout as heldout  # noqa: E402
+import bench_quality as quality  # noqa: E402
+import bench_quality_inputs as inputs  # noqa: E402
+from report import Report  # noqa: E402
+
+import core  # noqa: E402
+
+RULES = ("free", "curve", "hybrid", "slide")
+MESHES = "face,planar_scan,bunny10k,scan_bunny"
+
+
+def mean_matrix(operator):
+    """T as a sparse matrix: (T x)_i = mean of x over adj(i)."""
+    degree = np.maximum(operator.degree, 1)
+    n = operator.n_vertices
+    return sp.csr_matrix((np.repeat(1.0 / degree, operator.degree), operator.indices, operator.indptr), shape=(n, n))
+
+
+def vertex_normals(points, faces):
+    a, b, c = (points[faces[:, k]] for k in range(3))
+    face = np.cross(b - a, c - a)
+    normals = np.stack([np.bincount(faces.ravel(), np.repeat(face[:, k], 3), len(points)) for k in range(3)], 1)
+    return normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
+
+
+class Borders:
+    """The border curve of a mesh: its vertices with two border neighbours (``curve``), those neighbours
+    (``ends``) and the vertices where the border is no simple curve (``held``, fixed by every rule but
+    free, as core.borders holds them)."""
+
+    def __init__(self, faces, n):
+        edges = core.borders.border_edges(faces, n)
+        count = np.bincount(edges.ravel(), minlength=n)
+        self.on = count > 0
+        self.curve = np.flatnonzero(count == 2)
+        self.held = self.on & (count != 2)
+        order = np.argsort(np.concatenate([edges[:, 0], edges[:, 1]]), kind="stable")
+        other = np.concatenate([edges[:, 1], edges[:, 0]])[order]
+        first = np.searchsorted(np.sort(np.concatenate([edges[:, 0], edges[:, 1]])), self.curve)
+        self.ends = np.stack([other[first], other[first + 1]], 1)
+        self.edges = edges
+
+
+def run_rule(case, borders, rule, alpha, beta, iterations):
+    """Plain simultaneous HC under ``rule``; the Laplacian point p of border rows per RULES."""
+    n = len(case.noisy)
+    full = core.umbrella_operator(case.edges, n)
+    everyone = mean_matrix(full)
+    curve_rows = mean_matrix(full.with_rows(borders.curve, borders.edges))
+    laplacian = curve_rows if rule in ("curve", "hybrid") else everyone
+    held = borders.held if rule != "free" else np.zeros(n, dtype=bool)
+    rows = borders.curve
+    original = case.noisy.astype(np.float64)
+    q = original.copy()
+    for _ in range(iterations):
+        p = laplacian @ q
+        if rule in ("hybrid", "slide"):
+            normal = vertex_normals(q, case.faces)[rows]
+            if rule == "hybrid":  # the move along the normal from all neighbours
+                along = (everyone[rows] @ q) - p[rows]
+                p[rows] += np.einsum("ij,ij->i", along, normal)[:, None] * normal
+            else:  # without the part across the curve in the tangent plane
+                across = np.cross(q[borders.ends[:, 1]] - q[borders.ends[:, 0]], normal)
+                across /= np.maximum(np.linalg.norm(across, axis=1, keepdims=True), 1e-300)
+                move = p[rows] - q[rows]
+                p[rows] -= np.einsum("ij,ij->i", move, across)[:, None] * across
+        b = p - (alpha * original + (1.0 - alpha) * q)
+        b[held] = 0.0
+        q = p - (beta * b + (1.0 - beta) * (laplacian @ b))
+        q[held] = original[held]
+    return q
+
+
+def measure(case, borders, positions):
+    import open3d as o3d
+
+    found = case.surface.scene.compute_closest_points(o3d.core.Tensor(np.ascontiguousarray(positions, np.float32)))
+    nearest = found["points"].numpy().astype(np.float64)
+    face = case.faces[found["primitive_ids"].numpy()]
+    a, b, c = (case.clean[face[:, k]] for k in range(3))
+    normal = np.cross(b - a, c - a)
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    away = positions - nearest
+    height = np.einsum("ij,ij->i", away, normal)
+    overhang = np.sqrt(np.maximum(np.einsum("ij,ij->i", away, away) - height**2, 0.0))
+    distance = np.linalg.norm(away, axis=1)
+    move = np.linalg.norm(positions - case.noisy, axis=1)
+    on = borders.on
+
+    def rms(values, rows=slice(None)):
+        return 100.0 * float(np.sqrt(np.mean(values[rows] ** 2))) / case.diagonal
+
+    box = np.linalg.norm(np.ptp(positions, axis=0)) / np.linalg.norm(np.ptp(case.noisy, axis=0)) - 1.0
+    interior_move = rms(move, ~on)
+    return {
+        "all": rms(distance),
+        "interior": rms(distance, ~on),
+        "height": rms(height, on),
+        "overhang": rms(overhang, on),
+        "own": rms(np.linalg.norm(positions - case.clean, axis=1), on),
+        "ratio": rms(move, on) / interior_move if interior_move > 0 else float("nan"),
+        "box": 100.0 * box,
+    }
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--meshes", default=MESHES)
+    parser.add_argument("--kinds", default="normal,iso")
+    parser.add_argument("--sigmas", default="0.001,0.005")
+    args = parser.parse_args()
+    with Report("bench_border_rules") as out:
+        out(f"`bench/bench_border_rules.py --meshes {args.meshes} --kinds {args.kinds} --sigmas {args.sigmas}`\n")
+        out("Figures in % of the diagonal; `all`/`interior`: RMS distance to the clean surface; border `height`/")
+        out("`overhang`: its split at the nearest surface point; `own`: border vertices to their clean positions.\n")
+        out("| mesh | noise | it. | rule | all | interior | border height | border overhang | own | ratio | box |")
+        out("|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|")
+        for mesh in inputs.parse_list(args.meshes):
+            for kind in inputs.parse_list(args.kinds):
+                for sigma in inputs.parse_list(args.sigmas, float):
+                    case = heldout.make_case(mesh, kind, sigma, 0)
+                    _, chosen = quality.hc_default(case)
+                    borders = Borders(case.faces, len(case.noisy))
+                    for rule in RULES:
+                        result = run_rule(case, borders, rule, chosen["alpha"], chosen["beta"], chosen["iterations"])
+                        m = measure(case, borders, result)
+                        out(
+                            f"| {mesh} | {kind} {100 * sigma:g} % | {chosen['iterations']} | {rule} | {m['all']:.4f} "
+                            f"| {m['interior']:.4f} | {m['height']:.4f} | {m['overhang']:.4f} | {m['own']:.4f} "
+                            f"| {m['ratio']:.2f} | {m['box']:+.3f} |"
+                        )
+
+
+if __name__ == "__main__":
+    main()
