@@ -12,15 +12,18 @@ the same for all rules) at the (α, β, iterations) the Automatic Amount chooses
 * hybrid (candidate): a border vertex's move along its normal from all its neighbours, its move in
   the tangent plane from its border neighbours;
 * slide (candidate): a border vertex's move from all its neighbours without its part across the
-  border curve in the tangent plane (no pull-in, no outline smoothing).
+  border curve in the tangent plane (no pull-in, no outline smoothing);
+* height (candidate): a border vertex's whole step (Laplacian and push-back) kept to its part along
+  the vertex normal: the outline never moves in the tangent plane.
 
 Per cell, in % of the diagonal: RMS distance to the clean surface of all vertices, of the interior ones,
 and of the border ones split at the nearest point of the surface into height (along that face's
 normal) and overhang (in its plane: past the outline); the border vertices' RMS distance to their own
 clean positions (a pull-in slides along the surface, which the surface distance does not see); the
-border/interior RMS move ratio (item 5: ≤ 1.5) and the bounding-box diagonal's change.
+border/interior RMS move ratio (item 5: ≤ 1.5) and the bounding-box diagonal's change. ``grid`` is a flat
+10 x 10 grid (Blender's Grid), the one mesh here whose truth has a clean outline.
 
-    python bench/bench_border_rules.py                                  # 4 open scans, ~3 min
+    python bench/bench_border_rules.py                                  # 4 open scans and a grid, ~1 min
     python bench/bench_border_rules.py --meshes planar_scan --kinds normal --sigmas 0.005
 """
 
@@ -40,8 +43,30 @@ from report import Report  # noqa: E402
 
 import core  # noqa: E402
 
-RULES = ("free", "curve", "hybrid", "slide")
-MESHES = "face,planar_scan,bunny10k,scan_bunny"
+RULES = ("free", "curve", "hybrid", "slide", "height")
+MESHES = "face,planar_scan,bunny10k,scan_bunny,grid"
+
+
+def grid(cells=10, size=2.0):
+    """A flat square grid of ``cells`` x ``cells`` quads split into triangles, as Blender's Grid (an open
+    mesh whose truth has a straight outline and corners: the surface distance cannot see a pull-in)."""
+    axis = np.linspace(-size / 2.0, size / 2.0, cells + 1)
+    x, y = np.meshgrid(axis, axis)
+    vertices = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
+    index = np.arange(x.size).reshape(cells + 1, cells + 1)
+    a, b, c, d = index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]
+    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    return vertices, faces
+
+
+def make_case(mesh, kind, sigma):
+    """bench_default_heldout's cell, or a noisy ``grid`` (its noise made the same way)."""
+    if mesh != "grid":
+        return heldout.make_case(mesh, kind, sigma, 0)
+    clean, faces = grid()
+    normals = inputs.vertex_normals(clean, faces)
+    noisy = inputs.add_noise(clean, normals, sigma * inputs.diagonal(clean), kind, 0)
+    return quality.Case(mesh, kind, sigma, clean, faces, noisy)
 
 
 def mean_matrix(operator):
@@ -101,7 +126,12 @@ def run_rule(case, borders, rule, alpha, beta, iterations):
                 p[rows] -= np.einsum("ij,ij->i", move, across)[:, None] * across
         b = p - (alpha * original + (1.0 - alpha) * q)
         b[held] = 0.0
-        q = p - (beta * b + (1.0 - beta) * (laplacian @ b))
+        step = p - (beta * b + (1.0 - beta) * (laplacian @ b))
+        if rule == "height":
+            normal = vertex_normals(q, case.faces)[rows]
+            move = step[rows] - q[rows]
+            step[rows] = q[rows] + np.einsum("ij,ij->i", move, normal)[:, None] * normal
+        q = step
         q[held] = original[held]
     return q
 
@@ -153,7 +183,7 @@ def main():
         for mesh in inputs.parse_list(args.meshes):
             for kind in inputs.parse_list(args.kinds):
                 for sigma in inputs.parse_list(args.sigmas, float):
-                    case = heldout.make_case(mesh, kind, sigma, 0)
+                    case = make_case(mesh, kind, sigma)
                     _, chosen = quality.hc_default(case)
                     borders = Borders(case.faces, len(case.noisy))
                     for rule in RULES:
