@@ -14,7 +14,9 @@ the same for all rules) at the (α, β, iterations) the Automatic Amount chooses
 * slide (candidate): a border vertex's move from all its neighbours without its part across the
   border curve in the tangent plane (no pull-in, no outline smoothing);
 * height (candidate): a border vertex's whole step (Laplacian and push-back) kept to its part along
-  the vertex normal: the outline never moves in the tangent plane.
+  the vertex normal: the outline never moves in the tangent plane;
+* corners (candidate): the curve rule, holding the border vertices where the noisy outline turns by more
+  than ``CORNER`` (a grid's corners, a small hole's vertices).
 
 Per cell, in % of the diagonal: RMS distance to the clean surface of all vertices, of the interior ones,
 and of the border ones split at the nearest point of the surface into height (along that face's
@@ -43,7 +45,8 @@ from report import Report  # noqa: E402
 
 import core  # noqa: E402
 
-RULES = ("free", "curve", "hybrid", "slide", "height")
+RULES = ("free", "curve", "hybrid", "slide", "height", "corners")
+CORNER = 45.0  # degrees
 MESHES = "face,planar_scan,bunny10k,scan_bunny,grid"
 
 
@@ -107,8 +110,17 @@ def run_rule(case, borders, rule, alpha, beta, iterations):
     full = core.umbrella_operator(case.edges, n)
     everyone = mean_matrix(full)
     curve_rows = mean_matrix(full.with_rows(borders.curve, borders.edges))
-    laplacian = curve_rows if rule in ("curve", "hybrid") else everyone
+    laplacian = curve_rows if rule in ("curve", "hybrid", "corners") else everyone
     held = borders.held if rule != "free" else np.zeros(n, dtype=bool)
+    if rule == "corners":  # the curve rule, holding the border vertices where the outline turns by > CORNER
+        points = case.noisy[borders.curve]
+        before = points - case.noisy[borders.ends[:, 0]]
+        after = case.noisy[borders.ends[:, 1]] - points
+        cosine = np.einsum("ij,ij->i", before, after) / np.maximum(
+            np.linalg.norm(before, axis=1) * np.linalg.norm(after, axis=1), 1e-300
+        )
+        held = held.copy()
+        held[borders.curve[cosine < np.cos(np.radians(CORNER))]] = True
     rows = borders.curve
     original = case.noisy.astype(np.float64)
     q = original.copy()
