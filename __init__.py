@@ -22,8 +22,8 @@ import bpy  # noqa: E402
 from . import cli, operators  # noqa: E402
 from .ui import fixed, panel, preset, settings  # noqa: E402
 
-# The modules of ui/ that register, in order. ui/__init__ imports none of them: the operators import ui/draw.py
-# (how every panel draws the settings) for their redo panels, and these modules import operators/.
+# The modules of ui/ that register, in order. ui/__init__ imports none of them; they import operators/ (its
+# draw.py draws the settings in every panel), which imports nothing from ui/.
 UI = (settings, preset, fixed, panel)
 
 

@@ -2,7 +2,7 @@
 enum items, how panels draw it, and for the command line its option and help.
 
 Built from it: the operators' properties and the scene settings (operators/properties.py), the rows of
-every panel (ui/draw.py: the operators' redo panels and the N-panel), the presets' list (ui/settings.py),
+every panel (operators/draw.py: the operators' redo panels and the N-panel), the presets' list (ui/settings.py),
 the command-line options (cli/arguments.py), the modifier's inputs (nodes/hc_group.py), and the plain
 settings objects (MeshSettings, PointSettings) that the operators snapshot and the command line fills. A
 top-level module, not one inside operators/, ui/ or cli/: those packages import bpy in their
@@ -52,7 +52,7 @@ class Setting:
     points_keep: object = None  # a mesh-only option: the value --points accepts (what point clouds run anyway)
     argument: str = None  # the core.MeshSmoother argument it sets (enums: each Choice's ``core`` name)
     chosen: bool = False  # with the Automatic Amount on, chosen by core unless the caller sets it
-    # How panels draw it (ui/draw.py). The rules read the values of the settings drawn with it: {name: value}.
+    # How panels draw it (operators/draw.py). The rules read the values of the settings drawn with it: {name: value}.
     active: Callable = None  # False: greyed out, still editable (it applies once the rule holds)
     text: Callable = None  # the label drawn, where it depends on other settings
     invert: str = None  # a vertex group's name: the bool setting that inverts it, drawn beside it as a toggle

@@ -2,9 +2,8 @@
 
 register() hands ``main`` to Blender's command registry (bpy.utils.register_cli_command, Blender 4.2+),
 so the command exists while the extension is enabled. Importing this package loads no Blender module:
-``arguments`` (the command line and the plan of which file goes where) and ``console_capture`` are
-plain Python and are tested without Blender (the demo imports ``cli.console_capture`` with the
-repository root on sys.path); ``command`` (which runs the smoothing) is loaded by ``register``.
+``arguments`` (the command line and the plan of which file goes where) is plain Python and is tested
+without Blender; ``command`` (which runs the smoothing) is loaded by ``register``.
 """
 
 COMMAND = "hc_smooth"

@@ -22,11 +22,11 @@ import bpy
 import numpy as np
 
 from .. import core
+from ..console_capture import captured
 from ..operators import jobs as jobs_module
 from ..operators import mesh_io, point_cloud
 from ..operators.objects import InputError, unique_data
 from . import arguments, files
-from .console_capture import captured
 from .files import FileError
 from .formats.normals import corner_neighbours
 

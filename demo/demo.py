@@ -35,7 +35,7 @@ from extension_session import install_extension, run_and_exit  # noqa: E402  (be
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
-import cli.console_capture as console  # noqa: E402  (the add-on's own, plain Python)
+import console_capture as console  # noqa: E402  (the add-on's own, plain Python)
 import core  # noqa: E402  (the same code the extension carries; used here for metrics and the best count)
 import scene_setup  # noqa: E402
 # isort: on

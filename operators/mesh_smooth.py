@@ -8,9 +8,9 @@ a modal timer with progress in the status bar and Esc to cancel (nothing is writ
 import bpy
 
 from .. import core, settings_spec
-from ..ui.draw import draw_mesh_convergence, draw_settings
 from . import jobs as jobs_module
 from . import mesh_io
+from .draw import draw_mesh_convergence, draw_settings
 from .modal_progress import ModalProgress
 from .modifier import draw_add_as_modifier
 from .objects import InputError, unique_data

@@ -11,8 +11,8 @@ from bpy.props import BoolProperty
 
 from .. import settings_spec
 from ..nodes import hc_group, inputs
-from ..ui.draw import draw_settings, modifier_differences
 from . import mesh_io, undo_steps
+from .draw import draw_settings, modifier_differences
 from .properties import annotations
 
 MODIFIER_NAME = "HC Smooth"

@@ -18,8 +18,8 @@ from ..core.pointcloud.geometry import collinear
 from ..core.pointcloud.noise import MAX_STEPS, matched_alpha
 from ..core.pointcloud.sdg import reach_gap_problem
 from ..settings_spec import PointSettings
-from ..ui.draw import draw_convergence, draw_settings
 from . import mesh_io, objects
+from .draw import draw_convergence, draw_settings
 from .modal_progress import ModalProgress
 from .objects import InputError, unique_data
 from .properties import annotations

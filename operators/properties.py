@@ -2,7 +2,7 @@
 
 The operators and the scene settings (ui/settings.py) take their ``__annotations__`` from
 ``annotations()``, so both are the same declaration turned into bpy.props. How panels draw them is
-ui/draw.py.
+operators/draw.py.
 """
 
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty

@@ -6,7 +6,7 @@ Blender keeps its undo history out of the Python API; ``WindowManager.print_undo
 
 import re
 
-from ..cli.console_capture import captured
+from ..console_capture import captured
 
 # [*#MS]  index {address} type='Global Undo', name='HC Smooth'  (the marks: active, applied, memfile, skip)
 _STEP = re.compile(r"^\[(?P<active>.)...\]\s+\d+\s+\{[^}]*\}\s+type='.*?', name='(?P<name>.*)'$")

@@ -1,6 +1,6 @@
-"""Scene settings, the N-panel, menu entries and presets (no algorithm: the buttons call the operators), and
-draw.py: how every panel draws the settings, the operators' redo panels too.
+"""Scene settings, the N-panel, menu entries and presets (no algorithm: the buttons call the operators; the
+settings are drawn by operators/draw.py, as the operators' redo panels are).
 
-Nothing is imported here: the operators import ui.draw, and the modules that register (settings, preset,
-fixed, panel) import operators/; the add-on's __init__ registers them.
+Nothing is imported here: the modules that register (settings, preset, fixed, panel) import operators/,
+which imports nothing from ui/; the add-on's __init__ registers them.
 """

@@ -7,8 +7,8 @@ F3 does what the panel shows, and F9 (redo) starts from those values.
 import bpy
 
 from .. import settings_spec
+from ..operators.draw import draw_mesh_convergence, draw_settings, modifier_differences
 from . import fixed, texts
-from .draw import draw_mesh_convergence, draw_settings, modifier_differences
 from .preset import HC_SMOOTH_MT_presets
 from .settings import MODIFIER_SETTINGS
 

@@ -1,7 +1,7 @@
 """What the Fixed Vertices panel says, as plain functions of the settings (no bpy: testable on their own).
 
 Each function returns short lines for a narrow sidebar; the panel only picks icons and draws them. The
-convergence lines, which the operators' redo panels show as well, come from core/convergence.py (ui/draw.py).
+convergence lines, which the operators' redo panels show as well, come from core/convergence.py (operators/draw.py).
 """
 
 

@@ -93,7 +93,7 @@ def test_the_demo_renders_without_cycles_progress_lines(demo):
 
 
 def test_captured_collects_what_c_code_and_python_print(capfd):
-    from cli import console_capture  # the repository root is on sys.path (conftest), as for the demo
+    import console_capture  # the repository root is on sys.path (conftest), as for the demo
 
     with console_capture.captured() as lines:
         os.write(1, b"Fra:1 Mem:8.20M | Synchronizing object\n")

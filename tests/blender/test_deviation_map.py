@@ -352,7 +352,7 @@ def test_blend_copy_holds_the_attributes(cli, tmp_path):
 
 
 def test_add_as_modifier_carries_the_option_and_says_what_differs(scene):
-    draw = __import__(ADDON + ".ui.draw", fromlist=["modifier_differences"])
+    draw = __import__(ADDON + ".operators.draw", fromlist=["modifier_differences"])
     spec = __import__(ADDON + ".settings_spec", fromlist=["MeshSettings"])
     assert "The modifier stores hc_deviation without its colours" in draw.modifier_differences(
         spec.MeshSettings(deviation_map=True)

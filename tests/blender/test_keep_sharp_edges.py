@@ -158,7 +158,7 @@ def test_command_line_takes_the_angle_in_degrees(cli, scene, tmp_path, capsys):
 
 
 def test_add_as_modifier_says_the_modifier_has_no_keep_sharp_edges(addon):
-    draw = sys.modules[ADDON + ".ui.draw"]
+    draw = sys.modules[ADDON + ".operators.draw"]
     spec = sys.modules[ADDON + ".settings_spec"]
     line = "The modifier has no Keep Sharp Edges: it runs the method"
     assert line in draw.modifier_differences(spec.MeshSettings(keep_sharp_edges=True))

@@ -34,7 +34,7 @@ spec = load("settings_spec")
 def test_cli_package_imports_no_blender_module():
     code = (
         "import sys; sys.path.insert(0, sys.argv[1]); import test_cli_arguments as t; "
-        "t.load('cli'); t.load('cli.arguments'); t.load('cli.console_capture'); "
+        "t.load('cli'); t.load('cli.arguments'); t.load('console_capture'); "
         "print(sorted(m for m in sys.modules if m.split('.')[0] in ('bpy', 'mathutils', '_bpy')))"
     )
     here = os.path.dirname(__file__)

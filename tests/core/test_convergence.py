@@ -137,7 +137,7 @@ def test_hc_outside_the_region_warns_but_runs():
 
 
 def test_panel_lines_follow_the_paper():
-    # The short lines panels show (ui/draw.py): the same region as convergence_message, section 5's verdicts.
+    # The short lines panels show (operators/draw.py): the same region as convergence_message, section 5's verdicts.
     for alpha in np.linspace(0, 1, 11):
         for beta in np.linspace(0, 1, 11):
             converges, lines = convergence_lines("hc", alpha, beta)

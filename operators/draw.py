@@ -4,7 +4,7 @@
 setting's ``active`` rule says it does not apply, labelled by its ``text`` rule, a vertex group searchable
 on a mesh with its Invert toggle beside it. A new setting is drawn everywhere its tuple is drawn.
 
-Imports nothing from operators/ and no other module of ui/: the operators import it for their redo panels.
+Plain drawing on a layout, without bpy: the operators' redo panels and ui/panel.py import it.
 """
 
 from .. import settings_spec

@@ -1,9 +1,9 @@
 """Collect what Blender prints while a block runs, so a person's console shows only the lines meant
 for them (the command line's per-file progress, the demo's table).
 
-Plain Python, no imports from the rest of the package: the command line uses it (cli/command.py) and
-so do scripts that run before the add-on is installed (demo/demo.py imports ``cli.console_capture``
-with the repository root on sys.path).
+Plain Python, no imports from the rest of the package: the command line (cli/command.py) and the
+operators (operators/undo_steps.py) use it, and so do scripts that run before the add-on is installed
+(demo/demo.py imports ``console_capture`` with the repository root on sys.path).
 """
 
 import contextlib
