@@ -306,8 +306,8 @@ KEEP_OUTLINE = Setting(
     "bool",
     "Keep Outline",
     "Smooth open boundaries along themselves, as curves, instead of pulling them into the surface: a "
-    "range scan's outline and its holes stay in place (corners where boundaries meet stay fixed). Leaves "
-    "a little more noise next to ragged outlines",
+    "range scan's outline stays in place (corners where boundaries meet stay fixed). Holes of a few "
+    "boundary vertices shrink, and a little more noise stays next to ragged outlines",
     False,
     flag="keep-outline",
     help="smooth open boundaries as curves instead of pulling them in (--pin-boundary wins)",

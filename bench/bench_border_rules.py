@@ -16,7 +16,9 @@ the same for all rules) at the (α, β, iterations) the Automatic Amount chooses
 * height (candidate): a border vertex's whole step (Laplacian and push-back) kept to its part along
   the vertex normal: the outline never moves in the tangent plane;
 * corners (candidate): the curve rule, holding the border vertices where the noisy outline turns by more
-  than ``CORNER`` (a grid's corners, a small hole's vertices).
+  than ``CORNER`` (a grid's corners, a small hole's vertices);
+* areas (candidate): the curve rule, then each closed border loop scaled in its plane to the area it
+  enclosed before (as each closed part gets its volume back).
 
 Per cell, in % of the diagonal: RMS distance to the clean surface of all vertices, of the interior ones,
 and of the border ones split at the nearest point of the surface into height (along that face's
@@ -45,7 +47,7 @@ from report import Report  # noqa: E402
 
 import core  # noqa: E402
 
-RULES = ("free", "curve", "hybrid", "slide", "height", "corners")
+RULES = ("free", "curve", "hybrid", "slide", "height", "corners", "areas")
 CORNER = 45.0  # degrees
 MESHES = "face,planar_scan,bunny10k,scan_bunny,grid"
 
@@ -110,7 +112,7 @@ def run_rule(case, borders, rule, alpha, beta, iterations):
     full = core.umbrella_operator(case.edges, n)
     everyone = mean_matrix(full)
     curve_rows = mean_matrix(full.with_rows(borders.curve, borders.edges))
-    laplacian = curve_rows if rule in ("curve", "hybrid", "corners") else everyone
+    laplacian = curve_rows if rule in ("curve", "hybrid", "corners", "areas") else everyone
     held = borders.held if rule != "free" else np.zeros(n, dtype=bool)
     if rule == "corners":  # the curve rule, holding the border vertices where the outline turns by > CORNER
         points = case.noisy[borders.curve]
@@ -145,7 +147,45 @@ def run_rule(case, borders, rule, alpha, beta, iterations):
             step[rows] = q[rows] + np.einsum("ij,ij->i", move, normal)[:, None] * normal
         q = step
         q[held] = original[held]
+    if rule == "areas":
+        q = keep_loop_areas(q, original, case.faces)
     return q
+
+
+def vector_area(points, vertices, sides):
+    """(the vector area, the centroid) of the closed loop of ``vertices`` along its directed ``sides``."""
+    centre = points[vertices].mean(axis=0)
+    return 0.5 * np.cross(points[sides[:, 0]] - centre, points[sides[:, 1]] - centre).sum(axis=0), centre
+
+
+def keep_loop_areas(points, original, faces):
+    """Each closed border loop (every vertex with two border neighbours) scaled about its centroid, in the
+    plane of its vector area, to the area it enclosed in ``original``."""
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(points)
+    sides = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64)
+    forward, backward = sides[:, 0] * n + sides[:, 1], sides[:, 1] * n + sides[:, 0]
+    border = sides[~np.isin(forward, backward)]  # directed as their faces run
+    count = np.bincount(border.ravel(), minlength=n)
+    graph = sp.coo_matrix((np.ones(len(border)), (border[:, 0], border[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    out = points.copy()
+    for loop in np.unique(label[border[:, 0]]):
+        sides_of = border[label[border[:, 0]] == loop]
+        vertices = np.unique(sides_of)
+        if np.any(count[vertices] != 2):
+            continue
+
+        (before, _), (after, centre) = (vector_area(x, vertices, sides_of) for x in (original, points))
+        size_before, size_after = np.linalg.norm(before), np.linalg.norm(after)
+        if size_before <= 0.0 or size_after <= 0.0:
+            continue
+        normal = after / size_after
+        offset = points[vertices] - centre
+        along = np.outer(offset @ normal, normal)
+        out[vertices] = centre + along + np.sqrt(size_before / size_after) * (offset - along)
+    return out
 
 
 def measure(case, borders, positions):
