@@ -333,7 +333,6 @@ class MeshSmoother:
         angle no narrower than the noise's, come from the noise core.mesh_noise finds (parts without noise
         held or kept within a small radius, as HC's default does), and closed parts get their volume back."""
         iterations, amount, fixed, angle = self.iterations, None, self.fixed, self.sharpness_angle
-        guided = False
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
         restoring, share = self.automatic and self.faces is not None, 0.0
         if restoring:
@@ -347,7 +346,6 @@ class MeshSmoother:
             if not noise.found:  # light noise at most: smoothed within a small radius (below)
                 ratio = min(ratio, sharp_edges.QUIET_RATIO)
             iterations = sharp_edges.steps_for_noise(ratio, self.faces.shape[0])
-            guided = sharp_edges.guided_for_noise(angle, ratio)
             angle = sharp_edges.angle_for_noise(angle, ratio)
             fixed = fixed | noise.held()
             if fixed.all():  # nothing to smooth (clean parts only)
@@ -369,7 +367,6 @@ class MeshSmoother:
             max_deviation=limit,
             tolerance=self.tolerance,
             operator=self.operator,
-            guided=guided,
         )
         for fraction in run.steps(chunk):
             if fraction < 1.0:

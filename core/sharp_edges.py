@@ -8,18 +8,20 @@ denoising" (the two-step scheme MeshLab offers as "Two Step Smoothing").
 One step of it, with the triangles' unit normals n_f and centroids c_f:
 
 1. **Normal filtering**, ``NORMAL_ITERATIONS`` times: n_i <- normalize(sum_j w_ij n_j) over the faces j
-   sharing a vertex with face i (i itself included), w_ij = (n_i . n_j - T)^2 where n_i . n_j > T and 0
-   elsewhere, T = cos(sharpness angle). Faces meeting at more than the sharpness angle do not see each
-   other: the normals of the two sides of a crease stay apart, while the noise within each side, whose
-   normals are much closer to each other, is averaged away.
-   Where the noise tilts single faces by more than the angle (``guided_for_noise``: the Automatic Amount's
-   heavier noise), their own normals no longer tell a crease from noise, and the weights compare guidance
-   normals instead (Zhang, Deng, Zhang, Bouaziz and Liu 2015, "Guided Mesh Normal Filtering"): each face
-   takes the mean normal of the most consistent patch it lies in (``guidance_normals``), steady where one
-   face is not. w_ij = (g_i . g_j - T)^2, computed once per step. On the tuning parts at 0.5 % noise this
-   leaves 35-45 % less RMS error on the bevelled box and the holed cylinder and halves the bevelled box's
-   dihedral error (bench/bench_sharp_edges.py --sets tuning --sigmas 0.005); light noise keeps the
-   plain filter, which also keeps corners (where every patch is mixed, the guidance blends the sides).
+   sharing a vertex with face i (i itself included), w_ij = (g_i . g_j - T)^2 where g_i . g_j > T and 0
+   elsewhere, T = cos(sharpness angle). Faces whose guidance normals g meet at more than the sharpness
+   angle do not see each other: the normals of the two sides of a crease stay apart, while the noise
+   within each side is averaged away. The guidance (Zhang, Deng, Zhang, Bouaziz and Liu 2015, "Guided
+   Mesh Normal Filtering"; ``guidance_normals``), computed once per step, is the mean normal of the most
+   consistent patch each face lies in: steady where a single face is not, it tells a crease from noise
+   that tilts faces by nearly as much as the crease turns. Sun et al.'s filter compares the faces' own
+   normals, g = n, recomputed every pass (``guided=False``). On the tuning parts the guidance leaves
+   up to 45 % less RMS error at 0.5-1 % noise and sharper creases at every noise level
+   (bench/bench_sharp_edges.py --sets tuning).
+   Then each face takes the filtered normal of its ring whose plane lies nearest its corners
+   (``nearest_plane_normals``): the faces along a crease that filtering left between the two sides
+   take the side they lie on, and at a corner, where every patch is mixed and the guidance blends the
+   sides, each face keeps its own plane (a clean part stays put).
 2. **Vertex fitting**, ``FIT_ITERATIONS`` times: x_i <- x_i + 1/|F_i| sum_{f in F_i} n_f n_f^T (c_f - x_i),
    F_i the faces around vertex i: each vertex moves towards the planes through its faces' centroids
    with the filtered normals (a crease vertex to the line where its two planes meet, a corner to the
@@ -37,9 +39,10 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    get half their move, up to ``FOLD_ROUNDS`` times; then the deviation limit, if any.
 
 Everything runs on all faces or vertices at once: the face rings are one sparse pattern (the faces
-sharing a vertex with each face: incidence times its transpose), built once per run; a filtering pass
-computes the weight of each pair of faces in it once (about 6 per triangle) and sums it both ways, a
-fitting pass is three sparse products on the flattened coordinates.
+sharing a vertex with each face: incidence times its transpose), built once per run; the filtering
+computes the weight of each pair of faces in it once (about 6 per triangle; once per step with the
+guidance, every pass without) and sums it both ways, a fitting pass is three sparse products on the
+flattened coordinates.
 Fixed vertices never move (their positions still place their faces' planes); ``influence`` scales each
 step's move, as core.smoothing scales an iteration's.
 """
@@ -94,7 +97,6 @@ DEFAULT_ITERATIONS = 5  # steps when the caller gives no amount and no Automatic
 # * angle: at least NOISE_ANGLE_GAIN x atan(ratio): noise tilts neighbouring faces by about that much,
 #   and a filter that sees noisy faces as creases leaves the noise (at 1 % noise along the normals on the
 #   tuning parts, 50°-60° leave 20-50 % less error than 30°). A crease gentler than the noise is noise.
-#   Where it widens the angle, the filter also compares guidance normals (``guided_for_noise``).
 # * QUIET_RATIO for meshes where no part has noise above core.mesh_noise's threshold (they move within
 #   its small radius).
 FIRST_STEPS = 4
@@ -123,14 +125,6 @@ def angle_for_noise(angle, ratio):
     """The Automatic Amount's sharpness angle: ``angle``, or wider where noise of ``ratio`` median edge
     lengths tilts neighbouring faces by more (at most 80°)."""
     return max(angle, min(math.radians(80.0), NOISE_ANGLE_GAIN * math.atan(ratio)))
-
-
-def guided_for_noise(angle, ratio):
-    """Whether the filter compares guidance normals for noise of ``ratio`` median edge lengths: where the
-    noise tilts neighbouring faces by more than ``angle`` (``angle_for_noise`` widens it), their own normals
-    no longer tell a crease from noise. Below, they do, and they also keep corners, where every patch
-    around a face is mixed and the guidance is a blend of the sides."""
-    return NOISE_ANGLE_GAIN * math.atan(ratio) > angle
 
 
 def check_sharpness_angle(value):
@@ -248,6 +242,7 @@ def guidance_normals(normals, rings):
     edges. Face i takes m_j of the j of smallest H_j among the patches containing it (its own ring's j:
     the pattern is symmetric; the first such j on a tie). Noise tilts single faces by nearly as much
     as a crease turns, but the mean of a patch on one side is steady: the filter's weights compare these.
+    At a corner every patch is mixed, and the guidance is a blend of the sides.
 
     Blocked over rows of the ring pattern (about 13 entries per face): its gathers stay in cache."""
     t = normals.shape[0]
@@ -265,9 +260,7 @@ def guidance_normals(normals, rings):
         np.maximum(steep, step, out=steep)
         summed += step
     spread, steepest = np.empty(t), np.empty(t)
-    cuts = np.searchsorted(indptr, np.arange(_BLOCK, indices.size, _BLOCK))
-    bounds = np.unique(np.concatenate([[0], cuts, [t]]))
-    blocks = [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
+    blocks = _row_blocks(indptr, t)
     for a, b in blocks:
         columns, starts = indices[indptr[a] : indptr[b]], indptr[a:b] - indptr[a]
         rows = np.repeat(np.arange(a, b), rings.counts[a:b])
@@ -286,6 +279,44 @@ def guidance_normals(normals, rings):
         place = np.where(candidates <= best, np.arange(columns.size), columns.size)
         chosen[a:b] = columns[np.minimum.reduceat(place, starts)]
     return means[chosen]
+
+
+def nearest_plane_normals(points, normals, rings):
+    """Each face's normal replaced by the normal n_j of the face j of its ring (itself included) whose plane,
+    through j's centroid c_j, lies nearest its corners: least sum_k (n_j . (x_k - c_j))^2 (the first j
+    on a tie). Where filtering leaves a row of faces along a crease between the two sides' normals,
+    these faces take the side their corners lie on: the crease stays one edge, not a rounded strip.
+
+    Blocked over rows of the ring pattern, as ``guidance_normals``."""
+    t = normals.shape[0]
+    indptr, indices = rings.indptr, rings.indices
+    corners = np.ascontiguousarray(points[rings.triangles].transpose(1, 2, 0), dtype=np.float64)  # (3, 3, t)
+    planar = np.ascontiguousarray(normals.T, dtype=np.float64)
+    centroids = corners.mean(axis=0)
+    offsets = np.einsum("kt,kt->t", planar, centroids)  # n_j . c_j
+    chosen = np.empty(t, dtype=indices.dtype)
+    for a, b in _row_blocks(indptr, t):
+        columns, starts = indices[indptr[a] : indptr[b]], indptr[a:b] - indptr[a]
+        rows = np.repeat(np.arange(a, b), rings.counts[a:b])
+        candidate = [row.take(columns) for row in planar]
+        shift = offsets.take(columns)
+        cost = np.zeros(columns.size)
+        for corner in corners:
+            distance = candidate[0] * corner[0].take(rows) - shift
+            for c in (1, 2):
+                distance += candidate[c] * corner[c].take(rows)
+            cost += distance * distance
+        best = np.repeat(np.minimum.reduceat(cost, starts), rings.counts[a:b])
+        place = np.where(cost <= best, np.arange(columns.size), columns.size)
+        chosen[a:b] = columns[np.minimum.reduceat(place, starts)]
+    return normals[chosen]
+
+
+def _row_blocks(indptr, t):
+    """(first, end) row ranges of a CSR pattern with about ``_BLOCK`` entries each."""
+    cuts = np.searchsorted(indptr, np.arange(_BLOCK, indptr[-1], _BLOCK))
+    bounds = np.unique(np.concatenate([[0], cuts, [t]]))
+    return [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
 
 
 def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS, guidance=None):
@@ -522,8 +553,7 @@ class SharpSmoothing:
     push_back : bool
         False: Sun et al.'s two steps alone, without HC's push-back.
     guided : bool
-        True: the filter's weights compare the faces' guidance normals (``guidance_normals``), not their
-        own; for noise that tilts faces by more than the angle (``guided_for_noise``).
+        False: Sun et al.'s filter, its weights from the faces' own normals, and no ``nearest_plane_normals``.
 
     Examples
     --------
@@ -553,7 +583,7 @@ class SharpSmoothing:
         tolerance: float = 0.0,
         operator: Umbrella | None = None,
         push_back: bool = True,
-        guided: bool = False,
+        guided: bool = True,
     ) -> None:
         self.positions = check_positions(positions)
         n = self.positions.shape[0]
@@ -618,6 +648,8 @@ class SharpSmoothing:
         guidance = guidance_normals(normals, self.rings) if self.guided else None
         filtering = filter_steps(normals, self.rings, self.cos_threshold, NORMAL_ITERATIONS, guidance)
         normals = yield from _counted(filtering)
+        if self.guided:
+            normals = nearest_plane_normals(start, normals, self.rings)
         fitting = fit_steps(start, normals, self.rings, self.moving, FIT_ITERATIONS)
         moved = yield from _counted(fitting, NORMAL_ITERATIONS)
         if TANGENTIAL:

@@ -433,26 +433,66 @@ def test_guided_filter_finds_a_noisy_wedges_planes_where_the_plain_filter_cannot
     assert error(guided) < 5.0 < 15.0 < error(plain)
 
 
-def test_guidance_of_a_clean_part_is_its_normals_but_at_corners():
+def test_guidance_of_a_clean_box_is_its_normals_but_at_corners_and_the_box_stays():
     """On a clean box every face off the corners lies in a patch on one side (spread 0): its guidance is its
-    normal, and a clean wedge (no corners) stays put. Every patch around a face at a corner is mixed: its
-    guidance is a blend of the sides, and guided smoothing rounds corners (why guided_for_noise keeps
-    the plain filter for light noise)."""
+    normal. Every patch around a face at a corner is mixed, and its guidance a blend of the sides; there
+    the nearest plane, the face's own, gives its normal back: the box stays put."""
     clean, faces = box(8)
     normals = face_normals(clean, faces)
-    guidance = sharp_edges.guidance_normals(normals, FaceRings(faces, len(clean)))
+    rings = FaceRings(faces, len(clean))
+    guidance = sharp_edges.guidance_normals(normals, rings)
     off = np.einsum("ij,ij->i", normals, guidance) < 1.0 - 1e-12
     at_corner = (np.abs(clean[faces]) == 1.0).all(axis=2).any(axis=1)  # a corner of the face is the box's
     assert off.any() and not (off & ~at_corner).any()
+    assert np.array_equal(sharp_edges.nearest_plane_normals(clean, guidance, rings), normals)
+    assert np.allclose(sharp_smooth(clean, faces, iterations=3), clean, atol=1e-12)
     points, triangles = wedge(8)
-    assert np.allclose(sharp_smooth(points, triangles, iterations=3, guided=True), points, atol=1e-12)
-    _, noisy, faces = noisy_box(0.01, "iso")
-    assert off_the_cube(sharp_smooth(noisy, faces, iterations=5, guided=True)) < 0.4 * off_the_cube(noisy)
+    assert np.allclose(sharp_smooth(points, triangles, iterations=3), points, atol=1e-12)
 
 
-def test_guidance_where_the_noise_widens_the_angle():
-    angle = sharp_edges.DEFAULT_SHARPNESS_ANGLE
-    for ratio in (0.0, 0.05, 0.1, 0.2, 0.25, 0.5, 1.0):
-        widened = sharp_edges.angle_for_noise(angle, ratio) > angle
-        assert sharp_edges.guided_for_noise(angle, ratio) == widened
-    assert not sharp_edges.guided_for_noise(angle, 0.05) and sharp_edges.guided_for_noise(angle, 0.5)
+def _loop_nearest_planes(points, normals, faces):
+    """``nearest_plane_normals`` written from its definition, face by face."""
+    around = {}
+    for f, face in enumerate(faces):
+        for v in face:
+            around.setdefault(int(v), set()).add(f)
+    out = np.empty_like(normals)
+    for i, face in enumerate(faces):
+        ring = sorted(set().union(*(around[int(v)] for v in face)))
+        costs = [sum(float(normals[j] @ (x - points[faces[j]].mean(axis=0))) ** 2 for x in points[face]) for j in ring]
+        out[i] = normals[ring[int(np.argmin(costs))]]  # the first on a tie
+    return out
+
+
+def test_nearest_planes_equal_their_definition_as_a_loop():
+    _, noisy, faces = noisy_box(0.02, "iso", cells=3)
+    rings = FaceRings(faces, len(noisy))
+    filtered = filter_normals(face_normals(noisy, faces), rings, math.cos(math.radians(40.0)), iterations=3)
+    chosen = sharp_edges.nearest_plane_normals(noisy, filtered, rings)
+    assert np.array_equal(chosen, _loop_nearest_planes(noisy, filtered, faces))
+    assert not np.array_equal(chosen, filtered)
+
+
+def test_a_crease_row_between_the_sides_takes_the_side_it_lies_on():
+    """A clean wedge whose faces along the crease were given the halfway normal: each takes its side's."""
+    points, faces = wedge(8)
+    clean = face_normals(points, faces)
+    centre = points[faces].mean(axis=1)
+    row = np.abs(centre[:, 0]) < 1.0 / 8
+    blended = clean.copy()
+    blended[row] = [-math.sin(math.radians(22.5)), 0.0, math.cos(math.radians(22.5))]  # halfway
+    chosen = sharp_edges.nearest_plane_normals(points, blended, FaceRings(faces, len(points)))
+    assert np.allclose(chosen, clean, atol=1e-12)
+
+
+def test_sun_et_als_filter_on_request(monkeypatch):
+    """guided=False: a step is Sun et al.'s filter (the faces' own normals) and the fitting, no guidance."""
+    _, noisy, faces = noisy_box(0.01, "iso", cells=6)
+    rings = FaceRings(faces, len(noisy))
+    threshold = math.cos(sharp_edges.DEFAULT_SHARPNESS_ANGLE)
+    filtered = filter_normals(face_normals(noisy, faces), rings, threshold)
+    fitted = fit_vertices(noisy, filtered, rings, np.ones(len(noisy)))
+    monkeypatch.setattr(sharp_edges, "TANGENTIAL", 0.0)
+    plain = sharp_smooth(noisy, faces, iterations=1, guided=False, push_back=False)
+    assert np.allclose(plain, fitted, atol=1e-12)
+    assert not np.allclose(sharp_smooth(noisy, faces, iterations=1, push_back=False), fitted, atol=1e-6)
