@@ -358,22 +358,58 @@ def _loop_guidance(normals, faces):
             other = next((g for g in shared if g != f), f)
             step = np.linalg.norm(normals[f] - normals[other])
             steep[f], summed[f] = max(steep[f], step), summed[f] + step
-    means, consistency = [], []
-    for ring in rings:
-        mean = sum(normals[a] for a in ring)
+
+    def patch(faces_of):  # (unit mean, consistency H)
+        mean = sum(normals[a] for a in faces_of)
         mean = mean / np.linalg.norm(mean)
-        spread = max(1.0 - normals[a] @ mean for a in ring)
-        means.append(mean)
-        consistency.append(spread * max(steep[a] for a in ring) / (1e-9 + sum(summed[a] for a in ring)))
-    return np.array([means[min(ring, key=lambda j: (consistency[j], j))] for ring in rings])
+        spread = max(1.0 - normals[a] @ mean for a in faces_of)
+        return mean, spread * max(steep[a] for a in faces_of) / (1e-9 + sum(summed[a] for a in faces_of))
+
+    face_rings = [patch(ring) for ring in rings]
+    vertex_rings = {v: patch(sorted(fs)) for v, fs in around.items()}
+    out = []
+    for ring, face in zip(rings, faces):
+        j = min(ring, key=lambda j: (face_rings[j][1], j))
+        corner = min(range(3), key=lambda k: (vertex_rings[int(face[k])][1], k))
+        vertex = vertex_rings[int(face[corner])]
+        out.append(vertex[0] if sharp_edges.VERTEX_RING_WEIGHT * vertex[1] < face_rings[j][1] else face_rings[j][0])
+    return np.array(out)
 
 
 def test_guidance_equals_its_definition_as_a_loop():
     _, noisy, faces = noisy_box(0.02, "iso", cells=3)
     normals = face_normals(noisy, faces)
     guidance = sharp_edges.guidance_normals(normals, FaceRings(faces, len(noisy)))
-    assert np.allclose(guidance, _loop_guidance(normals, faces), atol=1e-12)
+    expected = _loop_guidance(normals, faces)
+    assert np.allclose(guidance, expected, atol=1e-12)
     assert not np.allclose(guidance, normals, atol=1e-3)
+    vertex_means = np.array([normals[(faces == v).any(axis=1)].sum(0) for v in range(len(noisy))])
+    vertex_means /= np.linalg.norm(vertex_means, axis=1, keepdims=True)
+    from_vertices = (np.abs(guidance[:, None, :] - vertex_means[None]).max(axis=2) < 1e-12).any(axis=1)
+    assert 0 < from_vertices.sum() < len(faces)  # both kinds of patch were chosen
+
+
+def slab(cells=12, layers=2):
+    """A closed box 2 x 2 x (layers / cells * 2): a thin plate whose rim is ``layers`` cells tall."""
+    points, faces = box(cells)
+    points = points.copy()
+    points[:, 2] = np.clip(points[:, 2], -layers / cells, layers / cells)  # the rows above squashed onto the top
+    unique, inverse = np.unique(np.round(points, 12), axis=0, return_inverse=True)
+    faces = inverse.reshape(-1)[faces]
+    return unique, faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])]
+
+
+def test_guidance_of_a_thin_plates_rim_comes_from_vertex_rings():
+    """On a clean plate whose rim is two faces tall every face ring of a rim face reaches over a crease;
+    the rings of the rim's middle vertices do not: every rim face off the corners gets its own normal."""
+    points, faces = slab()
+    normals = face_normals(points, faces)
+    guidance = sharp_edges.guidance_normals(normals, FaceRings(faces, len(points)))
+    centre = points[faces].mean(axis=1)
+    rim = np.abs(normals[:, 2]) < 0.5
+    off_corners = (np.abs(centre[:, :2]) < 1.0 - 2.0 / 12).any(axis=1)
+    assert (rim & off_corners).sum() > 100
+    assert np.allclose(guidance[rim & off_corners], normals[rim & off_corners], atol=1e-12)
 
 
 def test_guided_filter_with_fixed_weights_equals_the_loop_on_the_guidance():
