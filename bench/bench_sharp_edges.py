@@ -2,8 +2,9 @@
 
 Parts: the cube and the thin plate of bench_quality_inputs.py and the CAD-like parts of sharp_parts.py
 (a bevelled box, a cylinder with a through hole, a fandisk-like block). ``tuning`` (cube, bevelled box,
-holed cylinder) is what the default angle and the Automatic Amount's rule were chosen on; ``heldout``
-(plate, fandisk) was never looked at while choosing. Noise σ = 0.1 / 0.25 / 0.5 / 1 % of the
+holed cylinder) is what the default angle, the Automatic Amount's rule and the guidance's constants were
+chosen on; no constant was chosen on ``heldout`` (plate, fandisk), though the plate's thin rim is why
+the guidance has vertex rings. Noise σ = 0.1 / 0.25 / 0.5 / 1 % of the
 bounding-box diagonal, along the clean vertex normals ("normal") or on every coordinate ("iso"), one
 seed per cell (bench_quality.make_case's seeding).
 
