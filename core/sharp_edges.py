@@ -15,9 +15,9 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    Mesh Normal Filtering"; ``guidance_normals``), computed once per step, is the mean normal of the most
    consistent patch each face lies in: steady where a single face is not, it tells a crease from noise
    that tilts faces by nearly as much as the crease turns. Sun et al.'s filter compares the faces' own
-   normals, g = n, recomputed every pass (``guided=False``). On the tuning parts the guidance leaves
-   up to 45 % less RMS error at 0.5-1 % noise and sharper creases at every noise level
-   (bench/bench_sharp_edges.py --sets tuning).
+   normals, g = n, recomputed every pass (``guided=False``). On bench_sharp_edges.py's tuning parts the
+   guidance (with the nearest planes below) leaves 34-47 % less RMS error at 1 % isotropic noise, and
+   the bevelled box's creases 13-16° off at 0.5 % noise instead of 36° (against ``guided=False``).
    Then each face takes the filtered normal of its ring whose plane lies nearest its corners
    (``nearest_plane_normals``): the faces along a crease that filtering left between the two sides
    take the side they lie on, and at a corner, where every patch is mixed and the guidance blends the
