@@ -481,9 +481,9 @@ def test_guidance_of_a_clean_box_is_its_normals_but_at_corners_and_the_box_stays
     at_corner = (np.abs(clean[faces]) == 1.0).all(axis=2).any(axis=1)  # a corner of the face is the box's
     assert off.any() and not (off & ~at_corner).any()
     assert np.array_equal(sharp_edges.nearest_plane_normals(clean, guidance, rings), normals)
-    assert np.allclose(sharp_smooth(clean, faces, iterations=3), clean, atol=1e-12)
+    assert np.allclose(sharp_smooth(clean, faces, iterations=3, guided=True), clean, atol=1e-12)
     points, triangles = wedge(8)
-    assert np.allclose(sharp_smooth(points, triangles, iterations=3), points, atol=1e-12)
+    assert np.allclose(sharp_smooth(points, triangles, iterations=3, guided=True), points, atol=1e-12)
 
 
 def _loop_nearest_planes(points, normals, faces):
@@ -521,14 +521,40 @@ def test_a_crease_row_between_the_sides_takes_the_side_it_lies_on():
     assert np.allclose(chosen, clean, atol=1e-12)
 
 
-def test_sun_et_als_filter_on_request(monkeypatch):
-    """guided=False: a step is Sun et al.'s filter (the faces' own normals) and the fitting, no guidance."""
+def test_sun_et_als_filter_without_guidance(monkeypatch):
+    """guided=False (SharpSmoothing's default): a step is Sun et al.'s filter (the faces' own normals) and
+    the fitting; guided=True is another step."""
     _, noisy, faces = noisy_box(0.01, "iso", cells=6)
     rings = FaceRings(faces, len(noisy))
     threshold = math.cos(sharp_edges.DEFAULT_SHARPNESS_ANGLE)
     filtered = filter_normals(face_normals(noisy, faces), rings, threshold)
     fitted = fit_vertices(noisy, filtered, rings, np.ones(len(noisy)))
     monkeypatch.setattr(sharp_edges, "TANGENTIAL", 0.0)
-    plain = sharp_smooth(noisy, faces, iterations=1, guided=False, push_back=False)
+    plain = sharp_smooth(noisy, faces, iterations=1, push_back=False)
     assert np.allclose(plain, fitted, atol=1e-12)
-    assert not np.allclose(sharp_smooth(noisy, faces, iterations=1, push_back=False), fitted, atol=1e-6)
+    assert not np.allclose(sharp_smooth(noisy, faces, iterations=1, push_back=False, guided=True), fitted, atol=1e-6)
+
+
+def test_the_automatic_amount_guides_where_it_finds_noise(monkeypatch):
+    """The guidance runs with the Automatic Amount on a noisy part; not with a set number of steps, nor on
+    a clean part (held)."""
+    calls = []
+    guidance = sharp_edges.guidance_normals
+    monkeypatch.setattr(sharp_edges, "guidance_normals", lambda *a: calls.append(1) or guidance(*a))
+    _, noisy, faces = noisy_box(0.005, "iso", cells=8)
+    core.smooth_mesh(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True)
+    assert calls
+    calls.clear()
+    core.smooth_mesh(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True, iterations=2)
+    clean, faces = box(8)
+    core.smooth_mesh(clean, edges_of(faces), faces=faces, keep_sharp_edges=True)
+    assert not calls
+
+
+def test_a_coarse_cube_is_why_the_guidance_needs_noise():
+    """Every face of a cube of 12 triangles is at a corner: the guidance blends the sides, Sun et al.'s
+    filter keeps them."""
+    positions = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    quads = [[0, 1, 3, 2], [2, 3, 7, 6], [6, 7, 5, 4], [4, 5, 1, 0], [2, 6, 4, 0], [7, 3, 1, 5]]
+    assert np.allclose(sharp_smooth(positions, quads, iterations=2), positions, atol=1e-12)
+    assert not np.allclose(sharp_smooth(positions, quads, iterations=2, guided=True), positions, atol=0.1)
