@@ -2,8 +2,9 @@
 
 Parts: the cube and the thin plate of bench_quality_inputs.py and the CAD-like parts of sharp_parts.py
 (a bevelled box, a cylinder with a through hole, a fandisk-like block). ``tuning`` (cube, bevelled box,
-holed cylinder) is what the default angle and the Automatic Amount's rule were chosen on; ``heldout``
-(plate, fandisk) was never looked at while choosing. Noise σ = 0.1 / 0.25 / 0.5 / 1 % of the
+holed cylinder) is what the default angle, the Automatic Amount's rule and the guidance's constants were
+chosen on; no constant was chosen on ``heldout`` (plate, fandisk), though the plate's thin rim is why
+the guidance has vertex rings. Noise σ = 0.1 / 0.25 / 0.5 / 1 % of the
 bounding-box diagonal, along the clean vertex normals ("normal") or on every coordinate ("iso"), one
 seed per cell (bench_quality.make_case's seeding).
 
@@ -30,6 +31,11 @@ at 0.5 % noise; |ΔV| ≤ 0.5 %.
 ``--cost`` times the Automatic Amount with the option on against 10 HC iterations on noisy tori of
 meshes.py (isotropic noise 0.1 % of the diagonal, float32).
 
+``--bounds`` measures, instead of the peers, what the vertex fitting could reach with perfect normals:
+ours with the clean part's face normals in place of the filtered ones at every step, and at the first
+step only; and the noisy vertices moved to their nearest points of the clean surface (RMS 0: the
+creases' error of vertices on the surface but off the crease lines).
+
 ``--organic`` smooths organic scans (no sharp edges) with the option on and reports it beside HC's
 default and the best HC setting.
 
@@ -37,6 +43,7 @@ default and the best HC setting.
     python bench/bench_sharp_edges.py --sets tuning --parts cube --sigmas 0.005 --kinds normal
     python bench/bench_sharp_edges.py --organic bunny,cow --sigmas 0.001,0.0025,0.005 --sets none
     python bench/bench_sharp_edges.py --sets none --cost 250k,1M       # time on noisy tori (~4 min)
+    python bench/bench_sharp_edges.py --bounds --sigmas 0.005           # with perfect normals (~1 min)
 
 The report goes to stdout and bench/results/; the numbers to a JSON file beside it.
 """
@@ -200,6 +207,56 @@ def measure_cell(name, set_name, kind, sigma, seed, cache, peers=True):
     return cell
 
 
+class _CleanNormals:
+    """core.sharp_edges with the clean face normals in place of the filtered ones at the steps of
+    ``steps`` (all if None): a ``with`` block patches its filter and its nearest planes."""
+
+    def __init__(self, normals, steps=None):
+        self.normals, self.steps, self.step = normals, steps, 0
+
+    def __enter__(self):
+        self.saved = sharp_edges.filter_steps, sharp_edges.nearest_plane_normals
+        filtering, nearest = self.saved
+
+        def filter_steps(normals, rings, cos_threshold, iterations=sharp_edges.NORMAL_ITERATIONS, guidance=None):
+            clean = self.steps is None or self.step in self.steps
+            self.step += 1
+            if not clean:
+                return (yield from filtering(normals, rings, cos_threshold, iterations, guidance))
+            yield
+            return self.normals.copy()
+
+        def nearest_plane_normals(points, normals, rings):
+            clean = self.steps is None or self.step - 1 in self.steps
+            return normals if clean else nearest(points, normals, rings)
+
+        sharp_edges.filter_steps, sharp_edges.nearest_plane_normals = filter_steps, nearest_plane_normals
+        return self
+
+    def __exit__(self, *exc):
+        sharp_edges.filter_steps, sharp_edges.nearest_plane_normals = self.saved
+
+
+def bounds_cell(name, set_name, kind, sigma, seed, cache):
+    case = make_case(name, kind, sigma, seed, cache)
+    cell = {"set": set_name, "mesh": name, "kind": kind, "sigma": sigma}
+    cell["input"] = measure(case, case.noisy)
+    cell["ours"] = measure(case, ours(case)[0])
+    clean = sharp_edges.face_normals(case.clean, case.faces)
+    with _CleanNormals(clean):
+        cell["clean normals"] = measure(case, ours(case)[0])
+    with _CleanNormals(clean, steps={0}):
+        cell["clean normals, first step"] = measure(case, ours(case)[0])
+    import open3d as o3d
+
+    nearest = case.surface.scene.compute_closest_points(o3d.core.Tensor(case.noisy.astype(np.float32)))
+    cell["on the surface"] = measure(case, nearest["points"].numpy().astype(np.float64))
+    return cell
+
+
+BOUND_COLUMNS = ["input", "ours", "clean normals", "clean normals, first step", "on the surface"]
+
+
 # --- report -------------------------------------------------------------------------------------------
 
 
@@ -297,6 +354,17 @@ def report(record, out):
             )
         )
         targets(cells, out, set_name)
+    if record.get("bounds"):
+        out(
+            "\n## With perfect normals\n\nMean |dihedral error| on the true sharp edges, degrees (RMS, % of the "
+            "diagonal): ours with the clean face normals given to the fitting at every step, at the first step "
+            "only, and the noisy vertices moved to their nearest points of the clean surface.\n"
+        )
+        out("| part | noise | " + " | ".join(BOUND_COLUMNS) + " |")
+        out("|---|---|" + "---:|" * len(BOUND_COLUMNS))
+        for c in record["bounds"]:
+            values = [f"{c[k]['dihedral']:.1f} ({pct(c[k]['rms'])})" for k in BOUND_COLUMNS]
+            out(f"| {c['mesh']} | {c['kind']} {100 * c['sigma']:g} % | " + " | ".join(values) + " |")
     organic = record.get("organic", [])
     if organic:
         out("\n## Organic scans with Keep Sharp Edges on\n")
@@ -337,6 +405,7 @@ def main():
     parser.add_argument("--kinds", default="normal,iso")
     parser.add_argument("--organic", default="", help="organic scans to run with the option on, e.g. bunny")
     parser.add_argument("--cost", default="", help="torus sizes to time, e.g. 250k,1M")
+    parser.add_argument("--bounds", action="store_true", help="with perfect normals, instead of the peers")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     sigmas = inputs.parse_list(args.sigmas, float)
@@ -348,6 +417,7 @@ def main():
         "load": " ".join(f"{x:.1f}" for x in __import__("os").getloadavg()),
         "cells": [],
         "organic": [],
+        "bounds": [],
     }
     cache = {}
     for set_name in inputs.parse_list(args.sets):
@@ -356,6 +426,9 @@ def main():
                 continue
             for kind in kinds:
                 for sigma in sigmas:
+                    if args.bounds:
+                        record["bounds"].append(bounds_cell(name, set_name, kind, sigma, args.seed, cache))
+                        continue
                     record["cells"].append(measure_cell(name, set_name, kind, sigma, args.seed, cache))
                     c = record["cells"][-1]
                     print(

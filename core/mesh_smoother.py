@@ -333,6 +333,7 @@ class MeshSmoother:
         angle no narrower than the noise's, come from the noise core.mesh_noise finds (parts without noise
         held or kept within a small radius, as HC's default does), and closed parts get their volume back."""
         iterations, amount, fixed, angle = self.iterations, None, self.fixed, self.sharpness_angle
+        guided = False  # the guidance where the Automatic Amount finds noise (core.sharp_edges)
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
         restoring, share = self.automatic and self.faces is not None, 0.0
         if restoring:
@@ -345,6 +346,7 @@ class MeshSmoother:
             ratio = sigma / edge if edge > 0 else 0.0
             if not noise.found:  # light noise at most: smoothed within a small radius (below)
                 ratio = min(ratio, sharp_edges.QUIET_RATIO)
+            guided = noise.found
             iterations = sharp_edges.steps_for_noise(ratio, self.faces.shape[0])
             angle = sharp_edges.angle_for_noise(angle, ratio)
             fixed = fixed | noise.held()
@@ -367,6 +369,7 @@ class MeshSmoother:
             max_deviation=limit,
             tolerance=self.tolerance,
             operator=self.operator,
+            guided=guided,
         )
         for fraction in run.steps(chunk):
             if fraction < 1.0:

@@ -342,3 +342,219 @@ def test_big_meshes_yield_between_filtering_passes(monkeypatch):
     fewest = sharp_edges.NORMAL_ITERATIONS + sharp_edges.FIT_SLICES + 1
     assert 2 * fewest <= len(fine) <= 2 * sharp_edges.STEP_SLICES and fine == sorted(fine) and fine[-1] == 1.0
     assert np.array_equal(sliced.result(), whole.result())
+
+
+def _loop_guidance(normals, faces):
+    """``guidance_normals`` written from its definition, face by face and patch by patch."""
+    around, edges = {}, {}
+    for f, face in enumerate(faces):
+        for k in range(3):
+            around.setdefault(int(face[k]), set()).add(f)
+            edges.setdefault(tuple(sorted((int(face[k]), int(face[(k + 1) % 3])))), []).append(f)
+    rings = [sorted(set().union(*(around[int(v)] for v in face))) for face in faces]
+    steep, summed = np.zeros(len(faces)), np.zeros(len(faces))
+    for shared in edges.values():
+        for f in shared:
+            other = next((g for g in shared if g != f), f)
+            step = np.linalg.norm(normals[f] - normals[other])
+            steep[f], summed[f] = max(steep[f], step), summed[f] + step
+
+    def patch(faces_of):  # (unit mean, consistency H)
+        mean = sum(normals[a] for a in faces_of)
+        mean = mean / np.linalg.norm(mean)
+        spread = max(1.0 - normals[a] @ mean for a in faces_of)
+        return mean, spread * max(steep[a] for a in faces_of) / (1e-9 + sum(summed[a] for a in faces_of))
+
+    face_rings = [patch(ring) for ring in rings]
+    vertex_rings = {v: patch(sorted(fs)) for v, fs in around.items()}
+    out = []
+    for ring, face in zip(rings, faces):
+        j = min(ring, key=lambda j: (face_rings[j][1], j))
+        corner = min(range(3), key=lambda k: (vertex_rings[int(face[k])][1], k))
+        vertex = vertex_rings[int(face[corner])]
+        out.append(vertex[0] if sharp_edges.VERTEX_RING_WEIGHT * vertex[1] < face_rings[j][1] else face_rings[j][0])
+    return np.array(out)
+
+
+def test_guidance_equals_its_definition_as_a_loop():
+    _, noisy, faces = noisy_box(0.02, "iso", cells=3)
+    normals = face_normals(noisy, faces)
+    guidance = sharp_edges.guidance_normals(normals, FaceRings(faces, len(noisy)))
+    expected = _loop_guidance(normals, faces)
+    assert np.allclose(guidance, expected, atol=1e-12)
+    assert not np.allclose(guidance, normals, atol=1e-3)
+    vertex_means = np.array([normals[(faces == v).any(axis=1)].sum(0) for v in range(len(noisy))])
+    vertex_means /= np.linalg.norm(vertex_means, axis=1, keepdims=True)
+    from_vertices = (np.abs(guidance[:, None, :] - vertex_means[None]).max(axis=2) < 1e-12).any(axis=1)
+    assert 0 < from_vertices.sum() < len(faces)  # both kinds of patch were chosen
+
+
+def slab(cells=12, layers=2):
+    """A closed box 2 x 2 x (layers / cells * 2): a thin plate whose rim is ``layers`` cells tall."""
+    points, faces = box(cells)
+    points = points.copy()
+    points[:, 2] = np.clip(points[:, 2], -layers / cells, layers / cells)  # the rows above squashed onto the top
+    unique, inverse = np.unique(np.round(points, 12), axis=0, return_inverse=True)
+    faces = inverse.reshape(-1)[faces]
+    return unique, faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])]
+
+
+def test_guidance_of_a_thin_plates_rim_comes_from_vertex_rings():
+    """On a clean plate whose rim is two faces tall every face ring of a rim face reaches over a crease;
+    the rings of the rim's middle vertices do not: every rim face off the corners gets its own normal."""
+    points, faces = slab()
+    normals = face_normals(points, faces)
+    guidance = sharp_edges.guidance_normals(normals, FaceRings(faces, len(points)))
+    centre = points[faces].mean(axis=1)
+    rim = np.abs(normals[:, 2]) < 0.5
+    off_corners = (np.abs(centre[:, :2]) < 1.0 - 2.0 / 12).any(axis=1)
+    assert (rim & off_corners).sum() > 100
+    assert np.allclose(guidance[rim & off_corners], normals[rim & off_corners], atol=1e-12)
+
+
+def test_guided_filter_with_fixed_weights_equals_the_loop_on_the_guidance():
+    """With guidance, the weights are the guidance's cosines, the same for every pass: one guided pass is the
+    paper's pass with the cosines of the guidance."""
+    _, noisy, faces = noisy_box(0.02, "iso", cells=3)
+    rings = FaceRings(faces, len(noisy))
+    normals = face_normals(noisy, faces)
+    guidance = sharp_edges.guidance_normals(normals, rings)
+    threshold = math.cos(math.radians(40.0))
+    once = filter_normals(normals, rings, threshold, iterations=1, guidance=guidance)
+    around = {}
+    for f, face in enumerate(faces):
+        for v in face:
+            around.setdefault(int(v), set()).add(f)
+    for i, face in enumerate(faces):
+        ring = set().union(*(around[int(v)] for v in face))
+        weights = {j: max(float(guidance[i] @ guidance[j]) - threshold, 0.0) ** 2 for j in ring}
+        if sum(w for j, w in weights.items() if j != i) == 0.0:
+            continue  # a lonely face: the ring's mean, as in the plain filter
+        total = sum(w * normals[j] for j, w in weights.items())
+        assert np.allclose(once[i], total / np.linalg.norm(total), atol=1e-12)
+
+
+def wedge(cells=24, degrees=45.0):
+    """Two planes meeting at a crease of ``degrees`` along the grid line u = 0: (2 cells + 1) x (cells + 1)
+    points, triangles."""
+    u, v = np.meshgrid(np.linspace(-1, 1, 2 * cells + 1), np.linspace(0, 1, cells + 1), indexing="ij")
+    z = np.where(u > 0, u * math.tan(math.radians(degrees)), 0.0)
+    points = np.c_[u.ravel(), v.ravel(), z.ravel()]
+    grid = np.arange(points.shape[0]).reshape(u.shape)
+    a, b, c, d = grid[:-1, :-1].ravel(), grid[1:, :-1].ravel(), grid[1:, 1:].ravel(), grid[:-1, 1:].ravel()
+    return points, np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_guided_filter_finds_a_noisy_wedges_planes_where_the_plain_filter_cannot(seed):
+    """Noise of 0.35 edge lengths tilts single faces by ~37 degrees, nearly the wedge's 45: the plain filter
+    at 30 degrees leaves ~18 degrees of error on the faces off the crease and the borders, the guided one
+    (weights from the steadier patch means) under 5."""
+    points, faces = wedge()
+    edge = 1.0 / 24
+    noisy = points + np.random.default_rng(seed).normal(0.0, 0.35 * edge, points.shape)
+    rings = FaceRings(faces, len(points))
+    normals = face_normals(noisy, faces)
+    threshold = math.cos(math.radians(30.0))
+    guided = filter_normals(normals, rings, threshold, guidance=sharp_edges.guidance_normals(normals, rings))
+    plain = filter_normals(normals, rings, threshold)
+    centre = points[faces].mean(axis=1)
+    inner = (np.abs(centre[:, 0]) > 2 * edge) & (np.abs(centre[:, 0]) < 1 - 2 * edge)
+    inner &= (centre[:, 1] > 2 * edge) & (centre[:, 1] < 1 - 2 * edge)
+    clean = face_normals(points, faces)
+
+    def error(n):
+        return np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n, clean), -1.0, 1.0)))[inner].mean()
+
+    assert error(guided) < 5.0 < 15.0 < error(plain)
+
+
+def test_guidance_of_a_clean_box_is_its_normals_but_at_corners_and_the_box_stays():
+    """On a clean box every face off the corners lies in a patch on one side (spread 0): its guidance is its
+    normal. Every patch around a face at a corner is mixed, and its guidance a blend of the sides; there
+    the nearest plane, the face's own, gives its normal back: the box stays put."""
+    clean, faces = box(8)
+    normals = face_normals(clean, faces)
+    rings = FaceRings(faces, len(clean))
+    guidance = sharp_edges.guidance_normals(normals, rings)
+    off = np.einsum("ij,ij->i", normals, guidance) < 1.0 - 1e-12
+    at_corner = (np.abs(clean[faces]) == 1.0).all(axis=2).any(axis=1)  # a corner of the face is the box's
+    assert off.any() and not (off & ~at_corner).any()
+    assert np.array_equal(sharp_edges.nearest_plane_normals(clean, guidance, rings), normals)
+    assert np.allclose(sharp_smooth(clean, faces, iterations=3, guided=True), clean, atol=1e-12)
+    points, triangles = wedge(8)
+    assert np.allclose(sharp_smooth(points, triangles, iterations=3, guided=True), points, atol=1e-12)
+
+
+def _loop_nearest_planes(points, normals, faces):
+    """``nearest_plane_normals`` written from its definition, face by face."""
+    around = {}
+    for f, face in enumerate(faces):
+        for v in face:
+            around.setdefault(int(v), set()).add(f)
+    out = np.empty_like(normals)
+    for i, face in enumerate(faces):
+        ring = sorted(set().union(*(around[int(v)] for v in face)))
+        costs = [sum(float(normals[j] @ (x - points[faces[j]].mean(axis=0))) ** 2 for x in points[face]) for j in ring]
+        out[i] = normals[ring[int(np.argmin(costs))]]  # the first on a tie
+    return out
+
+
+def test_nearest_planes_equal_their_definition_as_a_loop():
+    _, noisy, faces = noisy_box(0.02, "iso", cells=3)
+    rings = FaceRings(faces, len(noisy))
+    filtered = filter_normals(face_normals(noisy, faces), rings, math.cos(math.radians(40.0)), iterations=3)
+    chosen = sharp_edges.nearest_plane_normals(noisy, filtered, rings)
+    assert np.array_equal(chosen, _loop_nearest_planes(noisy, filtered, faces))
+    assert not np.array_equal(chosen, filtered)
+
+
+def test_a_crease_row_between_the_sides_takes_the_side_it_lies_on():
+    """A clean wedge whose faces along the crease were given the halfway normal: each takes its side's."""
+    points, faces = wedge(8)
+    clean = face_normals(points, faces)
+    centre = points[faces].mean(axis=1)
+    row = np.abs(centre[:, 0]) < 1.0 / 8
+    blended = clean.copy()
+    blended[row] = [-math.sin(math.radians(22.5)), 0.0, math.cos(math.radians(22.5))]  # halfway
+    chosen = sharp_edges.nearest_plane_normals(points, blended, FaceRings(faces, len(points)))
+    assert np.allclose(chosen, clean, atol=1e-12)
+
+
+def test_sun_et_als_filter_without_guidance(monkeypatch):
+    """guided=False (SharpSmoothing's default): a step is Sun et al.'s filter (the faces' own normals) and
+    the fitting; guided=True is another step."""
+    _, noisy, faces = noisy_box(0.01, "iso", cells=6)
+    rings = FaceRings(faces, len(noisy))
+    threshold = math.cos(sharp_edges.DEFAULT_SHARPNESS_ANGLE)
+    filtered = filter_normals(face_normals(noisy, faces), rings, threshold)
+    fitted = fit_vertices(noisy, filtered, rings, np.ones(len(noisy)))
+    monkeypatch.setattr(sharp_edges, "TANGENTIAL", 0.0)
+    plain = sharp_smooth(noisy, faces, iterations=1, push_back=False)
+    assert np.allclose(plain, fitted, atol=1e-12)
+    assert not np.allclose(sharp_smooth(noisy, faces, iterations=1, push_back=False, guided=True), fitted, atol=1e-6)
+
+
+def test_the_automatic_amount_guides_where_it_finds_noise(monkeypatch):
+    """The guidance runs with the Automatic Amount on a noisy part; not with a set number of steps, nor on
+    a clean part (held)."""
+    calls = []
+    guidance = sharp_edges.guidance_normals
+    monkeypatch.setattr(sharp_edges, "guidance_normals", lambda *a: calls.append(1) or guidance(*a))
+    _, noisy, faces = noisy_box(0.005, "iso", cells=8)
+    core.smooth_mesh(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True)
+    assert calls
+    calls.clear()
+    core.smooth_mesh(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True, iterations=2)
+    clean, faces = box(8)
+    core.smooth_mesh(clean, edges_of(faces), faces=faces, keep_sharp_edges=True)
+    assert not calls
+
+
+def test_a_coarse_cube_is_why_the_guidance_needs_noise():
+    """Every face of a cube of 12 triangles is at a corner: the guidance blends the sides, Sun et al.'s
+    filter keeps them."""
+    positions = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    quads = [[0, 1, 3, 2], [2, 3, 7, 6], [6, 7, 5, 4], [4, 5, 1, 0], [2, 6, 4, 0], [7, 3, 1, 5]]
+    assert np.allclose(sharp_smooth(positions, quads, iterations=2), positions, atol=1e-12)
+    assert not np.allclose(sharp_smooth(positions, quads, iterations=2, guided=True), positions, atol=0.1)
