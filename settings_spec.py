@@ -137,8 +137,9 @@ KEEP_SHARP_EDGES = Setting(
     "bool",
     "Keep Sharp Edges",
     "For hard-surface scans (machined, cast, CAD parts): smooth the face normals without averaging across "
-    "edges sharper than Sharpness, then fit the vertices to them with HC's push-back (Sun et al. 2007). "
-    "Replaces the method; Iterations count its steps. Slower than HC, and worse on organic shapes",
+    "edges sharper than Sharpness, then fit the vertices to them with HC's push-back (Sun et al. 2007, with "
+    "Zhang et al. 2015's guided filtering). Replaces the method; Iterations count its steps. Slower than HC, "
+    "and worse on organic shapes",
     False,
     flag="keep-sharp-edges",
     help="keep sharp edges (hard-surface scans): normals are not averaged across edges sharper than "
