@@ -51,6 +51,7 @@ Fixed vertices never move (their positions still place their faces' planes); ``i
 step's move, as core.smoothing scales an iteration's.
 """
 
+import itertools
 import math
 from collections.abc import Iterator
 
@@ -120,7 +121,8 @@ PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between t
 FIT_SLICE = 5  # fitting passes between two of those yields
 FIT_SLICES = -(-FIT_ITERATIONS // FIT_SLICE)
 REFIT_SLICES = -(-REFIT_ITERATIONS // FIT_SLICE)
-STEP_SLICES = NORMAL_ITERATIONS + FIT_SLICES + REFIT_SLICES + FOLD_ROUNDS  # a step's slices there, at most
+GUIDED_SLICES = 3  # after the guidance and after each choice of the nearest planes
+STEP_SLICES = GUIDED_SLICES + NORMAL_ITERATIONS + FIT_SLICES + REFIT_SLICES + FOLD_ROUNDS  # a step's, at most
 # The guidance's vertex rings (about 6 faces) count their consistency this many times against the face
 # rings' (about 13): on the tuning parts at 0.5 % noise 1.5-3 leave the same dihedral error, 1 more.
 VERTEX_RING_WEIGHT = 2.0
@@ -185,6 +187,17 @@ class FaceRings:
     """
 
     def __init__(self, triangles, n_vertices):
+        to_end(self._build(triangles, n_vertices))
+
+    @classmethod
+    def in_slices(cls, triangles, n_vertices):
+        """The rings built in slices: a generator yielding after each stage (each a second or so at a
+        million triangles), returning the rings."""
+        rings = cls.__new__(cls)
+        yield from rings._build(triangles, n_vertices)
+        return rings
+
+    def _build(self, triangles, n_vertices):
         t = triangles.shape[0]
         index = np.int32 if max(t, n_vertices) < np.iinfo(np.int32).max // 9 else np.int64
         rows = triangles.ravel().astype(index)
@@ -194,6 +207,7 @@ class FaceRings:
         self.incidence.data[:] = 1.0  # a triangle with a repeated corner counts once at that vertex
         pattern = (self.incidence.T @ self.incidence).tocsr()
         pattern.sort_indices()
+        yield
         self.indptr, self.indices = pattern.indptr, pattern.indices
         self.counts = np.diff(self.indptr)
         self.ring = sp.csr_matrix((np.ones(self.indices.size), self.indices, self.indptr), shape=(t, t))
@@ -203,6 +217,7 @@ class FaceRings:
         self.upper_indptr = np.zeros(t + 1, dtype=self.indices.dtype)  # one index type, as SciPy's kernels need
         np.cumsum(np.bincount(self.upper_rows, minlength=t), out=self.upper_indptr[1:])
         self.corner_columns = (triangles.astype(index)[:, :, None] + n_vertices * np.arange(3, dtype=index)).ravel()
+        yield
         # Each triangle's edges (its corners k, k + 1) as sorted vertex pairs, sorted by pair: a pair met twice
         # is an edge between two triangles, a pair met once an open border (its umbrella leans inwards).
         pairs = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
@@ -219,6 +234,7 @@ class FaceRings:
         self.border[pairs[order[alone]].ravel()] = True
         self.faces_at = np.diff(self.incidence.indptr)
         self.triangles = triangles
+        yield
 
 
 def face_normals(points, triangles):
@@ -662,13 +678,15 @@ class SharpSmoothing:
 
     def steps(self, chunk: int | None = None) -> Iterator[float]:
         """Run the steps left, ``chunk`` at a time, yielding the fraction done after each slice; on meshes of
-        ``PASS_SLICES_FROM`` triangles or more also within a step (at most ``STEP_SLICES`` slices: after each
-        filtering pass, each fitting's set-up, every ``FIT_SLICE`` fitting passes and each unfolding round
-        but the last; a step takes seconds there)."""
-        if self.rings is None:
-            self.rings = FaceRings(self.triangles, self.positions.shape[0])
+        ``PASS_SLICES_FROM`` triangles or more also between the stages of building the face rings (yielding
+        0.0) and within a step (at most ``STEP_SLICES`` slices: after the guidance, each filtering pass, each
+        choice of the nearest planes, each fitting's set-up, every ``FIT_SLICE`` fitting passes and each
+        unfolding round but the last; a step takes seconds there)."""
         chunk = self.iterations if chunk is None else max(1, int(chunk))
         passes = self.triangles.shape[0] >= PASS_SLICES_FROM
+        if self.rings is None and self.iterations > 0:
+            building = FaceRings.in_slices(self.triangles, self.positions.shape[0])
+            self.rings = (yield from _counted(building, itertools.repeat(0.0))) if passes else to_end(building)
         while self.done < self.iterations and not self.stopped_early:
             for _ in range(min(chunk, self.iterations - self.done)):
                 for k in self._step():
@@ -689,18 +707,24 @@ class SharpSmoothing:
         if self.rings is None:
             self.rings = FaceRings(self.triangles, self.positions.shape[0])
         start = self.current
+        slices = itertools.count(1)  # the slice numbers this step yields, in order
         normals = face_normals(start, self.triangles)
-        guidance = guidance_normals(normals, self.rings) if self.guided else None
+        guidance = None
+        if self.guided:
+            guidance = guidance_normals(normals, self.rings)
+            yield next(slices)
         filtering = filter_steps(normals, self.rings, self.cos_threshold, NORMAL_ITERATIONS, guidance)
-        normals = yield from _counted(filtering)
+        normals = yield from _counted(filtering, slices)
         if self.guided:
             normals = nearest_plane_normals(start, normals, self.rings)
+            yield next(slices)
         fitting = fit_steps(start, normals, self.rings, self.moving, FIT_ITERATIONS)
-        moved = yield from _counted(fitting, NORMAL_ITERATIONS)
+        moved = yield from _counted(fitting, slices)
         if self.guided:  # the fitted corners, much less noisy, place the faces on their sides again
             normals = nearest_plane_normals(moved, normals, self.rings)
+            yield next(slices)
             refitting = fit_steps(moved, normals, self.rings, self.moving, REFIT_ITERATIONS)
-            moved = yield from _counted(refitting, NORMAL_ITERATIONS + FIT_SLICES)
+            moved = yield from _counted(refitting, slices)
         if TANGENTIAL:
             _relax(moved, normals, self.rings, self.operator, self.cos_threshold, self.still)
         if self.push_back:
@@ -711,7 +735,7 @@ class SharpSmoothing:
             moved = start + self.share[:, None] * (moved - start)
         moved[self.still] = start[self.still]
         unfolding = _unfold(moved, start, self.triangles, normals, _unit(self.rings.ring @ normals))
-        yield from _counted(unfolding, NORMAL_ITERATIONS + FIT_SLICES + REFIT_SLICES)
+        yield from _counted(unfolding, slices)
         if np.any(self.max_deviation):
             _within(moved, self.original, self.max_deviation)
         self.done += 1
@@ -742,15 +766,15 @@ def _relax(points, normals, rings, operator, cos_threshold, still):
     points[flat] += TANGENTIAL * umbrella
 
 
-def _counted(generator, count=0):
-    """``yield from _counted(g, count)``: g's value, yielding count + 1, count + 2, ... for its slices."""
+def _counted(generator, slices):
+    """``yield from _counted(g, slices)``: g's value, yielding the next number of ``slices`` (an iterator) for
+    each of g's slices."""
     while True:
         try:
             next(generator)
         except StopIteration as done:
             return done.value
-        count += 1
-        yield count
+        yield next(slices)
 
 
 def _unfold(points, start, triangles, normals, around, rounds=FOLD_ROUNDS):

@@ -9,6 +9,7 @@ from primitives import CAD, PRIMITIVES, TINY
 import core
 from core import sharp_edges
 from core.sharp_edges import FaceRings, SharpSmoothing, face_normals, filter_normals, fit_vertices, sharp_smooth
+from core.slices import to_end
 
 
 def box(cells=12, size=2.0):
@@ -342,6 +343,29 @@ def test_big_meshes_yield_between_filtering_passes(monkeypatch):
     fewest = sharp_edges.NORMAL_ITERATIONS + sharp_edges.FIT_SLICES + 1
     assert 2 * fewest <= len(fine) <= 2 * sharp_edges.STEP_SLICES and fine == sorted(fine) and fine[-1] == 1.0
     assert np.array_equal(sliced.result(), whole.result())
+
+
+def test_big_meshes_yield_while_the_rings_and_the_guidance_are_made(monkeypatch):
+    """On big meshes the face rings are built in slices (steps() yields 0.0 after each stage) and a guided
+    step yields after the guidance and after each choice of the nearest planes too: a cancel never waits
+    for the whole set-up. Sliced or not, the rings and the result are the same."""
+    _, noisy, faces = noisy_box(0.005, "iso", cells=6)
+    whole = SharpSmoothing(noisy, faces, iterations=2, guided=True)
+    at_once = list(whole.steps())
+    monkeypatch.setattr(sharp_edges, "PASS_SLICES_FROM", 10)
+    sliced = SharpSmoothing(noisy, faces, iterations=2, guided=True)
+    fine = list(sliced.steps(chunk=1))
+    stages = fine.index(next(f for f in fine if f > 0.0))
+    assert at_once == [1.0] and stages == 3
+    per_step = sharp_edges.GUIDED_SLICES + sharp_edges.NORMAL_ITERATIONS + sharp_edges.FIT_SLICES + 1
+    assert stages + 2 * per_step <= len(fine) <= stages + 2 * (sharp_edges.STEP_SLICES + 1)
+    assert fine == sorted(fine) and fine[-1] == 1.0
+    assert np.array_equal(sliced.result(), whole.result())
+    rings = to_end(FaceRings.in_slices(faces, len(noisy)))
+    reference = FaceRings(faces, len(noisy))
+    for name in ("indptr", "indices", "upper_indptr", "upper_indices", "across", "border", "faces_at"):
+        assert np.array_equal(getattr(rings, name), getattr(reference, name)), name
+    assert (rings.ring != reference.ring).nnz == 0 and (rings.incidence != reference.incidence).nnz == 0
 
 
 def _loop_guidance(normals, faces):
