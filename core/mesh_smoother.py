@@ -331,9 +331,10 @@ class MeshSmoother:
     def _sharp_steps(self, chunk, start):
         """``steps`` with Keep Sharp Edges (core.sharp_edges): with the Automatic Amount the steps, and an
         angle no narrower than the noise's, come from the noise core.mesh_noise finds (parts without noise
-        held or kept within a small radius, as HC's default does), and closed parts get their volume back."""
+        held or kept within a small radius, as HC's default does), and closed parts get their volume back.
+        Where it finds noise the filter is guided, steps set or not (a clean coarse model keeps Sun et al.'s)."""
         iterations, amount, fixed, angle = self.iterations, None, self.fixed, self.sharpness_angle
-        guided = False  # the guidance where the Automatic Amount finds noise (core.sharp_edges)
+        guided = False  # the guidance where core.mesh_noise finds noise (core.sharp_edges), steps set or not
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
         restoring, share = self.automatic and self.faces is not None, 0.0
         if restoring:
@@ -355,6 +356,10 @@ class MeshSmoother:
             amount = MeshAmount(self.alpha, self.beta, iterations, sigma, edge, 0, noise.found)
             if self.max_deviation == AUTO:
                 limit = self._noise_limit(noise, sigma)
+            yield share
+        elif self.iterations > 0:  # set steps: the noise test only chooses the filter
+            share = sharp_edges.CHOOSING_SHARE
+            guided = (yield from as_fraction(noise_steps(self.positions, self.surface_operator), 0.0)).found
             yield share
         end = 1.0 - RESTORE_SHARE if restoring else 1.0
         run = SharpSmoothing(

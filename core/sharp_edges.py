@@ -14,12 +14,12 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    within each side is averaged away. The guidance (Zhang, Deng, Zhang, Bouaziz and Liu 2015, "Guided
    Mesh Normal Filtering"; ``guidance_normals``), computed once per step, is the mean normal of the most
    consistent patch each face lies in: steady where a single face is not, it tells a crease from noise
-   that tilts faces by nearly as much as the crease turns. It runs where the Automatic Amount finds
-   noise (``guided``): it needs patches on one side of each crease, which scans have and a coarse model
-   (every face at a corner) does not. Elsewhere Sun et al.'s filter compares the faces' own normals,
-   g = n, recomputed every pass. On bench_sharp_edges.py's tuning parts the guidance (with the nearest
-   planes below) leaves 34-47 % less RMS error at 1 % isotropic noise, and the bevelled box's creases
-   13-16° off at 0.5 % noise instead of 36° (against ``guided=False``).
+   that tilts faces by nearly as much as the crease turns. It runs where core.mesh_noise finds noise
+   (``guided``; core.MeshSmoother asks, steps set or not): it needs patches on one side of each crease,
+   which scans have and a coarse model (every face at a corner) does not. Elsewhere Sun et al.'s filter
+   compares the faces' own normals, g = n, recomputed every pass. On bench_sharp_edges.py's tuning parts
+   the guidance (with the nearest planes below) leaves 34-47 % less RMS error at 1 % isotropic noise,
+   and the bevelled box's creases 13-16° off at 0.5 % noise instead of 36° (against ``guided=False``).
    With the guidance, each face then takes the filtered normal of its ring whose plane lies nearest its
    corners (``nearest_plane_normals``): the faces along a crease that filtering left between the two
    sides take the side they lie on, and a face at a corner, where every patch is mixed and the guidance
@@ -612,7 +612,7 @@ class SharpSmoothing:
         False: Sun et al.'s two steps alone, without HC's push-back.
     guided : bool
         True: the filter's weights compare guidance normals, and the faces take their nearest planes (what
-        core.MeshSmoother's Automatic Amount runs where it finds noise). False: Sun et al.'s filter alone.
+        core.MeshSmoother runs where core.mesh_noise finds noise). False: Sun et al.'s filter alone.
         The guidance is for meshes fine enough that most faces lie in a patch on one side of every crease
         (scans): on a coarse model (a cube of 12 triangles) every face is at a corner and it blends the sides.
 

@@ -274,7 +274,7 @@ def test_slices_progress_and_cancel():
     fractions = list(run.steps(chunk=1))
     assert fractions == sorted(fractions) and fractions[-1] == 1.0 and len(fractions) >= 4
     assert run.report.keep_sharp_edges and run.report.iterations == 4
-    assert np.array_equal(run.result, sharp_smooth(noisy, faces, iterations=4))
+    assert np.array_equal(run.result, sharp_smooth(noisy, faces, iterations=4, guided=True))
     with pytest.raises(core.Cancelled):
         core.smooth_mesh(
             noisy, edges_of(faces), faces=faces, keep_sharp_edges=True, iterations=4, progress=lambda f: f < 0.3
@@ -559,9 +559,9 @@ def test_sun_et_als_filter_without_guidance(monkeypatch):
     assert not np.allclose(sharp_smooth(noisy, faces, iterations=1, push_back=False, guided=True), fitted, atol=1e-6)
 
 
-def test_the_automatic_amount_guides_where_it_finds_noise(monkeypatch):
-    """The guidance runs with the Automatic Amount on a noisy part; not with a set number of steps, nor on
-    a clean part (held)."""
+def test_the_filter_is_guided_where_noise_is_found(monkeypatch):
+    """The guidance runs on a noisy part, with the Automatic Amount and with a set number of steps alike
+    (the result then is SharpSmoothing's guided run of those steps); not on a clean part, steps set or not."""
     calls = []
     guidance = sharp_edges.guidance_normals
     monkeypatch.setattr(sharp_edges, "guidance_normals", lambda *a: calls.append(1) or guidance(*a))
@@ -569,10 +569,22 @@ def test_the_automatic_amount_guides_where_it_finds_noise(monkeypatch):
     core.smooth_mesh(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True)
     assert calls
     calls.clear()
-    core.smooth_mesh(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True, iterations=2)
+    set_steps = core.smooth_mesh(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True, iterations=2)
+    assert len(calls) == 2
+    guided = SharpSmoothing(noisy, faces, iterations=2, guided=True)
+    assert np.array_equal(set_steps, to_end_result(guided))
+    calls.clear()
     clean, faces = box(8)
     core.smooth_mesh(clean, edges_of(faces), faces=faces, keep_sharp_edges=True)
+    core.smooth_mesh(clean, edges_of(faces), faces=faces, keep_sharp_edges=True, iterations=2)
     assert not calls
+
+
+def to_end_result(run):
+    """A SharpSmoothing's result after all its steps."""
+    for _ in run.steps():
+        pass
+    return run.result()
 
 
 def test_a_coarse_cube_is_why_the_guidance_needs_noise():
