@@ -18,8 +18,8 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    noise (``guided``): it needs patches on one side of each crease, which scans have and a coarse model
    (every face at a corner) does not. Elsewhere Sun et al.'s filter compares the faces' own normals,
    g = n, recomputed every pass. On bench_sharp_edges.py's tuning parts the guidance (with the nearest
-   planes below) leaves 34-47 % less RMS error at 1 % isotropic noise, and the bevelled box's creases
-   13-16° off at 0.5 % noise instead of 36° (against ``guided=False``).
+   planes below) leaves 14-25 % less RMS error at 1 % isotropic noise, and the bevelled box's creases
+   13-15° off at 0.5 % noise instead of 36° (against ``guided=False``).
    With the guidance, each face then takes the filtered normal of its ring whose plane lies nearest its
    corners (``nearest_plane_normals``): the faces along a crease that filtering left between the two
    sides take the side they lie on, and a face at a corner, where every patch is mixed and the guidance
@@ -34,7 +34,7 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    moves ``TANGENTIAL`` of the way to its neighbours' mean along its tangent plane: noise along the
    surface (isotropic noise)
    leaves uneven, folded triangles whose normals the filter cannot trust; this evens them out without
-   moving the surface (on the tuning parts at 0.5 % isotropic noise: 12 % less error).
+   moving the surface (on the tuning parts at 0.5 % isotropic noise: 2-16 % less RMS error).
 4. **HC's push-back** (paper section 4, Algorithm 1), with the step's move as the Laplacian move:
    b_i = p_i - (alpha o_i + (1 - alpha) q_i), then p_i <- p_i - (beta b_i + (1 - beta) mean_adj(b)).
    What the fitting moved alike over a neighbourhood (a face or a rim drifting inwards: shrinkage) is
