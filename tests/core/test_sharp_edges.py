@@ -594,3 +594,65 @@ def test_a_coarse_cube_is_why_the_guidance_needs_noise():
     quads = [[0, 1, 3, 2], [2, 3, 7, 6], [6, 7, 5, 4], [4, 5, 1, 0], [2, 6, 4, 0], [7, 3, 1, 5]]
     assert np.allclose(sharp_smooth(positions, quads, iterations=2), positions, atol=1e-12)
     assert not np.allclose(sharp_smooth(positions, quads, iterations=2, guided=True), positions, atol=0.1)
+
+
+def _grid(cells=4):
+    """A flat square grid of ``cells`` x ``cells`` squares split into triangles, facing +z."""
+    ticks = np.arange(cells + 1, dtype=float)
+    u, v = (a.ravel() for a in np.meshgrid(ticks, ticks, indexing="ij"))
+    a = (np.arange((cells + 1) ** 2).reshape(cells + 1, cells + 1))[:-1, :-1].ravel()
+    b, c, d = a + cells + 1, a + cells + 2, a + 1
+    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    points = np.c_[u, v, np.zeros(u.size)]
+    if face_normals(points, faces)[0, 2] < 0:
+        faces = faces[:, ::-1]
+    return points, faces
+
+
+def _loop_unfold(points, start, before, faces, normals, around, rounds=sharp_edges.FOLD_ROUNDS):
+    """The unfolding from its definition, triangle by triangle."""
+    points = points.copy()
+    folded = [before[f] @ normals[f] < 0.0 or before[f] @ around[f] < 0.0 for f in range(len(faces))]
+    for _ in range(rounds):
+        now = face_normals(points, faces)
+        turned = [not folded[f] and (now[f] @ normals[f] < 0.0 or now[f] @ around[f] < 0.0) for f in range(len(faces))]
+        if not any(turned):
+            break
+        corners = {int(v) for f in range(len(faces)) if turned[f] for v in faces[f]}
+        for v in corners:
+            points[v] = start[v] + 0.5 * (points[v] - start[v])
+    return points
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_unfolding_equals_its_definition_as_a_loop(seed):
+    flat, faces = _grid(6)
+    rng = np.random.default_rng(seed)
+    start = flat + rng.normal(0.0, 0.4, flat.shape) * [1, 1, 0]  # noise along the plane folds triangles
+    points = flat + rng.normal(0.0, 0.4, flat.shape) * [1, 1, 0]
+    before = face_normals(start, faces)
+    normals = around = np.tile([0.0, 0.0, 1.0], (len(faces), 1))
+    expected = _loop_unfold(points, start, before, faces, normals, around)
+    unfolded = points.copy()
+    for _ in sharp_edges._unfold(unfolded, start, before, faces, normals, around):
+        pass
+    assert np.array_equal(unfolded, expected)
+    assert (face_normals(start, faces)[:, 2] < 0).any() and (face_normals(points, faces)[:, 2] < 0).any()
+    assert not np.array_equal(unfolded, points)
+
+
+def test_a_step_unfolds_what_noise_folded_and_halves_what_it_folds():
+    flat, faces = _grid(4)
+    folded = flat.copy()
+    folded[6, :2] += [1.6, 1.6]  # an inner vertex pushed across its ring along the plane: triangles turn over
+    assert (face_normals(folded, faces)[:, 2] < 0).any()
+    normals = around = np.tile([0.0, 0.0, 1.0], (len(faces), 1))
+    unfolded = flat.copy()  # the step moves it back: its move is kept
+    for _ in sharp_edges._unfold(unfolded, folded, face_normals(folded, faces), faces, normals, around):
+        pass
+    assert np.array_equal(unfolded, flat)
+    turned = folded.copy()  # the step folds it: its corners' moves are halved until no triangle is turned
+    for _ in sharp_edges._unfold(turned, flat, face_normals(flat, faces), faces, normals, around):
+        pass
+    assert (face_normals(turned, faces)[:, 2] > 0).all()
+    assert not np.array_equal(turned, folded)
