@@ -25,13 +25,20 @@ def torus(n_vertices, ratio=2.5, minor_radius=0.4):
     vertices = np.stack(
         np.broadcast_arrays(ring * np.cos(u), ring * np.sin(u), minor_radius * np.sin(v)), axis=-1
     ).reshape(-1, 3)
-    i, j = np.meshgrid(np.arange(around_axis), np.arange(around_tube), indexing="ij")
-    a = i * around_tube + j
-    b = ((i + 1) % around_axis) * around_tube + j
-    c = ((i + 1) % around_axis) * around_tube + (j + 1) % around_tube
-    d = i * around_tube + (j + 1) % around_tube
-    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
-    return vertices, faces.astype(np.int64)
+    return vertices, wrapped_grid(around_axis, around_tube)
+
+
+def wrapped_grid(rows, columns):
+    """(2 rows columns, 3) int64 triangles of a rows x columns vertex grid (vertex i columns + j) closed in
+    both directions, each quad split along its diagonal from (i, j) to (i + 1, j + 1): a torus's faces."""
+    i, j = np.meshgrid(np.arange(rows), np.arange(columns), indexing="ij")
+    a = i * columns + j
+    b = ((i + 1) % rows) * columns + j
+    c = ((i + 1) % rows) * columns + (j + 1) % columns
+    d = i * columns + (j + 1) % columns
+    return np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)]).astype(
+        np.int64
+    )
 
 
 def torus_volume(ratio=2.5, minor_radius=0.4):

@@ -12,6 +12,7 @@ scanner's mesh is: the constructive solid's long thin triangles would be no scan
   convex and concave creases, curved faces, creases meeting curved faces (a fandisk's kind of shape).
 """
 
+import meshes  # bench/, on sys.path beside this module
 import numpy as np
 
 
@@ -53,14 +54,7 @@ def holed_cylinder(edge=0.035, radius=1.0, hole=0.45, height=1.0):
     angle = np.linspace(0.0, 2.0 * np.pi, around, endpoint=False)[:, None]
     r, z = profile[:, 0][None, :], profile[:, 1][None, :]
     vertices = np.stack(np.broadcast_arrays(r * np.cos(angle), r * np.sin(angle), z), axis=-1).reshape(-1, 3)
-    m = len(profile)
-    i, j = np.meshgrid(np.arange(around), np.arange(m), indexing="ij")
-    a = i * m + j
-    b = ((i + 1) % around) * m + j
-    c = ((i + 1) % around) * m + (j + 1) % m
-    d = i * m + (j + 1) % m
-    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
-    return vertices, _outward(vertices, faces.astype(np.int64))
+    return vertices, _outward(vertices, meshes.wrapped_grid(around, len(profile)))
 
 
 def _outward(vertices, faces):

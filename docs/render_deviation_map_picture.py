@@ -60,32 +60,33 @@ def placed(obj, x, size):
     )
 
 
-def attribute_material(name, attribute, emission=False):
-    """A material coloured by a colour attribute (linear RGB, as the operator stores it)."""
+def _shaded(name, emission):
+    """(material, its node tree, its shader, the shader's colour input): a new material of one shader,
+    emission or Principled BSDF, linked to the output."""
     material = bpy.data.materials.new(name)
     material.use_nodes = True
     tree = material.node_tree
     tree.nodes.clear()
     output = tree.nodes.new("ShaderNodeOutputMaterial")
-    colour = tree.nodes.new("ShaderNodeAttribute")
-    colour.attribute_name = attribute
     shader = tree.nodes.new("ShaderNodeEmission" if emission else "ShaderNodeBsdfPrincipled")
+    tree.links.new(shader.outputs[0], output.inputs["Surface"])
+    return material, tree, shader, shader.inputs["Color" if emission else "Base Color"]
+
+
+def attribute_material(name, attribute, emission=False):
+    """A material coloured by a colour attribute (linear RGB, as the operator stores it)."""
+    material, tree, shader, colour_input = _shaded(name, emission)
     if not emission:
         shader.inputs["Roughness"].default_value = 0.5
-    tree.links.new(colour.outputs["Color"], shader.inputs["Color" if emission else "Base Color"])
-    tree.links.new(shader.outputs[0], output.inputs["Surface"])
+    colour = tree.nodes.new("ShaderNodeAttribute")
+    colour.attribute_name = attribute
+    tree.links.new(colour.outputs["Color"], colour_input)
     return material
 
 
 def plain_material(name, rgb, emission=False):
-    material = bpy.data.materials.new(name)
-    material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.clear()
-    output = tree.nodes.new("ShaderNodeOutputMaterial")
-    shader = tree.nodes.new("ShaderNodeEmission" if emission else "ShaderNodeBsdfPrincipled")
-    shader.inputs["Color" if emission else "Base Color"].default_value = (*rgb, 1.0)
-    tree.links.new(shader.outputs[0], output.inputs["Surface"])
+    material, _, _, colour_input = _shaded(name, emission)
+    colour_input.default_value = (*rgb, 1.0)
     return material
 
 
