@@ -99,10 +99,10 @@ class Borders:
         self.on = count > 0
         self.curve = np.flatnonzero(count == 2)
         self.held = self.on & (count != 2)
-        order = np.argsort(np.concatenate([edges[:, 0], edges[:, 1]]), kind="stable")
-        other = np.concatenate([edges[:, 1], edges[:, 0]])[order]
-        first = np.searchsorted(np.sort(np.concatenate([edges[:, 0], edges[:, 1]])), self.curve)
-        self.ends = np.stack([other[first], other[first + 1]], 1)
+        heads, tails = np.concatenate([edges[:, 0], edges[:, 1]]), np.concatenate([edges[:, 1], edges[:, 0]])
+        order = np.argsort(heads, kind="stable")  # each vertex's border neighbours, side by side
+        first = np.searchsorted(heads[order], self.curve)
+        self.ends = np.stack([tails[order][first], tails[order][first + 1]], 1)
         self.edges = edges
 
 
