@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import parallel, sharp_edges, topology, volume, welding
+from . import collapse, parallel, sharp_edges, topology, volume, welding
 from .adjacency import Umbrella, umbrella_operator
 from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
@@ -84,6 +84,8 @@ class MeshReport:
         its push-back's weights, and ``sharpness_angle`` the angle it kept).
     sharpness_angle : float or None
         Radians; None when ``keep_sharp_edges`` is off.
+    held_parts : int
+        Parts the Automatic Amount would have collapsed, given their input positions back (core.collapse).
 
     Examples
     --------
@@ -105,6 +107,7 @@ class MeshReport:
     seconds: float
     keep_sharp_edges: bool = False
     sharpness_angle: float | None = None
+    held_parts: int = 0
 
 
 def _auto_or(value, name):
@@ -269,7 +272,7 @@ class MeshSmoother:
         if self.keep_sharp_edges:
             yield from self._sharp_steps(chunk, start)
             return
-        alpha, beta, iterations, amount, done = self.alpha, self.beta, self.iterations, None, None
+        alpha, beta, iterations, amount, done, noise = self.alpha, self.beta, self.iterations, None, None, None
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
         fixed, share, restoring = self.fixed, 0.0, self.automatic and self.faces is not None
         if restoring:  # what the restore needs of the input, on another thread while the choice runs on one
@@ -283,6 +286,7 @@ class MeshSmoother:
                 if fraction < 1.0:
                     yield share * fraction
             amount, fixed = chooser.amount, chooser.fixed  # the Automatic Amount holds parts without noise
+            noise = chooser.noise
             alpha, beta, iterations = amount.alpha, amount.beta, amount.iterations
             if self.max_deviation == AUTO:
                 limit = self._noise_limit(chooser.noise, amount.sigma)
@@ -302,9 +306,11 @@ class MeshSmoother:
             smoothed = smoothing.result()
             del smoothing
             result, ran = smoothed.positions, smoothed.iterations
-        offset = yield from self._finish(result, ran, amount, fixed, limit, measuring if restoring else None, end)
+        measured = measuring if restoring else None
+        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise)
         largest = float(np.max(limit)) if np.size(limit) else 0.0
-        self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, largest, time.perf_counter() - start)
+        seconds = time.perf_counter() - start
+        self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, largest, seconds, held_parts=held)
         yield 1.0
 
     def _noise_limit(self, noise, sigma):
@@ -315,25 +321,33 @@ class MeshSmoother:
             limit = np.where(noise.limited, noise.quiet_radius(self.positions, DEVIATION_IN_NOISE), limit)
         return limit
 
-    def _finish(self, result, ran, amount, fixed, limit, measuring, progress):
+    def _finish(self, result, ran, amount, fixed, limit, measuring, progress, noise=None):
         """Give closed parts their volume back (when ``measuring`` holds the input's measure: the Automatic
-        Amount) within the deviation limit, and set ``result`` in the caller's numbering; returns the
-        largest offset, yielding ``progress`` between the restore's slices."""
-        offset = 0.0
+        Amount) within the deviation limit, give the parts the run collapsed their input back (with the
+        ``noise`` core.mesh_noise found: the Automatic Amount; core.collapse), and set ``result`` in the
+        caller's numbering; returns (the largest offset, the parts given back), yielding ``progress``
+        between the restore's slices."""
+        offset, held = 0.0, 0
         if measuring is not None and ran > 0:
             limited = volume.NOISE_OFFSETS * amount.sigma
             result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), progress)
             if np.any(limit):  # the offset keeps to the limit too
                 _within(result, self.positions, limit)
+        if noise is not None and ran > 0:
+            parts = collapse.collapsed(self.positions, result, noise.part_of_vertex, noise.sigma)
+            held = int(np.count_nonzero(parts))
+            if held:
+                back = parts[noise.part_of_vertex]
+                result[back] = self.positions[back]
         self.result = result if self.welding is None else self.welding.scatter(result)
-        return offset
+        return offset, held
 
     def _sharp_steps(self, chunk, start):
         """``steps`` with Keep Sharp Edges (core.sharp_edges): with the Automatic Amount the steps, and an
         angle no narrower than the noise's, come from the noise core.mesh_noise finds (parts without noise
         held or kept within a small radius, as HC's default does), and closed parts get their volume back.
         Where it finds noise the filter is guided, steps set or not (a clean coarse model keeps Sun et al.'s)."""
-        iterations, amount, fixed, angle = self.iterations, None, self.fixed, self.sharpness_angle
+        iterations, amount, fixed, angle, noise = self.iterations, None, self.fixed, self.sharpness_angle, None
         guided = False  # the guidance where core.mesh_noise finds noise (core.sharp_edges), steps set or not
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
         restoring, share = self.automatic and self.faces is not None, 0.0
@@ -381,10 +395,13 @@ class MeshSmoother:
                 yield share + (end - share) * fraction
         result, ran = run.result(), run.done
         del run
-        offset = yield from self._finish(result, ran, amount, fixed, limit, measuring if restoring else None, end)
+        measured = measuring if restoring else None
+        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise)
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         seconds = time.perf_counter() - start
-        self.report = MeshReport(self.method, self.alpha, self.beta, ran, amount, offset, largest, seconds, True, angle)
+        self.report = MeshReport(
+            self.method, self.alpha, self.beta, ran, amount, offset, largest, seconds, True, angle, held
+        )
         yield 1.0
 
     def _keep_volume(self, result, fixed, limit, measured, progress):

@@ -259,7 +259,8 @@ def summary(jobs, props, length=None):
 
 def amount_words(reports):
     """What ran: '12 iterations' or, chosen, 'automatic amount: noise 0.45x edge length, 12 iterations,
-    alpha 0, beta 0.6, volume kept, moves at most 0.0123'; with Keep Sharp Edges, 'sharpness 30°, ' first,
+    alpha 0, beta 0.6, volume kept, moves at most 0.0123' (and '1 part left as it was (smoothing would
+    collapse it)' where core.collapse gave a part back); with Keep Sharp Edges, 'sharpness 30°, ' first,
     and steps for iterations."""
     angles = sorted({round(math.degrees(r.sharpness_angle)) for r in reports if r.keep_sharp_edges})
     if not angles:
@@ -286,4 +287,9 @@ def _amount_words(reports, unit):
     limits = [report.max_deviation for report in reports if report.max_deviation]
     if limits:
         words += f", moves at most {max(limits):.3g}"
+    held = sum(report.held_parts for report in reports)
+    if held == 1:
+        words += ", 1 part left as it was (smoothing would collapse it)"
+    elif held:
+        words += f", {held} parts left as they were (smoothing would collapse them)"
     return words

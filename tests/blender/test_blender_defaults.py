@@ -76,3 +76,17 @@ def test_small_parts_beside_a_noisy_one_neither_blow_up_nor_collapse(scene):
         if name != "sphere":
             assert growth.min() >= 0.99, name
     assert np.abs(after[: parts["sphere"]] - before[: parts["sphere"]]).max() > 1e-3  # the scan was smoothed
+
+
+@pytest.mark.parametrize("sharp", [False, True], ids=["hc", "keep_sharp_edges"])
+def test_a_noisy_cone_is_left_as_it_was(scene, capfd, sharp):
+    """Blender's Cone with noise of 0.3 median edge lengths (0.35 scene units): the Automatic Amount would
+    shrink it to a point (Keep Sharp Edges: by more than half); it stays as it was, and the report says why."""
+    bpy.ops.mesh.primitive_cone_add()
+    obj = bpy.context.active_object
+    noisy = positions_of(obj.data) + np.random.default_rng(0).normal(scale=0.35, size=(33, 3)).astype(np.float32)
+    obj.data.vertices.foreach_set("co", noisy.ravel())
+    obj.data.update()
+    assert bpy.ops.object.hc_smooth(keep_sharp_edges=sharp) == {"FINISHED"}
+    assert np.array_equal(positions_of(obj.data), noisy)
+    assert "1 part left as it was (smoothing would collapse it)" in capfd.readouterr().out

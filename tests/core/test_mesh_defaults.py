@@ -69,6 +69,41 @@ def test_closed_cone_neither_smoothed_nor_blown_up():
     assert np.all(np.ptp(restored, axis=0) <= 1.01 * np.ptp(cone.positions, axis=0) + 1e-12)
 
 
+@pytest.mark.parametrize("sharp", [False, True], ids=["hc", "keep_sharp_edges"])
+def test_a_noisy_coarse_cone_is_left_as_it_was(sharp):
+    """The reproducer: Blender's Cone (33 vertices) with noise of 0.3 median edge lengths got 198 iterations
+    (its shape is noise to GCV) and shrank to a point (Keep Sharp Edges: its RMS radius to 0.42 of what
+    taking the noise away leaves). Now it comes back as it was, alone and beside a noisy sphere, which is
+    smoothed; the report counts it."""
+    cone, _ = with_noise(PRIMITIVES["cone_ngon"](), 0.3, "isotropic")
+    sphere, _ = with_noise(PRIMITIVES["uv_sphere"](), 0.3, "isotropic", seed=4)
+    beside = joined(sphere, moved(cone, 0.2, (3.0, 0.0, 0.0)))
+    for mesh, first in ((cone, 0), (beside, len(sphere.positions))):
+        result, report = core.smooth_mesh(
+            mesh.positions, mesh.edges, faces=mesh.faces, keep_sharp_edges=sharp, return_report=True
+        )
+        assert report.amount.noise_found and report.iterations > 0 and report.held_parts == 1
+        assert np.array_equal(result[first:], mesh.positions[first:])
+        assert np.linalg.norm(result[:first] - mesh.positions[:first], axis=1).min(initial=1.0) > 0.0
+    explicit = core.smooth_mesh(cone.positions, cone.edges, faces=cone.faces, iterations=198, return_report=True)
+    assert explicit[1].held_parts == 0 and not np.array_equal(explicit[0], cone.positions)  # numbers set: as set
+
+
+def test_collapsed_tells_a_collapse_from_noise_taken_away():
+    """core.collapse: a sphere's noise taken away shrinks its radius as sqrt(r^2 - 3 sigma^2) says, within
+    KEEP; the same sphere shrunk to half is a collapse; parts are judged each on its own."""
+    rng = np.random.default_rng(5)
+    clean = rng.normal(size=(2000, 3))
+    clean /= np.linalg.norm(clean, axis=1, keepdims=True)
+    sigma = 0.2
+    noisy = clean + rng.normal(scale=sigma, size=clean.shape)
+    both = np.r_[noisy, noisy + 5.0]
+    parts = np.repeat([0, 1], len(clean))
+    after = np.r_[clean, 0.5 * (clean + 5.0) + 2.5]  # part 0 denoised, part 1 shrunk about its centre
+    assert list(core.collapse.collapsed(both, after, parts, np.array([sigma, sigma]))) == [False, True]
+    assert not core.collapse.collapsed(noisy, 0.9 * clean, np.zeros(len(clean), int), np.array([sigma]))[0]
+
+
 @pytest.fixture(scope="module")
 def sphere_cube_cone():
     """A noisy UV sphere joined with a small clean cube (size 0.05) and cone, and tiny parts."""
