@@ -183,6 +183,8 @@ def amount_text(params):
         text += f", β {params['beta']:g}"
     if "noise" in params:
         text += f", σ̂ {100 * params['noise']:.3f}"
+    if params.get("held_parts"):
+        text += f", {params['held_parts']} parts held"  # the default would have collapsed them (core.collapse)
     return text
 
 

@@ -134,6 +134,8 @@ def hc_default(case):
     settings = {"alpha": report.alpha, "beta": report.beta, "iterations": report.iterations}
     if report.amount is not None:
         settings.update(noise=report.amount.sigma / case.diagonal, noise_over_edge=report.amount.ratio)
+    if report.held_parts:
+        settings.update(held_parts=report.held_parts)
     return result, settings
 
 

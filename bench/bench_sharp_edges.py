@@ -155,7 +155,8 @@ def ours(case, automatic=True):
     result, report = core.smooth_mesh(
         case.noisy, case.edges, faces=case.faces, weld=True, keep_sharp_edges=True, return_report=True, **options
     )
-    return result, {"steps": report.iterations, "angle": round(math.degrees(report.sharpness_angle), 1)}
+    chosen = {"steps": report.iterations, "angle": round(math.degrees(report.sharpness_angle), 1)}
+    return result, {**chosen, "held_parts": report.held_parts}  # parts left as they were (core.collapse)
 
 
 def two_step(case, params):
@@ -431,6 +432,7 @@ def report(record, out):
             "\nOurs: steps and angle the Automatic Amount chose: "
             + "; ".join(
                 f"{c['mesh']} {c['kind']} {100 * c['sigma']:g} %: {c['ours']['steps']} at {c['ours']['angle']:g}°"
+                + (f", {c['ours']['held_parts']} parts held" if c["ours"].get("held_parts") else "")
                 for c in cells
             )
         )
