@@ -9,8 +9,9 @@ Numbers a caller gives are used exactly. The Automatic Amount (HC only) chooses 
 ``"auto"``: with ``iterations="auto"`` and ``alpha="auto"`` it chooses the iterations from the mesh's
 own noise (core.mesh_amount) with alpha 0, holding parts without noise, gives every closed part
 its volume back within bounds (core.volume), and gives a part it collapsed its input back
-(core.collapse); with ``beta="auto"`` it may take gentler steps on light noise. Either number given switches it off: the other then takes its default (``DEFAULT_ALPHA``,
-``DEFAULT_ITERATIONS``) and the run is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
+(core.collapse); with ``beta="auto"`` it may take gentler steps on light noise. Either number given
+switches it off: the other then takes its default (``DEFAULT_ALPHA``, ``DEFAULT_ITERATIONS``) and the run
+is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
 
 Two options change the mesh the run sees, both off by default: ``weld`` runs coincident vertices as
 one (core.welding), ``border`` chooses what open borders do (core.borders). ``keep_sharp_edges`` (off by
