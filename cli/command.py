@@ -47,6 +47,7 @@ class Outcome:
     vertices: int = 0
     iterations: int = 0  # meshes: the most iterations any mesh ran
     sharp: bool = False  # meshes: Keep Sharp Edges ran (its iterations are steps)
+    held: int = 0  # meshes: parts the Automatic Amount left as they were (core.collapse)
     rounds: list = field(default_factory=list)  # point clouds: (rounds, steps per round) per cloud
     seconds: float = 0.0
     changes: list = field(default_factory=list)  # core.Change per smoothed mesh
@@ -65,11 +66,13 @@ class Outcome:
         return text if len(self.changes) == 1 else f"{text} (the furthest of {len(self.changes)} meshes)"
 
     def amount_text(self):
-        """How much smoothing ran: '10 iterations', or for point clouds '3 rounds of 15 steps (45 steps)'."""
+        """How much smoothing ran: '10 iterations' (and the parts left as they were, if any), or for point
+        clouds '3 rounds of 15 steps (45 steps)'."""
+        held = f", {jobs_module.held_words(self.held)}" if self.held else ""
         if self.sharp:
-            return f"Keep Sharp Edges, {plural(self.iterations, 'step')}"
+            return f"Keep Sharp Edges, {plural(self.iterations, 'step')}{held}"
         if not self.rounds:
-            return plural(self.iterations, "iteration")
+            return plural(self.iterations, "iteration") + held
         kinds = sorted(set(self.rounds))
         if len(kinds) == 1:
             ((rounds, steps),) = kinds
@@ -428,6 +431,7 @@ def smooth_jobs(jobs, settings, outcome, given):
         outcome.vertices += len(job.positions)
         outcome.iterations = max(outcome.iterations, job.report.iterations)
         outcome.sharp = outcome.sharp or job.report.keep_sharp_edges
+        outcome.held += job.report.held_parts
 
 
 def smooth_point_clouds(objects, settings, outcome):

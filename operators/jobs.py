@@ -288,8 +288,13 @@ def _amount_words(reports, unit):
     if limits:
         words += f", moves at most {max(limits):.3g}"
     held = sum(report.held_parts for report in reports)
-    if held == 1:
-        words += ", 1 part left as it was (smoothing would collapse it)"
-    elif held:
-        words += f", {held} parts left as they were (smoothing would collapse them)"
+    if held:
+        words += ", " + held_words(held)
     return words
+
+
+def held_words(count):
+    """'1 part left as it was (smoothing would collapse it)': the parts core.collapse gave their input back."""
+    if count == 1:
+        return "1 part left as it was (smoothing would collapse it)"
+    return f"{count} parts left as they were (smoothing would collapse them)"

@@ -173,6 +173,24 @@ def test_automatic_amount_unless_alpha_or_iterations_given(cli, tmp_path):
         np.testing.assert_array_equal(result, expected)
 
 
+def test_a_part_left_as_it_was_is_said(cli, capsys, tmp_path):
+    """A noisy Cone (the Automatic Amount would shrink it to a point) comes back as it was, and the file's
+    line and the summary say why."""
+    bpy.ops.wm.read_homefile(use_empty=True)
+    bpy.ops.mesh.primitive_cone_add()
+    obj = bpy.context.active_object
+    noisy = positions_of(obj.data) + np.random.default_rng(0).normal(scale=0.35, size=(33, 3)).astype(np.float32)
+    obj.data.vertices.foreach_set("co", noisy.ravel())
+    select_only(obj)
+    bpy.ops.wm.ply_export(filepath=str(tmp_path / "cone.ply"), export_selected_objects=True, export_normals=False)
+    source, _ = import_positions(tmp_path / "cone.ply")
+    capsys.readouterr()
+    assert cli.main([str(tmp_path / "cone.ply"), "-o", str(tmp_path / "out")]) == 0
+    said = capsys.readouterr().out
+    assert said.count("1 part left as it was (smoothing would collapse it)") == 2  # the file's line, the summary
+    np.testing.assert_array_equal(import_positions(tmp_path / "out" / "cone.ply")[0], source)
+
+
 def test_format_option_and_folder_input(cli, tmp_path):
     scans = tmp_path / "scans"
     scans.mkdir()
