@@ -7,11 +7,13 @@ part gets isotropic noise of 0.1 / 0.3 / 0.5 median edge lengths, two seeds, and
 add-on's default (``core.smooth_mesh`` with nothing set, split vertices welded) with Keep Sharp Edges off
 and on. Measured: the RMS distance of the vertices to the clean primitive's surface over the input's
 (below 1: nearer the shape than the noisy input; above 1: farther; a vertex sliding along the surface
-costs nothing), and the parts the Automatic Amount left as they were because it would have collapsed
-them (core.collapse).
+costs nothing), the RMS radius over the clean part's, the correlation between neighbours of what the
+run took away along the normals (core.collapse.residual_correlation: above 0, shape went with the noise),
+and the parts the Automatic Amount left as they were because the run would have changed their shape
+(core.collapse).
 
-    python bench/bench_primitives.py             # ~20 s
-    python bench/bench_primitives.py --keep 0    # core.collapse off: what the runs do to the parts it gives back
+    python bench/bench_primitives.py               # ~20 s
+    python bench/bench_primitives.py --no-guard    # core.collapse off: what the runs do to the parts it holds
 
 The report goes to stdout and bench/results/.
 """
@@ -44,12 +46,15 @@ def radius(points):
 
 
 def run(part, surface, noisy, sharp):
-    """(surface error over the input's, RMS radius over the clean part's, parts held)."""
+    """(surface error over the input's, RMS radius over the clean part's, parts held, residual correlation)."""
     result, report = core.smooth_mesh(
         noisy, part.edges, faces=part.faces, weld=True, keep_sharp_edges=sharp, return_report=True
     )
     error = rms(surface, result) / rms(surface, noisy)
-    return error, radius(result) / radius(part.positions), report.held_parts
+    operator = core.umbrella_operator(part.edges, len(noisy))
+    one_part = np.zeros(len(noisy), dtype=np.int64)  # each shape is one part
+    correlation = core.collapse.residual_correlation(noisy, result, part.triangles(), operator, one_part, 1)[0]
+    return error, radius(result) / radius(part.positions), report.held_parts, correlation
 
 
 def table(out, rows, pick, title):
@@ -63,9 +68,10 @@ def table(out, rows, pick, title):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--keep", type=float, default=core.collapse.KEEP, help="core.collapse.KEEP (0: off)")
+    parser.add_argument("--no-guard", action="store_true", help="core.collapse off (parts never held)")
     args = parser.parse_args()
-    core.collapse.KEEP = args.keep
+    if args.no_guard:
+        core.collapse.KEEP, core.collapse.SMOOTH_RESIDUAL = 0.0, np.inf
     rows, worse, shrunk = [], {False: [], True: []}, {False: [], True: []}
     for name, make in {**primitives.PRIMITIVES, **primitives.CAD}.items():
         part = make()
@@ -89,10 +95,12 @@ def main():
     with Report("bench_primitives") as out:
         out("# The default on noisy primitives (bench_primitives.py)\n")
         out(f"Command: `python bench/bench_primitives.py {' '.join(sys.argv[1:])}`, {time.strftime('%Y-%m-%d')}; ")
-        out(f"core.collapse.KEEP {args.keep:g}. Isotropic noise in median edge lengths, seeds {SEEDS[0]} / {SEEDS[1]};")
+        guard = "off" if args.no_guard else "on"
+        out(f"core.collapse {guard}. Isotropic noise in median edge lengths, seeds {SEEDS[0]} / {SEEDS[1]};")
         out("in brackets the parts left as they were (core.collapse).")
         table(out, rows, lambda r: f"{r[0]:.2f}", "RMS distance to the clean surface over the input's:")
         table(out, rows, lambda r: f"{r[1]:.2f}", "RMS radius (about the centroid) over the clean part's:")
+        table(out, rows, lambda r: f"{r[3]:+.2f}", "Neighbour correlation of what the run took away along the normals:")
         for sharp in (False, True):
             label = "Keep Sharp Edges" if sharp else "HC default"
             runs = len(SEEDS) * len(RATIOS) * len(rows)

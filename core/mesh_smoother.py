@@ -8,7 +8,7 @@ run the same numbers.
 Numbers a caller gives are used exactly. The Automatic Amount (HC only) chooses what is left at
 ``"auto"``: with ``iterations="auto"`` and ``alpha="auto"`` it chooses the iterations from the mesh's
 own noise (core.mesh_amount) with alpha 0, holding parts without noise, gives every closed part
-its volume back within bounds (core.volume), and gives a part it collapsed its input back
+its volume back within bounds (core.volume), and gives a part whose shape it changed its input back
 (core.collapse); with ``beta="auto"`` it may take gentler steps on light noise. Either number given
 switches it off: the other then takes its default (``DEFAULT_ALPHA``, ``DEFAULT_ITERATIONS``) and the run
 is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
@@ -86,7 +86,8 @@ class MeshReport:
     sharpness_angle : float or None
         Radians; None when ``keep_sharp_edges`` is off.
     held_parts : int
-        Parts the Automatic Amount would have collapsed, given their input positions back (core.collapse).
+        Parts whose shape the Automatic Amount would have changed (collapsed, or smoothed away with the
+        noise), given their input positions back (core.collapse).
 
     Examples
     --------
@@ -308,7 +309,7 @@ class MeshSmoother:
             del smoothing
             result, ran = smoothed.positions, smoothed.iterations
         measured = measuring if restoring else None
-        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise)
+        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise, True)
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         seconds = time.perf_counter() - start
         self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, largest, seconds, held_parts=held)
@@ -322,12 +323,12 @@ class MeshSmoother:
             limit = np.where(noise.limited, noise.quiet_radius(self.positions, DEVIATION_IN_NOISE), limit)
         return limit
 
-    def _finish(self, result, ran, amount, fixed, limit, measuring, progress, noise=None):
+    def _finish(self, result, ran, amount, fixed, limit, measuring, progress, noise=None, residual=False):
         """Give closed parts their volume back (when ``measuring`` holds the input's measure: the Automatic
         Amount) within the deviation limit, give the parts the run collapsed their input back (with the
-        ``noise`` core.mesh_noise found: the Automatic Amount; core.collapse), and set ``result`` in the
-        caller's numbering; returns (the largest offset, the parts given back), yielding ``progress``
-        between the restore's slices."""
+        ``noise`` core.mesh_noise found: the Automatic Amount; core.collapse), and with ``residual`` the
+        parts whose shape it took away too, and set ``result`` in the caller's numbering; returns (the
+        largest offset, the parts given back), yielding ``progress`` between the restore's slices."""
         offset, held = 0.0, 0
         if measuring is not None and ran > 0:
             limited = volume.NOISE_OFFSETS * amount.sigma
@@ -336,6 +337,10 @@ class MeshSmoother:
                 _within(result, self.positions, limit)
         if noise is not None and ran > 0:
             parts = collapse.collapsed(self.positions, result, noise.part_of_vertex, noise.sigma)
+            if residual and self.faces is not None:
+                parts |= collapse.smooth_residual(
+                    self.positions, result, self.faces, self.surface_operator, noise.part_of_vertex, parts.size
+                )
             held = int(np.count_nonzero(parts))
             if held:
                 back = parts[noise.part_of_vertex]

@@ -260,7 +260,7 @@ def summary(jobs, props, length=None):
 def amount_words(reports):
     """What ran: '12 iterations' or, chosen, 'automatic amount: noise 0.45x edge length, 12 iterations,
     alpha 0, beta 0.6, volume kept, moves at most 0.0123' (and '1 part left as it was (smoothing would
-    collapse it)' where core.collapse gave a part back); with Keep Sharp Edges, 'sharpness 30°, ' first,
+    change its shape)' where core.collapse gave a part back); with Keep Sharp Edges, 'sharpness 30°, ' first,
     and steps for iterations."""
     angles = sorted({round(math.degrees(r.sharpness_angle)) for r in reports if r.keep_sharp_edges})
     if not angles:
@@ -294,7 +294,8 @@ def _amount_words(reports, unit):
 
 
 def held_words(count):
-    """'1 part left as it was (smoothing would collapse it)': the parts core.collapse gave their input back."""
+    """'1 part left as it was (smoothing would change its shape)': the parts core.collapse gave their input
+    back (the run collapsed them, or took their shape away with the noise)."""
     if count == 1:
-        return "1 part left as it was (smoothing would collapse it)"
-    return f"{count} parts left as they were (smoothing would collapse them)"
+        return "1 part left as it was (smoothing would change its shape)"
+    return f"{count} parts left as they were (smoothing would change their shape)"

@@ -187,7 +187,7 @@ def test_a_part_left_as_it_was_is_said(cli, capsys, tmp_path):
     capsys.readouterr()
     assert cli.main([str(tmp_path / "cone.ply"), "-o", str(tmp_path / "out")]) == 0
     said = capsys.readouterr().out
-    assert said.count("1 part left as it was (smoothing would collapse it)") == 2  # the file's line, the summary
+    assert said.count("1 part left as it was (smoothing would change its shape)") == 2  # the file's line, the summary
     np.testing.assert_array_equal(import_positions(tmp_path / "out" / "cone.ply")[0], source)
 
 

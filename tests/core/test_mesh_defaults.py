@@ -89,6 +89,21 @@ def test_a_noisy_coarse_cone_is_left_as_it_was(sharp):
     assert explicit[1].held_parts == 0 and not np.array_equal(explicit[0], cone.positions)  # numbers set: as set
 
 
+def test_a_coarse_tube_is_left_as_it_was_where_smoothing_would_round_it():
+    """The tube of tests/core/primitives.py (walls of single quads, every vertex on a rim) with noise of 0.1
+    median edge lengths: one HC iteration rounds its rims by more than the noise it takes away (1.5 times
+    the input's distance to the clean surface, bench_primitives.py). What it would take away correlates
+    between neighbours (core.collapse.smooth_residual): the tube stays as it was. With noise of 0.5 edge
+    lengths the noise dominates: it is smoothed."""
+    light, _ = with_noise(CAD["tube"](), 0.1, "isotropic")
+    result, report = default_run(light)
+    assert report.amount.noise_found and report.iterations > 0
+    assert report.held_parts == 1 and np.array_equal(result, light.positions)
+    heavy, _ = with_noise(CAD["tube"](), 0.5, "isotropic")
+    result, report = default_run(heavy)
+    assert report.held_parts == 0 and np.linalg.norm(result - heavy.positions, axis=1).min() > 0.0
+
+
 def test_collapsed_tells_a_collapse_from_noise_taken_away():
     """core.collapse: a sphere's noise taken away shrinks its radius as sqrt(r^2 - 3 sigma^2) says, within
     KEEP; the same sphere shrunk to half is a collapse; parts are judged each on its own."""
