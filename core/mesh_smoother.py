@@ -291,7 +291,7 @@ class MeshSmoother:
             noise = chooser.noise
             alpha, beta, iterations = amount.alpha, amount.beta, amount.iterations
             if self.max_deviation == AUTO:
-                limit = self._noise_limit(chooser.noise, amount.sigma)
+                limit = self._noise_limit(noise, amount.sigma)
             unlimited = not isinstance(limit, np.ndarray) and not limit
             same = self.operator is self.surface_operator
             if same and self.influence is None and self.mode == "simultaneous" and not self.tolerance and unlimited:
@@ -337,6 +337,7 @@ class MeshSmoother:
                 _within(result, self.positions, limit)
         if noise is not None and ran > 0:
             parts = collapse.collapsed(self.positions, result, noise.part_of_vertex, noise.sigma)
+            yield progress  # a second or so each on millions of vertices: a cancel waits for one at most
             if residual and self.faces is not None:
                 parts |= collapse.smooth_residual(
                     self.positions, result, self.faces, self.surface_operator, noise.part_of_vertex, parts.size

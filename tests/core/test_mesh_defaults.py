@@ -104,6 +104,16 @@ def test_a_coarse_tube_is_left_as_it_was_where_smoothing_would_round_it():
     assert report.held_parts == 0 and np.linalg.norm(result - heavy.positions, axis=1).min() > 0.0
 
 
+def test_parts_the_amount_takes_for_big_scans_are_not_asked_for_their_residual(monkeypatch):
+    """smooth_residual asks parts below core.mesh_amount.PATCH_FROM vertices only (a pass of normals over a
+    big scan costs a quarter of the default's time): with the bound below the tube's 192 vertices, the tube
+    of the test above is smoothed."""
+    light, _ = with_noise(CAD["tube"](), 0.1, "isotropic")
+    monkeypatch.setattr(core.collapse, "PATCH_FROM", 100)
+    result, report = default_run(light)
+    assert report.held_parts == 0 and not np.array_equal(result, light.positions)
+
+
 def test_collapsed_tells_a_collapse_from_noise_taken_away():
     """core.collapse: a sphere's noise taken away shrinks its radius as sqrt(r^2 - 3 sigma^2) says, within
     KEEP; the same sphere shrunk to half is a collapse; parts are judged each on its own."""
