@@ -71,7 +71,7 @@ def main():
     parser.add_argument("--no-guard", action="store_true", help="core.collapse off (parts never held)")
     args = parser.parse_args()
     if args.no_guard:
-        core.collapse.KEEP, core.collapse.SMOOTH_RESIDUAL = 0.0, np.inf
+        core.collapse.KEEP, core.collapse.SMOOTH_RESIDUAL, core.collapse.MOVED_IN_NOISE = 0.0, np.inf, np.inf
     rows, worse, shrunk = [], {False: [], True: []}, {False: [], True: []}
     for name, make in {**primitives.PRIMITIVES, **primitives.CAD}.items():
         part = make()

@@ -309,7 +309,7 @@ class MeshSmoother:
             del smoothing
             result, ran = smoothed.positions, smoothed.iterations
         measured = measuring if restoring else None
-        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise, True)
+        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise, "correlation")
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         seconds = time.perf_counter() - start
         self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, largest, seconds, held_parts=held)
@@ -323,12 +323,13 @@ class MeshSmoother:
             limit = np.where(noise.limited, noise.quiet_radius(self.positions, DEVIATION_IN_NOISE), limit)
         return limit
 
-    def _finish(self, result, ran, amount, fixed, limit, measuring, progress, noise=None, residual=False):
+    def _finish(self, result, ran, amount, fixed, limit, measuring, progress, noise=None, residual=None):
         """Give closed parts their volume back (when ``measuring`` holds the input's measure: the Automatic
         Amount) within the deviation limit, give the parts the run collapsed their input back (with the
-        ``noise`` core.mesh_noise found: the Automatic Amount; core.collapse), and with ``residual`` the
-        parts whose shape it took away too, and set ``result`` in the caller's numbering; returns (the
-        largest offset, the parts given back), yielding ``progress`` between the restore's slices."""
+        ``noise`` core.mesh_noise found: the Automatic Amount; core.collapse), and the parts whose shape it
+        took away too, read from the residual as ``residual`` says ("correlation": HC's rule, "move": Keep
+        Sharp Edges'), and set ``result`` in the caller's numbering; returns (the largest offset, the parts
+        given back), yielding ``progress`` between the restore's slices."""
         offset, held = 0.0, 0
         if measuring is not None and ran > 0:
             limited = volume.NOISE_OFFSETS * amount.sigma
@@ -338,9 +339,15 @@ class MeshSmoother:
         if noise is not None and ran > 0:
             parts = collapse.collapsed(self.positions, result, noise.part_of_vertex, noise.sigma)
             yield progress  # a second or so each on millions of vertices: a cancel waits for one at most
-            if residual and self.faces is not None:
+            if residual == "correlation" and self.faces is not None:
                 parts |= collapse.smooth_residual(
                     self.positions, result, self.faces, self.surface_operator, noise.part_of_vertex, parts.size
+                )
+            elif residual == "move" and self.faces is not None:
+                sizes = np.bincount(noise.part_of_vertex, minlength=parts.size)
+                asked = noise.noisy & (sizes >= collapse.SMOOTH_FROM)
+                parts |= collapse.moved_beyond_noise(
+                    self.positions, result, self.faces, noise.part_of_vertex, noise.sigma, asked
                 )
             held = int(np.count_nonzero(parts))
             if held:
@@ -403,7 +410,7 @@ class MeshSmoother:
         result, ran = run.result(), run.done
         del run
         measured = measuring if restoring else None
-        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise)
+        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise, "move")
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         seconds = time.perf_counter() - start
         self.report = MeshReport(

@@ -104,6 +104,42 @@ def test_a_coarse_tube_is_left_as_it_was_where_smoothing_would_round_it():
     assert report.held_parts == 0 and np.linalg.norm(result - heavy.positions, axis=1).min() > 0.0
 
 
+def test_keep_sharp_edges_leaves_a_coarse_torus_it_would_flatten():
+    """Blender's Torus (576 vertices, 30° between the faces of a ring) with noise of 0.1 median edge
+    lengths: Keep Sharp Edges' filter flattens its rings, 1.8 times the input's distance to the clean
+    surface (bench_primitives.py). It moves the torus by more than sqrt(2) noise estimates along the
+    normals (core.collapse.moved_beyond_noise): the torus stays as it was. A chamfered box with noise of 0.3
+    edge lengths, whose creases the option keeps, is smoothed."""
+    torus, _ = with_noise(PRIMITIVES["torus"](), 0.1, "isotropic")
+    result, report = core.smooth_mesh(
+        torus.positions, torus.edges, faces=torus.faces, keep_sharp_edges=True, return_report=True
+    )
+    assert report.amount.noise_found and report.iterations > 0
+    assert report.held_parts == 1 and np.array_equal(result, torus.positions)
+    box, _ = with_noise(CAD["chamfered_box"](), 0.3, "isotropic")
+    result, report = core.smooth_mesh(
+        box.positions, box.edges, faces=box.faces, keep_sharp_edges=True, return_report=True
+    )
+    assert report.held_parts == 0 and not np.array_equal(result, box.positions)
+
+
+def test_moved_beyond_noise_holds_a_part_moved_by_more_than_its_noise():
+    """By the noise model: a surface given its noise (sigma along the normals) back is kept; the same with
+    a change of the shape as large as the noise on top (sqrt(2) sigma in all) is held."""
+    rng = np.random.default_rng(2)
+    sphere = PRIMITIVES["uv_sphere"]()
+    clean = sphere.positions
+    normals = clean / np.linalg.norm(clean, axis=1, keepdims=True)
+    sigma = 0.01
+    noisy = clean + normals * rng.normal(0.0, sigma, (len(clean), 1))
+    one_part, asked = np.zeros(len(clean), dtype=int), np.array([True])
+    triangles = sphere.triangles()
+    assert not core.collapse.moved_beyond_noise(noisy, clean, triangles, one_part, np.array([sigma]), asked)[0]
+    shrunk = clean * (1.0 - 1.2 * sigma)
+    assert core.collapse.moved_beyond_noise(noisy, shrunk, triangles, one_part, np.array([sigma]), asked)[0]
+    assert not core.collapse.moved_beyond_noise(noisy, shrunk, triangles, one_part, np.array([sigma]), ~asked)[0]
+
+
 def test_parts_the_amount_takes_for_big_scans_are_not_asked_for_their_residual(monkeypatch):
     """smooth_residual asks parts below core.mesh_amount.PATCH_FROM vertices only (a pass of normals over a
     big scan costs a quarter of the default's time): with the bound below the tube's 192 vertices, the tube
