@@ -150,17 +150,14 @@ def moved_beyond_noise(before, after, triangles, part_of_vertex, sigma, asked):
     --------
     >>> import numpy as np
     >>> from core.collapse import moved_beyond_noise
-    >>> u, v = np.meshgrid(np.linspace(0, 1, 8), np.linspace(0, 1, 8))
-    >>> grid = np.arange(64).reshape(8, 8)
-    >>> triangles = np.r_[np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:]], -1).reshape(-1, 3),
-    ...                   np.stack([grid[:-1, :-1], grid[1:, 1:], grid[1:, :-1]], -1).reshape(-1, 3)]
-    >>> flat = np.c_[u.ravel(), v.ravel(), np.zeros(64)]
-    >>> noisy = flat + [0, 0, 0.01] * np.random.default_rng(0).normal(size=(64, 1))
-    >>> bump = noisy + [0, 0, 0.1] * np.exp(-10 * ((u - 0.5) ** 2 + (v - 0.5) ** 2)).reshape(-1, 1)
-    >>> one_part, asked = np.zeros(64, dtype=int), np.array([True])
-    >>> moved_beyond_noise(noisy, flat, triangles, one_part, np.array([0.01]), asked).tolist()  # noise taken away
+    >>> around = np.linspace(0.0, 2.0 * np.pi, 16, endpoint=False)
+    >>> disc = np.c_[np.r_[0.0, np.cos(around)], np.r_[0.0, np.sin(around)], np.zeros(17)]
+    >>> fan = np.c_[np.zeros(16, dtype=int), np.arange(1, 17), np.r_[np.arange(2, 17), 1]]
+    >>> noisy = disc + [0.0, 0.0, 0.01] * (-1.0) ** np.arange(17)[:, None]  # noise of 0.01 along the normals
+    >>> one_part, asked, sigma = np.zeros(17, dtype=int), np.array([True]), np.array([0.01])
+    >>> moved_beyond_noise(noisy, disc, fan, one_part, sigma, asked).tolist()  # the noise taken away
     [False]
-    >>> moved_beyond_noise(bump, flat, triangles, one_part, np.array([0.01]), asked).tolist()  # the bump too
+    >>> moved_beyond_noise(noisy, disc + [0.0, 0.0, 0.02], fan, one_part, sigma, asked).tolist()  # moved by more
     [True]
     """
     parts = sigma.size
