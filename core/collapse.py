@@ -112,18 +112,29 @@ def smooth_residual(before, after, triangles, operator, part_of_vertex, parts):
     asked = (counts >= SMOOTH_FROM) & (counts < PATCH_FROM)
     if not asked.any():
         return asked
-    triangles = np.asarray(triangles)
-    triangles = triangles[asked[part_of_vertex[triangles[:, 0]]]]  # the normals of the parts asked only
-    correlation = residual_correlation(before, after, triangles, operator, part_of_vertex, parts)
+    correlation = residual_correlation(
+        before, after, _of_parts(triangles, asked, part_of_vertex), operator, part_of_vertex, parts
+    )
     return asked & (correlation > SMOOTH_RESIDUAL)
+
+
+def _of_parts(triangles, asked, part_of_vertex):
+    """The triangles of the parts ``asked`` ((parts,) bool): the residual's normals are taken over these only."""
+    triangles = np.asarray(triangles)
+    return triangles[asked[part_of_vertex[triangles[:, 0]]]]
+
+
+def _residual(before, after, triangles):
+    """r_i = (y_i - x_i) . n_i: ``before`` y less ``after`` x along the result's area-weighted vertex normals
+    (0 where no triangle touches a vertex)."""
+    return np.einsum("ij,ij->i", np.asarray(before) - np.asarray(after), vertex_normals(after, triangles))
 
 
 def residual_correlation(before, after, triangles, operator, part_of_vertex, parts):
     """(parts,) the correlation of r_i = (y_i - x_i) . n_i (``before`` y, ``after`` x, n the result's
     area-weighted vertex normals) between neighbours, sum r_i r_j / sum deg_i r_i^2 over each part's pairs,
     r taken about its part's mean (the volume restore's uniform offset is no shape)."""
-    normals = vertex_normals(after, triangles)
-    residual = np.einsum("ij,ij->i", np.asarray(before) - np.asarray(after), normals)
+    residual = _residual(before, after, triangles)
     counts = np.bincount(part_of_vertex, minlength=parts)
     residual -= (np.bincount(part_of_vertex, residual, parts) / np.maximum(counts, 1))[part_of_vertex]
     around = np.empty_like(residual)  # sum of r_j over each vertex's neighbours, in cache-sized chunks
@@ -142,31 +153,30 @@ def residual_correlation(before, after, triangles, operator, part_of_vertex, par
 MOVED_IN_NOISE = math.sqrt(2.0)
 
 
-def moved_beyond_noise(before, after, triangles, part_of_vertex, sigma, asked):
-    """(parts,) bool: the parts ``asked`` ((parts,) bool) whose RMS move along the result's normals,
-    r_i = (y_i - x_i) . n_i (``before`` y, ``after`` x), exceeds MOVED_IN_NOISE times their noise ``sigma``.
+def moved_beyond_noise(before, after, triangles, part_of_vertex, sigma, noisy):
+    """(parts,) bool: the parts of at least SMOOTH_FROM vertices with noise found (``noisy``, (parts,) bool)
+    whose RMS move along the result's normals, r_i = (y_i - x_i) . n_i (``before`` y, ``after`` x), exceeds
+    MOVED_IN_NOISE times their noise ``sigma``.
 
     Examples
     --------
     >>> import numpy as np
     >>> from core.collapse import moved_beyond_noise
-    >>> around = np.linspace(0.0, 2.0 * np.pi, 16, endpoint=False)
-    >>> disc = np.c_[np.r_[0.0, np.cos(around)], np.r_[0.0, np.sin(around)], np.zeros(17)]
-    >>> fan = np.c_[np.zeros(16, dtype=int), np.arange(1, 17), np.r_[np.arange(2, 17), 1]]
-    >>> noisy = disc + [0.0, 0.0, 0.01] * (-1.0) ** np.arange(17)[:, None]  # noise of 0.01 along the normals
-    >>> one_part, asked, sigma = np.zeros(17, dtype=int), np.array([True]), np.array([0.01])
-    >>> moved_beyond_noise(noisy, disc, fan, one_part, sigma, asked).tolist()  # the noise taken away
+    >>> around = np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)
+    >>> disc = np.c_[np.r_[0.0, np.cos(around)], np.r_[0.0, np.sin(around)], np.zeros(25)]
+    >>> fan = np.c_[np.zeros(24, dtype=int), np.arange(1, 25), np.r_[np.arange(2, 25), 1]]
+    >>> noisy = disc + [0.0, 0.0, 0.01] * (-1.0) ** np.arange(25)[:, None]  # noise of 0.01 along the normals
+    >>> one_part, found, sigma = np.zeros(25, dtype=int), np.array([True]), np.array([0.01])
+    >>> moved_beyond_noise(noisy, disc, fan, one_part, sigma, found).tolist()  # the noise taken away
     [False]
-    >>> moved_beyond_noise(noisy, disc + [0.0, 0.0, 0.02], fan, one_part, sigma, asked).tolist()  # moved by more
+    >>> moved_beyond_noise(noisy, disc + [0.0, 0.0, 0.02], fan, one_part, sigma, found).tolist()  # moved by more
     [True]
     """
     parts = sigma.size
-    if not np.any(asked):
-        return np.zeros(parts, dtype=bool)
-    triangles = np.asarray(triangles)
-    triangles = triangles[asked[part_of_vertex[triangles[:, 0]]]]  # the normals of the parts asked only
-    normals = vertex_normals(after, triangles)
-    residual = np.einsum("ij,ij->i", np.asarray(before) - np.asarray(after), normals)
-    counts = np.maximum(np.bincount(part_of_vertex, minlength=parts), 1)
-    moved = np.sqrt(np.bincount(part_of_vertex, residual * residual, parts) / counts)
+    counts = np.bincount(part_of_vertex, minlength=parts)
+    asked = noisy & (counts >= SMOOTH_FROM)
+    if not asked.any():
+        return asked
+    residual = _residual(before, after, _of_parts(triangles, asked, part_of_vertex))
+    moved = np.sqrt(np.bincount(part_of_vertex, residual * residual, parts) / np.maximum(counts, 1))
     return asked & (moved > MOVED_IN_NOISE * sigma)

@@ -344,10 +344,8 @@ class MeshSmoother:
                     self.positions, result, self.faces, self.surface_operator, noise.part_of_vertex, parts.size
                 )
             elif residual == "move" and self.faces is not None:
-                sizes = np.bincount(noise.part_of_vertex, minlength=parts.size)
-                asked = noise.noisy & (sizes >= collapse.SMOOTH_FROM)
                 parts |= collapse.moved_beyond_noise(
-                    self.positions, result, self.faces, noise.part_of_vertex, noise.sigma, asked
+                    self.positions, result, self.faces, noise.part_of_vertex, noise.sigma, noise.noisy
                 )
             held = int(np.count_nonzero(parts))
             if held:

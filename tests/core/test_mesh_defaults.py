@@ -125,19 +125,20 @@ def test_keep_sharp_edges_leaves_a_coarse_torus_it_would_flatten():
 
 def test_moved_beyond_noise_holds_a_part_moved_by_more_than_its_noise():
     """By the noise model: a surface given its noise (sigma along the normals) back is kept; the same with
-    a change of the shape as large as the noise on top (sqrt(2) sigma in all) is held."""
+    a change of the shape as large as the noise on top (sqrt(2) sigma in all) is held; a part without noise
+    found is never held."""
     rng = np.random.default_rng(2)
     sphere = PRIMITIVES["uv_sphere"]()
     clean = sphere.positions
     normals = clean / np.linalg.norm(clean, axis=1, keepdims=True)
     sigma = 0.01
     noisy = clean + normals * rng.normal(0.0, sigma, (len(clean), 1))
-    one_part, asked = np.zeros(len(clean), dtype=int), np.array([True])
+    one_part, found = np.zeros(len(clean), dtype=int), np.array([True])
     triangles = sphere.triangles()
-    assert not core.collapse.moved_beyond_noise(noisy, clean, triangles, one_part, np.array([sigma]), asked)[0]
+    assert not core.collapse.moved_beyond_noise(noisy, clean, triangles, one_part, np.array([sigma]), found)[0]
     shrunk = clean * (1.0 - 1.2 * sigma)
-    assert core.collapse.moved_beyond_noise(noisy, shrunk, triangles, one_part, np.array([sigma]), asked)[0]
-    assert not core.collapse.moved_beyond_noise(noisy, shrunk, triangles, one_part, np.array([sigma]), ~asked)[0]
+    assert core.collapse.moved_beyond_noise(noisy, shrunk, triangles, one_part, np.array([sigma]), found)[0]
+    assert not core.collapse.moved_beyond_noise(noisy, shrunk, triangles, one_part, np.array([sigma]), ~found)[0]
 
 
 def test_parts_the_amount_takes_for_big_scans_are_not_asked_for_their_residual(monkeypatch):
