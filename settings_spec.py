@@ -173,6 +173,20 @@ MESH_AUTO_AMOUNT = Setting(
     True,
     active=lambda values: values["method"] == "HC" or values.get("keep_sharp_edges", False),
 )
+KEEP_IN_PLACE = Setting(
+    "keep_in_place",
+    "bool",
+    "Keep in Place",
+    "With Automatic Amount: every vertex moves only across the surface, along its normal, never along it: "
+    "textures, UVs and open outlines stay where they were. Off: vertices also slide along the surface as the "
+    "paper's HC moves them (Keep Sharp Edges and set numbers always do)",
+    True,
+    flag="slide",
+    help="let vertices slide along the surface as the paper's HC moves them (textures, UVs and outlines move "
+    "with them); by default the Automatic Amount moves every vertex only across the surface",
+    argument="keep_in_place",
+    active=lambda values: automatic(values) and not values.get("keep_sharp_edges", False),
+)
 ALPHA = Setting(
     "alpha",
     "float",
@@ -385,6 +399,7 @@ MESH_SMOOTHING = (
     KEEP_SHARP_EDGES,
     SHARPNESS_ANGLE,
     MESH_AUTO_AMOUNT,
+    KEEP_IN_PLACE,
     ALPHA,
     BETA,
     ITERATIONS,

@@ -146,8 +146,8 @@ def add_setting(group, setting, text):
     """An option for a declared setting, with help ``text``. Values default to None ("not given"), so the
     operator's default applies and --points can tell which options were given."""
     options = {"help": text}
-    if setting.kind == "bool":
-        options["action"] = "store_true"
+    if setting.kind == "bool":  # a switch names the change from the default: a setting on by default switches off
+        options["action"] = "store_false" if setting.default else "store_true"
     elif setting.kind == "string":
         options.update(default=setting.default, metavar=setting.metavar)
     elif setting.kind == "enum":

@@ -13,6 +13,10 @@ its volume back within bounds (core.volume), and gives a part whose shape it cha
 switches it off: the other then takes its default (``DEFAULT_ALPHA``, ``DEFAULT_ITERATIONS``) and the run
 is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
 
+``keep_in_place`` (core.in_place) keeps only the part of each vertex's move across the surface, along its
+normal: textures, UVs and open outlines stay where they were. ``"auto"`` (the default) turns it on with
+the Automatic Amount and off when numbers are given, so that given numbers run the paper's algorithm.
+
 Two options change the mesh the run sees, both off by default: ``weld`` runs coincident vertices as
 one (core.welding), ``border`` chooses what open borders do (core.borders). ``keep_sharp_edges`` (off by
 default) smooths with core.sharp_edges instead of HC's umbrella: the creases of hard-surface parts stay.
@@ -27,6 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import collapse, parallel, sharp_edges, topology, volume, welding
+from .in_place import keep_in_place as project_in_place
 from .adjacency import Umbrella, umbrella_operator
 from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
@@ -88,6 +93,8 @@ class MeshReport:
     held_parts : int
         Parts whose shape the Automatic Amount would have changed (collapsed, or smoothed away with the
         noise), given their input positions back (core.collapse).
+    kept_in_place : bool
+        Each vertex's move was kept to its part across the surface (core.in_place).
 
     Examples
     --------
@@ -110,6 +117,7 @@ class MeshReport:
     keep_sharp_edges: bool = False
     sharpness_angle: float | None = None
     held_parts: int = 0
+    kept_in_place: bool = False
 
 
 def _auto_or(value, name):
@@ -162,6 +170,7 @@ class MeshSmoother:
         border: str = "free",
         keep_sharp_edges: bool = False,
         sharpness_angle: float = DEFAULT_SHARPNESS_ANGLE,
+        keep_in_place: bool | str = AUTO,
     ) -> None:
         self.positions = start = check_positions(positions)
         n = start.shape[0]
@@ -194,6 +203,7 @@ class MeshSmoother:
         self.faces = None if faces is None else fan_triangles(faces)
         if self.keep_sharp_edges:
             check_triangles(self.faces, n)  # no faces: a clear ValueError now, not after the welding
+        self.in_place = self._in_place(keep_in_place)
         self.border = check_choice(border, "border", BORDERS)
         if self.border != "free" and self.faces is None:
             raise ValueError(
@@ -212,6 +222,17 @@ class MeshSmoother:
         self.prepared = False  # the welding, the faces' surface and the border rule: the first slices of steps()
         self.result = None
         self.report = None
+
+    def _in_place(self, keep_in_place):
+        """Whether the run keeps vertices in place: AUTO is on with the Automatic Amount (HC's) where
+        faces are given."""
+        if _auto_or(keep_in_place, "keep_in_place") == AUTO:
+            return self.automatic and not self.keep_sharp_edges and self.faces is not None
+        if not isinstance(keep_in_place, (bool, np.bool_)):
+            raise ValueError(f"keep_in_place must be True, False or '{AUTO}', got {keep_in_place!r}")
+        if keep_in_place and self.faces is None:
+            raise ValueError("keep_in_place=True needs the faces (the vertex normals come from them): pass faces=")
+        return bool(keep_in_place)
 
     def _prepare(self):
         """Weld coincident vertices (core.welding: the result is scattered back), find what the faces
@@ -312,7 +333,9 @@ class MeshSmoother:
         offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise, "correlation")
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         seconds = time.perf_counter() - start
-        self.report = MeshReport(self.method, alpha, beta, ran, amount, offset, largest, seconds, held_parts=held)
+        self.report = MeshReport(
+            self.method, alpha, beta, ran, amount, offset, largest, seconds, held_parts=held, kept_in_place=self.in_place
+        )
         yield 1.0
 
     def _noise_limit(self, noise, sigma):
@@ -324,35 +347,47 @@ class MeshSmoother:
         return limit
 
     def _finish(self, result, ran, amount, fixed, limit, measuring, progress, noise=None, residual=None):
-        """Give closed parts their volume back (when ``measuring`` holds the input's measure: the Automatic
-        Amount) within the deviation limit, give the parts the run collapsed their input back (with the
-        ``noise`` core.mesh_noise found: the Automatic Amount; core.collapse), and the parts whose shape it
-        took away too, read from the residual as ``residual`` says ("correlation": HC's rule, "move": Keep
-        Sharp Edges'), and set ``result`` in the caller's numbering; returns (the largest offset, the parts
-        given back), yielding ``progress`` between the restore's slices."""
-        offset, held = 0.0, 0
+        """Keep each move across the surface (Keep in Place), give closed parts their volume back (when
+        ``measuring`` holds the input's measure: the Automatic Amount) within the deviation limit, give the
+        parts the run collapsed their input back (with the ``noise`` core.mesh_noise found: the Automatic
+        Amount; core.collapse), and the parts whose shape it took away too, read from the residual as
+        ``residual`` says ("correlation": HC's rule, "move": Keep Sharp Edges'), and set ``result`` in the
+        caller's numbering; returns (the largest offset, the parts given back), yielding ``progress``
+        between the restore's slices. With Keep in Place the parts are judged on the run's own moves,
+        before they are kept across the surface: the same parts are given back either way."""
+        offset, parts = 0.0, None
+        if self.in_place and ran > 0:
+            if noise is not None:
+                parts = self._held_parts(result, noise, residual)
+                yield progress
+            result = project_in_place(self.positions, result, self.faces)
         if measuring is not None and ran > 0:
             limited = volume.NOISE_OFFSETS * amount.sigma
             result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), progress)
             if np.any(limit):  # the offset keeps to the limit too
                 _within(result, self.positions, limit)
-        if noise is not None and ran > 0:
-            parts = collapse.collapsed(self.positions, result, noise.part_of_vertex, noise.sigma)
-            yield progress  # a second or so each on millions of vertices: a cancel waits for one at most
-            if residual == "correlation" and self.faces is not None:
-                parts |= collapse.smooth_residual(
-                    self.positions, result, self.faces, self.surface_operator, noise.part_of_vertex, parts.size
-                )
-            elif residual == "move" and self.faces is not None:
-                parts |= collapse.moved_beyond_noise(
-                    self.positions, result, self.faces, noise.part_of_vertex, noise.sigma, noise.noisy
-                )
-            held = int(np.count_nonzero(parts))
-            if held:
-                back = parts[noise.part_of_vertex]
-                result[back] = self.positions[back]
+        if parts is None and noise is not None and ran > 0:
+            parts = self._held_parts(result, noise, residual)
+        held = 0 if parts is None else int(np.count_nonzero(parts))
+        if held:
+            back = parts[noise.part_of_vertex]
+            result[back] = self.positions[back]
         self.result = result if self.welding is None else self.welding.scatter(result)
         return offset, held
+
+    def _held_parts(self, result, noise, residual):
+        """(parts,) bool: the parts core.collapse gives their input back (collapsed, or their shape taken
+        away with the noise, read from the residual as ``residual`` says)."""
+        parts = collapse.collapsed(self.positions, result, noise.part_of_vertex, noise.sigma)
+        if residual == "correlation" and self.faces is not None:
+            parts |= collapse.smooth_residual(
+                self.positions, result, self.faces, self.surface_operator, noise.part_of_vertex, parts.size
+            )
+        elif residual == "move" and self.faces is not None:
+            parts |= collapse.moved_beyond_noise(
+                self.positions, result, self.faces, noise.part_of_vertex, noise.sigma, noise.noisy
+            )
+        return parts
 
     def _sharp_steps(self, chunk, start):
         """``steps`` with Keep Sharp Edges (core.sharp_edges): with the Automatic Amount the steps, and an
@@ -412,7 +447,7 @@ class MeshSmoother:
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         seconds = time.perf_counter() - start
         self.report = MeshReport(
-            self.method, self.alpha, self.beta, ran, amount, offset, largest, seconds, True, angle, held
+            self.method, self.alpha, self.beta, ran, amount, offset, largest, seconds, True, angle, held, self.in_place
         )
         yield 1.0
 
@@ -506,6 +541,11 @@ def smooth_mesh(
     sharpness_angle : float
         Radians in (0, pi): faces meeting at more than this angle keep their crease (as Blender's Auto
         Smooth angle). Default ``core.sharp_edges.DEFAULT_SHARPNESS_ANGLE``.
+    keep_in_place : bool or "auto"
+        Keep only the part of each vertex's move across the surface (along the result's vertex normal,
+        core.in_place): textures, UVs and open outlines stay where they were. Needs faces. ``"auto"``: on
+        with the Automatic Amount (HC's, where faces are given), off when numbers are given (the paper's
+        algorithm, bit for bit).
     return_report : bool
         Also return a MeshReport (what ran, what was chosen).
     progress : callable, optional

@@ -51,7 +51,9 @@ def core_options(props, given=frozenset()):
         if setting.argument is None:
             continue
         value = values[setting.name]
-        if automatic and setting.chosen and setting.name not in given:
+        if setting is settings_spec.KEEP_IN_PLACE:  # applies where HC's Automatic Amount runs, else off
+            value = core.AUTO if value and automatic else False
+        elif automatic and setting.chosen and setting.name not in given:
             value = core.AUTO
         elif setting.kind == "enum":
             value = next(choice.core for choice in setting.items if choice.identifier == value)
@@ -290,6 +292,8 @@ def _amount_words(reports, unit):
     held = sum(report.held_parts for report in reports)
     if held:
         words += ", " + held_words(held)
+    if any(report.kept_in_place for report in reports):
+        words += ", kept in place"
     return words
 
 

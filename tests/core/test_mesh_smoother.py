@@ -24,14 +24,16 @@ def paper_hc(positions, edges, **numbers):
 
 
 def test_automatic_amount_is_choose_smooth_restore(noisy_sphere):
-    """The default run is choose_amount, that HC run (alpha 0) and the volume given back, bit for bit."""
+    """The default run is choose_amount, that HC run (alpha 0), its moves kept across the surface
+    (core.in_place) and the volume given back, bit for bit."""
     noisy, edges, faces = noisy_sphere
     result, report = core.smooth_mesh(noisy, edges, faces=faces, return_report=True)
     amount = core.choose_amount(noisy, edges, beta=core.DEFAULT_BETA)
     assert report.amount == amount and report.alpha == 0.0 and report.iterations == amount.iterations > 1
     smoothed = paper_hc(noisy, edges, alpha=0.0, beta=amount.beta, iterations=amount.iterations)
+    smoothed = core.in_place.keep_in_place(noisy, smoothed, faces)
     restored, offsets = core.volume.restore_volume(noisy, smoothed, faces)
-    assert np.array_equal(result, restored)
+    assert np.array_equal(result, restored) and report.kept_in_place
     assert report.volume_offset == pytest.approx(np.abs(offsets).max()) and report.volume_offset > 0.0
     volumes = core.metrics.enclosed_volumes(faces, noisy, result)
     assert volumes[1] == pytest.approx(volumes[0], rel=1e-9)
@@ -47,7 +49,8 @@ def test_open_or_faceless_meshes_get_no_volume_restore(noisy_sphere):
     )
     # One face less: the part is open.
     opened, report = core.smooth_mesh(noisy, edges, faces=faces[1:], return_report=True)
-    assert report.volume_offset == 0.0 and np.array_equal(opened, without_faces)
+    kept = core.in_place.keep_in_place(noisy, without_faces, faces[1:])  # faces: Keep in Place, not restored
+    assert report.volume_offset == 0.0 and np.array_equal(opened, kept) and report.kept_in_place
 
 
 @pytest.mark.parametrize(

@@ -36,6 +36,7 @@ def test_identifiers_users_rely_on():
         "keep_sharp_edges",
         "sharpness_angle",
         "auto_amount",
+        "keep_in_place",
         "alpha",
         "beta",
         "iterations",
@@ -83,6 +84,7 @@ def test_identifiers_users_rely_on():
         "invert-group": "invert_vertex_group",
         "pin-boundary": "pin_boundary",
         "keep-outline": "keep_outline",
+        "slide": "keep_in_place",
         "influence-group": "influence_group",
         "invert-influence": "invert_influence_group",
         "deviation-attribute": "deviation_map",
@@ -229,7 +231,9 @@ def test_every_core_argument_is_an_argument_of_the_mesh_pipeline():
     assert {s.argument for s in arguments} >= {"method", "alpha", "beta", "iterations", "mode", "tolerance"}
     for setting in arguments:
         assert setting.argument in parameters, setting.name
-        assert (parameters[setting.argument].default == core.AUTO) == setting.chosen, setting.name
+        # Keep in Place is "auto" in core as well: the add-on's checkbox, on, passes that (operators/jobs.py).
+        automatic = setting.chosen or setting is spec.KEEP_IN_PLACE
+        assert (parameters[setting.argument].default == core.AUTO) == automatic, setting.name
         for choice in setting.items:
             assert choice.core, (setting.name, choice.identifier)
 

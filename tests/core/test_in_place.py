@@ -1,0 +1,171 @@
+"""Keep in Place (core.in_place): the default moves vertices across the surface, not along it, so
+textures, UVs and open outlines stay where they were; set numbers still run the paper's algorithm."""
+
+import warnings
+
+import numpy as np
+import pytest
+from primitives import grid, ico_sphere
+
+import core
+from core.in_place import keep_in_place
+from core.volume import vertex_normals
+
+
+def _noisy_along_normals(part, sigma, seed=0):
+    triangles = part.triangles()
+    normals = vertex_normals(part.positions, triangles)
+    rng = np.random.default_rng(seed)
+    return part.positions + normals * rng.normal(0.0, sigma, (len(normals), 1)), triangles
+
+
+def _slide(start, result, normals):
+    """RMS of the along-surface part of each vertex's move (against the given unit normals)."""
+    move = result - start
+    tangent = move - np.einsum("ij,ij->i", move, normals)[:, None] * normals
+    return float(np.sqrt(np.mean(np.sum(tangent**2, axis=1))))
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    """A noisy unit Ico Sphere (2,562 vertices), noise along the normals."""
+    part = ico_sphere(5)
+    noisy, triangles = _noisy_along_normals(part, 0.01)
+    return part, noisy, triangles
+
+
+def test_each_move_is_along_the_result_normal():
+    """keep_in_place keeps exactly the normal part of each move: what is left is parallel to the normal."""
+    part = ico_sphere(3)
+    rng = np.random.default_rng(1)
+    start = part.positions + rng.normal(0, 0.02, part.positions.shape)
+    result = part.positions * 1.01
+    kept = keep_in_place(start, result, part.triangles())
+    normals = vertex_normals(result, part.triangles())
+    move = kept - start
+    assert np.abs(np.cross(move, normals)).max() < 1e-12
+    assert np.allclose(np.einsum("ij,ij->i", move, normals), np.einsum("ij,ij->i", result - start, normals))
+
+
+def test_still_and_faceless_vertices_keep_their_result():
+    part = ico_sphere(2)
+    positions = np.vstack([part.positions, [[5.0, 5.0, 5.0]]])  # a loose vertex, in no triangle
+    result = positions * 1.1
+    result[3] = positions[3]  # did not move
+    kept = keep_in_place(positions, result, part.triangles())
+    assert np.array_equal(kept[3], positions[3]) and np.array_equal(kept[-1], result[-1])
+    assert kept.dtype == result.dtype
+    as_float32 = keep_in_place(positions.astype(np.float32), result.astype(np.float32), part.triangles())
+    assert as_float32.dtype == np.float32
+
+
+def test_default_keeps_vertices_in_place_and_removes_the_noise(sphere):
+    """On a noisy sphere the default's slide is a small share of the sliding default's, the noise goes
+    as well (distance to the clean sphere), and the report says the vertices were kept in place."""
+    part, noisy, triangles = sphere
+    edges = part.edges
+    kept, report = core.smooth_mesh(noisy, edges, faces=triangles, return_report=True)
+    sliding, slid_report = core.smooth_mesh(noisy, edges, faces=triangles, keep_in_place=False, return_report=True)
+    assert report.kept_in_place and not slid_report.kept_in_place
+    clean_normals = part.positions  # the unit sphere's normals
+    assert _slide(noisy, kept, clean_normals) <= 0.4 * _slide(noisy, sliding, clean_normals)
+
+    def error(points):
+        return float(np.sqrt(np.mean((np.linalg.norm(points, axis=1) - 1.0) ** 2)))
+
+    assert error(kept) < 0.5 * error(noisy)
+    assert error(kept) <= 1.05 * error(sliding)
+    # Each vertex's own clean position: the kept default is nearer than the sliding one.
+    assert np.linalg.norm(kept - part.positions) < np.linalg.norm(sliding - part.positions)
+
+
+def test_texture_stays_where_it_was(sphere):
+    """A texture's point on each vertex is where the vertex sits on the surface (here: its direction on
+    the unit sphere, as a spherical UV map reads it). Smoothing noise along the normals must not move it:
+    the default shifts it by a small share of the noise, the sliding default by far more."""
+    part, noisy, triangles = sphere
+
+    def texture_shift(points):  # angle between each vertex's texture point before and after, RMS
+        before = noisy / np.linalg.norm(noisy, axis=1, keepdims=True)
+        after = points / np.linalg.norm(points, axis=1, keepdims=True)
+        return float(np.sqrt(np.mean(np.arccos(np.clip(np.einsum("ij,ij->i", before, after), -1, 1)) ** 2)))
+
+    kept = core.smooth_mesh(noisy, part.edges, faces=triangles)
+    sliding = core.smooth_mesh(noisy, part.edges, faces=triangles, keep_in_place=False)
+    sigma = 0.01
+    assert texture_shift(kept) <= 0.4 * texture_shift(sliding)
+    assert texture_shift(kept) < 0.25 * sigma  # radians on a unit sphere: distance along it
+
+
+def test_open_outline_is_not_pulled_in():
+    """Blender's Grid (40 quads a side) with noise along z: the default keeps the outline's length and the
+    enclosed area within 1 % of the clean ones; without Keep in Place the border is pulled in."""
+    part = grid(40)
+    rng = np.random.default_rng(2)
+    noisy = part.positions + [0, 0, 1] * rng.normal(0.0, 0.01, (len(part.positions), 1))
+    triangles = part.triangles()
+    kept = core.smooth_mesh(noisy, part.edges, faces=triangles, weld=True)
+    sliding = core.smooth_mesh(noisy, part.edges, faces=triangles, weld=True, keep_in_place=False)
+    assert np.std(kept[:, 2]) < 0.5 * np.std(noisy[:, 2])
+
+    def area(points):  # the xy area the border encloses: the grid's xy extent, as its outline is a square
+        border = (np.abs(part.positions[:, :2]) == 1.0).any(axis=1)
+        return float(np.ptp(points[border, 0]) * np.ptp(points[border, 1])), np.abs(points[border, :2]).mean()
+
+    clean_area, clean_reach = area(part.positions)
+    kept_area, kept_reach = area(kept)
+    assert abs(kept_area / clean_area - 1) < 0.01 and abs(kept_reach / clean_reach - 1) < 0.01
+    sliding_reach = area(sliding)[1]
+    assert sliding_reach < kept_reach
+
+
+def test_set_numbers_run_the_paper_algorithm_unless_asked(sphere):
+    part, noisy, triangles = sphere
+    numbers = dict(alpha=0.1, beta=0.6, iterations=8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", core.ConvergenceWarning)
+        paper = core.hc_smooth(noisy, part.edges, **numbers)
+    given, report = core.smooth_mesh(noisy, part.edges, faces=triangles, return_report=True, **numbers)
+    assert np.array_equal(given, paper) and not report.kept_in_place
+    asked = core.smooth_mesh(noisy, part.edges, faces=triangles, keep_in_place=True, **numbers)
+    assert np.array_equal(asked, keep_in_place(noisy, paper, triangles))
+
+
+def test_fixed_vertices_influence_and_limit_hold(sphere):
+    part, noisy, triangles = sphere
+    fixed = np.zeros(len(noisy), bool)
+    fixed[::7] = True
+    influence = np.ones(len(noisy))
+    influence[1::7] = 0.0
+    limit = 0.004
+    result = core.smooth_mesh(noisy, part.edges, faces=triangles, fixed=fixed, influence=influence, max_deviation=limit)
+    assert np.array_equal(result[fixed], noisy[fixed]) and np.array_equal(result[1::7], noisy[1::7])
+    assert np.linalg.norm(result - noisy, axis=1).max() <= limit * (1 + 1e-9)
+
+
+def test_welded_copies_move_alike():
+    """A UV seam (split vertices) moves as the welded mesh does, kept in place there too."""
+    part = ico_sphere(3)
+    noisy, triangles = _noisy_along_normals(part, 0.01, seed=4)
+    split_triangles = triangles.copy()
+    copies = np.arange(0, len(noisy), 5)
+    positions = np.vstack([noisy, noisy[copies]])
+    remap = np.arange(len(noisy))
+    remap[copies] = len(noisy) + np.arange(len(copies))
+    half = len(triangles) // 2
+    split_triangles[:half] = remap[triangles[:half]]  # half the faces use the copies
+    edges = np.concatenate([split_triangles[:, [0, 1]], split_triangles[:, [1, 2]], split_triangles[:, [2, 0]]])
+    split = core.smooth_mesh(positions, edges, faces=split_triangles, weld=True)
+    whole = core.smooth_mesh(noisy, part.edges, faces=triangles)
+    assert np.array_equal(split[copies], split[len(noisy) :])
+    assert np.allclose(split[: len(noisy)], whole, atol=1e-12)
+
+
+def test_bad_keep_in_place_is_refused(sphere):
+    part, noisy, triangles = sphere
+    with pytest.raises(ValueError, match="needs the faces"):
+        core.smooth_mesh(noisy, part.edges, keep_in_place=True)
+    with pytest.raises(ValueError, match="keep_in_place must be"):
+        core.smooth_mesh(noisy, part.edges, faces=triangles, keep_in_place="yes")
+    faceless = core.smooth_mesh(noisy, part.edges, return_report=True)[1]
+    assert not faceless.kept_in_place  # no faces, no normals: the paper's moves
