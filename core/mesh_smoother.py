@@ -31,10 +31,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import collapse, parallel, sharp_edges, topology, volume, welding
-from .in_place import keep_in_place as project_in_place
 from .adjacency import Umbrella, umbrella_operator
 from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
+from .in_place import keep_in_place as project_in_place
 from .mesh_amount import PATCH_FROM, AmountChooser, MeshAmount
 from .mesh_noise import noise_steps
 from .metrics import fan_triangles
@@ -334,7 +334,7 @@ class MeshSmoother:
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         seconds = time.perf_counter() - start
         self.report = MeshReport(
-            self.method, alpha, beta, ran, amount, offset, largest, seconds, held_parts=held, kept_in_place=self.in_place
+            self.method, alpha, beta, ran, amount, offset, largest, seconds, False, None, held, self.in_place
         )
         yield 1.0
 
