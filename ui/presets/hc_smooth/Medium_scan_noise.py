@@ -6,6 +6,7 @@ settings.method = "HC"
 settings.keep_sharp_edges = False
 settings.sharpness_angle = 0.5235987901687622
 settings.auto_amount = False
+settings.keep_in_place = True
 settings.alpha = 0.02
 settings.beta = 0.6
 settings.iterations = 50
