@@ -59,9 +59,10 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray) 
 def unfold(kept, start, result, triangles):
     """Where ``kept`` folds or flattens a triangle, its corners take back part of the slide to ``result``,
     in place: half of what is left of it for each round the triangle stays folded, all of it after
-    _ROUNDS rounds (until no triangle with a corner off the result is folded). Shadows are read along the smoothed triangle's normal: a kept triangle is folded where its
-    shadow is not positive, flattened where it is under FOLDED times the input's shadow or FLAT times the
-    input's area. Later rounds read only the triangles at the corners just moved."""
+    _ROUNDS rounds (until no triangle with a corner off the result is folded). Shadows are read along the
+    smoothed triangle's normal: a kept triangle is folded where its shadow is not positive, flattened
+    where it is under FOLDED times the input's shadow or FLAT times the input's area. Later rounds read
+    only the triangles at the corners just moved."""
     corners_of = [np.ascontiguousarray(triangles[:, k]) for k in range(3)]
     facing = _cross(result, corners_of)
     length = np.sqrt(_dot(facing, facing))
