@@ -48,6 +48,7 @@ class Outcome:
     iterations: int = 0  # meshes: the most iterations any mesh ran
     sharp: bool = False  # meshes: Keep Sharp Edges ran (its iterations are steps)
     held: int = 0  # meshes: parts the Automatic Amount left as they were (core.collapse)
+    kept: bool = False  # meshes: every move was kept across the surface (Keep in Place)
     rounds: list = field(default_factory=list)  # point clouds: (rounds, steps per round) per cloud
     seconds: float = 0.0
     changes: list = field(default_factory=list)  # core.Change per smoothed mesh
@@ -69,6 +70,7 @@ class Outcome:
         """How much smoothing ran: '10 iterations' (and the parts left as they were, if any), or for point
         clouds '3 rounds of 15 steps (45 steps)'."""
         held = f", {jobs_module.held_words(self.held)}" if self.held else ""
+        held += ", kept in place" if self.kept else ""
         if self.sharp:
             return f"Keep Sharp Edges, {plural(self.iterations, 'step')}{held}"
         if not self.rounds:
@@ -432,6 +434,7 @@ def smooth_jobs(jobs, settings, outcome, given):
         outcome.iterations = max(outcome.iterations, job.report.iterations)
         outcome.sharp = outcome.sharp or job.report.keep_sharp_edges
         outcome.held += job.report.held_parts
+        outcome.kept = outcome.kept or job.report.kept_in_place
 
 
 def smooth_point_clouds(objects, settings, outcome):

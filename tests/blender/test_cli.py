@@ -552,3 +552,22 @@ def test_blend_with_meshes_and_point_clouds_smooths_the_kind_asked_for(cli, caps
     assert "warning: left as they are: Scan (meshes: smooth them without --points)" in capsys.readouterr().out
     assert not np.allclose(blend_positions(tmp_path / "clouds" / "scene.blend"), points)
     assert np.array_equal(positions_of(bpy.data.objects["Scan"].data), mesh_before)
+
+
+def test_slide_runs_the_sliding_default(cli, capsys, tmp_path):
+    """The command line keeps vertices in place by default, as the operator does, and says so; --slide
+    gives core's sliding default."""
+    source = export_noisy_sphere(tmp_path / "scan.ply")
+    before = import_positions(source)[0]
+    for options, folder in (([], "kept"), (["--slide"], "slid")):
+        assert cli.main([str(source), "-o", str(tmp_path / folder), *options]) == 0
+        said = capsys.readouterr().out
+        assert ("kept in place" in said) == (not options)
+    kept, slid = import_positions(tmp_path / "kept" / "scan.ply")[0], import_positions(tmp_path / "slid" / "scan.ply")[0]
+
+    def slide(after):  # RMS along-surface part of each move; a sphere's normals are its directions
+        normals = before / np.linalg.norm(before, axis=1, keepdims=True)
+        move = (after - before).astype(np.float64)
+        return np.sqrt(np.mean(np.sum((move - np.sum(move * normals, axis=1)[:, None] * normals) ** 2, axis=1)))
+
+    assert len(kept) == len(slid) == len(before) and slide(kept) <= 0.4 * slide(slid)

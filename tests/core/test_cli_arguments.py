@@ -143,3 +143,13 @@ def test_options_are_built_from_the_declarations(tmp_path, monkeypatch):
                 arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", str(shown + beyond)])
     assert set(arguments.MESH_ONLY) == {name.replace("-", "_") for name in declared_options() if name not in points}
     assert vars(arguments.Settings()) == {s.name: s.default for s in spec.MESH}
+
+
+def test_slide_switches_keep_in_place_off(tmp_path, monkeypatch):
+    """Keep in Place is on unless --slide is given; --slide is a mesh option, refused with --points."""
+    monkeypatch.chdir(tmp_path)
+    assert arguments.parse(["a.ply", "-o", "out"]).settings.keep_in_place is True
+    plan = arguments.parse(["a.ply", "-o", "out", "--slide"])
+    assert plan.settings.keep_in_place is False and "keep_in_place" in plan.given
+    with pytest.raises(arguments.UsageError, match="--slide"):
+        arguments.parse(["a.ply", "-o", "out", "--points", "--slide"])
