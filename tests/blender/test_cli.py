@@ -563,7 +563,7 @@ def test_slide_runs_the_sliding_default(cli, capsys, tmp_path):
         assert cli.main([str(source), "-o", str(tmp_path / folder), *options]) == 0
         said = capsys.readouterr().out
         assert ("kept in place" in said) == (not options)
-    kept, slid = import_positions(tmp_path / "kept" / "scan.ply")[0], import_positions(tmp_path / "slid" / "scan.ply")[0]
+    kept, slid = (import_positions(tmp_path / folder / "scan.ply")[0] for folder in ("kept", "slid"))
 
     def slide(after):  # RMS along-surface part of each move; a sphere's normals are its directions
         normals = before / np.linalg.norm(before, axis=1, keepdims=True)
