@@ -44,8 +44,8 @@ def core_options(props, given=frozenset()):
 
     Numbers are taken in single precision, as Blender's float properties hold them, so every route runs
     the same numbers."""
-    values = {setting.name: getattr(props, setting.name) for setting in settings_spec.MESH}
-    automatic = settings_spec.automatic(values) and not set(settings_spec.SWITCHES_OFF_THE_AMOUNT) & set(given)
+    values = settings_spec.values_of(props, settings_spec.MESH)
+    automatic = settings_spec.automatic(values, given)
     options = {}
     for setting in settings_spec.MESH:
         if setting.argument is None:
