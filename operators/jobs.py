@@ -34,6 +34,7 @@ class Job:
     change: object = None  # core.Change of the result, measured once for every report
     measured_input: object = None  # Future of the core.metrics.InputMeasure the report compares with
     deviation: object = None  # the core.DeviationMap of the result (Deviation Map on), made before any write
+    map_names: object = None  # mesh_io.DeviationNames: where the map goes (Deviation Map on), chosen on reading
 
 
 def core_options(props, given=frozenset()):
@@ -136,6 +137,7 @@ def make_job(obj, props, extra_fixed=None):
         corners=corners,
         key_block=key_block,
         influence=influence,
+        map_names=mesh_io.deviation_names(obj) if props.deviation_map else None,
     )
 
 
@@ -169,8 +171,8 @@ def make_smoother(job, options):
 
 
 def write_all(jobs, props):
-    """Write every job's result (``write``); with Deviation Map on, every map is made before anything is
-    written, so a failure leaves every mesh as it was."""
+    """Write every job's result (``write``); with Deviation Map on, every map is made (and where it goes was
+    chosen when the job was read) before anything is written, so a failure leaves every mesh as it was."""
     if props.deviation_map:
         for job in jobs:
             deviation_map(job)
@@ -183,7 +185,7 @@ def write(job, props):
     Map on, also its map as point attributes of the mesh."""
     if props.deviation_map:
         deviation = deviation_map(job)
-        mesh_io.write_deviation(job.mesh, deviation.deviation, deviation.colors)
+        mesh_io.write_deviation(job.mesh, job.map_names, deviation.deviation, deviation.colors)
     if props.output == "SHAPE_KEY":
         if job.mesh.shape_keys is None:
             job.obj.shape_key_add(name="Basis", from_mix=False)
@@ -200,6 +202,16 @@ def deviation_map(job):
         normals = input_measure(job).result().normals
         job.deviation = core.deviation_map(job.positions, job.result, normals=normals, linear=True)
     return job.deviation
+
+
+def map_legend(job, length=None):
+    """The deviation map's legend (core.DeviationMap.legend), and where the map went when a name of the user's
+    kept it from hc_deviation and hc_deviation_color."""
+    text = deviation_map(job).legend(length)
+    names = job.map_names
+    if names is not None and not names.usual:
+        text += f", stored in '{names.value}' and '{names.color}'"
+    return text
 
 
 def input_measure(job):
@@ -250,7 +262,7 @@ def summary(jobs, props, length=None):
     smoother = "Keep Sharp Edges" if any(report.keep_sharp_edges for report in reports) else METHOD_LABEL[props.method]
     text = f"{smoother} on {names}{where}: {ran}, {seconds:.2f} s; {changed}"
     if props.deviation_map:
-        legends = [deviation_map(job).legend(length) for job in jobs]
+        legends = [map_legend(job, length) for job in jobs]
         text += "; " + (
             "; ".join(f"'{j.obj.name}': {t}" for j, t in zip(jobs, legends)) if len(jobs) > 1 else legends[0]
         )
