@@ -376,8 +376,8 @@ MAX_DEVIATION = Setting(
     "max_deviation",
     "float",
     "Deviation Limit",
-    "The farthest any vertex may end from where it started, kept inside every iteration (0 = no limit). "
-    "HC with Automatic Amount: a multiple of the noise it finds, unless set",
+    "The farthest any vertex may end from where it started, in world space (on the object as scaled), kept "
+    "inside every iteration (0 = no limit). HC with Automatic Amount: a multiple of the noise it finds, unless set",
     0.0,
     min=0.0,
     soft_max=1.0,
@@ -578,7 +578,8 @@ MODIFIER_ITERATIONS = replace(
 )
 MODIFIER_MAX_DEVIATION = replace(
     MAX_DEVIATION,
-    description="The farthest any vertex may end from where it started, kept inside every iteration (0 = no limit)",
+    description="The farthest any vertex may end from where it started, in world space (on the object as scaled), "
+    "kept inside every iteration (0 = no limit)",
     flag=None,
     cli_default=None,
 )

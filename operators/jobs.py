@@ -2,6 +2,12 @@
 
 Shared by the Object-mode and Edit-mode operators (and the command line): every job is read and
 validated before any mesh is written, so a failure leaves every mesh as it was.
+
+A scaled object is smoothed as it stands in the world (core.world): its positions are taken through its
+stretch, so the Deviation Limit, the Automatic Amount's noise and limit, Keep Sharp Edges' angles, the report
+and the deviation map measure world-space lengths in scene units; the result is mapped back to object space
+on writing. An object without scale (identity, rotation, mirror) runs in object space, bit for bit as before.
+A mesh shared by several objects is smoothed once, as the first of them (the active one) stands.
 """
 
 import math
@@ -21,7 +27,7 @@ METHOD_LABEL = {choice.identifier: choice.short for choice in settings_spec.METH
 class Job:
     obj: object
     mesh: object
-    positions: np.ndarray  # (n, 3): the mesh's or its active shape key's (float32), or a file's
+    positions: np.ndarray  # (n, 3): the mesh's or its active shape key's (float32) in ``frame``, or a file's
     edges: np.ndarray
     faces: np.ndarray  # (t, 3) triangles (a fan of each face), None for a mesh without faces
     fixed: np.ndarray  # bool (n,)
@@ -35,6 +41,10 @@ class Job:
     measured_input: object = None  # Future of the core.metrics.InputMeasure the report compares with
     deviation: object = None  # the core.DeviationMap of the result (Deviation Map on), made before any write
     map_names: object = None  # mesh_io.DeviationNames: where the map goes (Deviation Map on), chosen on reading
+    # The object's stretch (core.world.frame): ``positions`` and ``result`` are in world-space lengths, the
+    # object-space positions read are ``local``. None: object space measures as world space does.
+    frame: np.ndarray = None
+    local: np.ndarray = None
 
 
 def core_options(props, given=frozenset()):
@@ -96,6 +106,7 @@ def make_job(obj, props, extra_fixed=None):
             "Use Object > HC Smooth Points (object.hc_smooth_points) instead"
         )
     positions, key_block = objects.read_positions(obj)
+    frame = objects.world_frame(obj)
     edges = mesh_io.read_edges(mesh)
     corner_verts, corner_edges = mesh_io.read_corners(mesh)
     corners = None
@@ -129,7 +140,7 @@ def make_job(obj, props, extra_fixed=None):
     return Job(
         obj=obj,
         mesh=mesh,
-        positions=positions,
+        positions=positions if frame is None else core.world.to_frame(positions, frame),
         edges=edges,
         faces=faces,
         fixed=fixed,
@@ -138,6 +149,8 @@ def make_job(obj, props, extra_fixed=None):
         key_block=key_block,
         influence=influence,
         map_names=mesh_io.deviation_names(obj) if props.deviation_map else None,
+        frame=frame,
+        local=None if frame is None else positions,
     )
 
 
@@ -186,18 +199,27 @@ def write(job, props):
     if props.deviation_map:
         deviation = deviation_map(job)
         mesh_io.write_deviation(job.mesh, job.map_names, deviation.deviation, deviation.colors)
+    before, result = local_result(job)
     if props.output == "SHAPE_KEY":
         if job.mesh.shape_keys is None:
             job.obj.shape_key_add(name="Basis", from_mix=False)
         key = job.obj.shape_key_add(name=METHOD_LABEL[props.method] + " Smooth", from_mix=False)
-        mesh_io.write_shape_key(key, job.result)
+        mesh_io.write_shape_key(key, result)
         return
-    objects.write_positions(job.obj, job.key_block, job.positions, job.result)
+    objects.write_positions(job.obj, job.key_block, before, result)
+
+
+def local_result(job):
+    """(the positions read, the result) of a job in object space."""
+    if job.frame is None:
+        return job.positions, job.result
+    return job.local, core.world.from_frame(job.local, job.positions, job.result, job.frame)
 
 
 def deviation_map(job):
     """The job's core.DeviationMap, made once: the move along the input's vertex normals (those the report
-    measures along), in linear colours as Blender's float colour attributes hold them."""
+    measures along; world-space lengths, as the job's positions), in linear colours as Blender's float colour
+    attributes hold them."""
     if job.deviation is None:
         normals = input_measure(job).result().normals
         job.deviation = core.deviation_map(job.positions, job.result, normals=normals, linear=True)
@@ -242,7 +264,7 @@ def release(job):
     measure(job)
     if job.deviation is not None:
         job.deviation = replace(job.deviation, deviation=None, colors=None)
-    job.positions = job.result = job.edges = job.faces = job.fixed = job.influence = None
+    job.positions = job.result = job.local = job.edges = job.faces = job.fixed = job.influence = None
     job.corners = job.measured_input = None
 
 

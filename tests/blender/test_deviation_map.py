@@ -9,7 +9,16 @@ import bmesh
 import bpy
 import numpy as np
 import pytest
-from blender_scene import ADDON, make_mesh_object, noisy_grid, noisy_sphere, positions_of, select_only
+from blender_scene import (
+    ADDON,
+    in_world,
+    make_mesh_object,
+    noisy_grid,
+    noisy_sphere,
+    positions_of,
+    select_only,
+    transformed,
+)
 from test_undo import ctrl_z, run_as_from_the_ui
 
 import core
@@ -94,6 +103,28 @@ def test_object_mode_stores_the_move_along_the_normals(scene, capfd):
     assert "deviation map -" in said and "(blue: inwards, red: outwards" in said
     shown = bpy.utils.units.to_string("METRIC", "LENGTH", extent, precision=3)
     assert f"deviation map -{shown} to +{shown}" in said
+
+
+@pytest.mark.parametrize("modifier", [False, True])
+def test_a_scaled_objects_map_and_legend_are_in_world_space(scene, capfd, modifier):
+    """On an object scaled (1, 1, 10) and rotated the map is the world-space move along the world-space
+    normals, and the legend gives its range in scene units; the modifier's map is the same."""
+    obj = transformed(noisy_sphere(sigma=0.05), scale=(1.0, 1.0, 10.0), rotation_euler=(0.4, -0.3, 1.1))
+    before, triangles = positions_of(obj.data), triangles_of(obj.data)
+    if modifier:
+        add_modifier(obj, deviation_map=True, alpha=0.1, iterations=6)
+        mesh = evaluated(obj)
+    else:
+        assert bpy.ops.object.hc_smooth(deviation_map=True, auto_amount=False, iterations=6) == {"FINISHED"}
+        mesh = obj.data
+    after = positions_of(mesh)
+    values = attribute_values(mesh)
+    expected = expected_deviation(in_world(obj, before), in_world(obj, after), triangles)
+    np.testing.assert_allclose(values, expected, rtol=0, atol=1e-5 * np.abs(expected).max())
+    if not modifier:
+        extent = core.deviation_extent(values)
+        shown = bpy.utils.units.to_string("METRIC", "LENGTH", extent, precision=3)
+        assert f"deviation map -{shown} to +{shown}" in capfd.readouterr().out
 
 
 def test_off_adds_nothing(scene, capfd):
