@@ -80,12 +80,24 @@ def settings_class(name, settings, doc):
 # --- meshes: object.hc_smooth, mesh.hc_smooth and the scene settings (scene.hc_smooth) -----------------
 
 
-def automatic(values):
-    """HC with Automatic Amount: Alpha and Iterations are chosen for each mesh, not taken as set. ``values``:
-    {name: value} of mesh settings (the modifier's have no Automatic Amount). Keep Sharp Edges has its own
-    Automatic Amount, whatever the method."""
-    smoother = values["method"] == "HC" or values.get("keep_sharp_edges", False)
-    return smoother and values.get("auto_amount", False)
+def automatic(values, given=()):
+    """Whether the Automatic Amount chooses Alpha and Iterations (and Beta and the Deviation Limit unless
+    given): the one rule the panels' greying, the buttons, the operators and the command line read.
+
+    ``values``: {name: value} of the mesh settings (``values_of``), at least method, keep_sharp_edges and
+    auto_amount; settings without auto_amount (the modifier's) have no Automatic Amount. ``given``: the names
+    the caller set (Blender's ``is_property_set``, a command line's options): Alpha or Iterations among them
+    runs every number as set. It runs for HC, and for Keep Sharp Edges (its own) whatever the method."""
+    if "auto_amount" not in values:
+        return False
+    smoother = values["method"] == "HC" or values["keep_sharp_edges"]
+    return bool(smoother and values["auto_amount"]) and not set(SWITCHES_OFF_THE_AMOUNT) & set(given)
+
+
+def values_of(props, settings):
+    """{name: value} of ``settings`` on ``props`` (an operator's properties, the scene settings, a snapshot):
+    what the declared rules (``automatic``, each setting's ``active`` and ``text``) read."""
+    return {setting.name: getattr(props, setting.name) for setting in settings}
 
 
 METHOD = Setting(
@@ -378,8 +390,8 @@ MAX_DEVIATION = Setting(
     "max_deviation",
     "float",
     "Deviation Limit",
-    "The farthest any vertex may end from where it started, kept inside every iteration (0 = no limit). "
-    "HC with Automatic Amount: a multiple of the noise it finds, unless set",
+    "The farthest any vertex may end from where it started, in world space (on the object as scaled), kept "
+    "inside every iteration (0 = no limit). HC with Automatic Amount: a multiple of the noise it finds, unless set",
     0.0,
     min=0.0,
     soft_max=1.0,
@@ -581,7 +593,8 @@ MODIFIER_ITERATIONS = replace(
 )
 MODIFIER_MAX_DEVIATION = replace(
     MAX_DEVIATION,
-    description="The farthest any vertex may end from where it started, kept inside every iteration (0 = no limit)",
+    description="The farthest any vertex may end from where it started, in world space (on the object as scaled), "
+    "kept inside every iteration (0 = no limit)",
     flag=None,
     cli_default=None,
 )

@@ -98,7 +98,7 @@ def main():
         deviation_map = core.deviation_map(job.positions, job.result, normals=normals, linear=True)
         parts["core.deviation_map"].append(time.perf_counter() - start)
         start = time.perf_counter()
-        mesh_io.write_deviation(obj.data, deviation_map.deviation, deviation_map.colors)
+        mesh_io.write_deviation(obj.data, job.map_names, deviation_map.deviation, deviation_map.colors)
         parts["attributes written"].append(time.perf_counter() - start)
     parts = {name: statistics.median(values) for name, values in parts.items()}
     reset()

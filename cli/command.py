@@ -428,7 +428,7 @@ def smooth_jobs(jobs, settings, outcome, given):
     for job in jobs:
         outcome.changes.append(jobs_module.measure(job))
         if settings.deviation_map:
-            legend = jobs_module.deviation_map(job).legend()
+            legend = jobs_module.map_legend(job)
             outcome.legends.append(f"'{job.obj.name}': {legend}" if len(jobs) > 1 else legend)
         outcome.vertices += len(job.positions)
         outcome.iterations = max(outcome.iterations, job.report.iterations)

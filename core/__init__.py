@@ -4,7 +4,19 @@ The same package loads as ``core`` in tests and tools and as ``bl_ext.<repo>.hc_
 Blender, so everything inside uses relative imports.
 """
 
-from . import borders, collapse, deviation, in_place, mesh_amount, metrics, sharp_edges, topology, volume, welding
+from . import (
+    borders,
+    collapse,
+    deviation,
+    in_place,
+    mesh_amount,
+    metrics,
+    sharp_edges,
+    topology,
+    volume,
+    welding,
+    world,
+)
 from .adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, in_convergence_region
 from .deviation import DeviationMap, deviation_colors, deviation_extent, deviation_map, normal_deviation
@@ -58,4 +70,5 @@ __all__ = [
     "umbrella_operator",
     "volume",
     "welding",
+    "world",
 ]

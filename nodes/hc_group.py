@@ -30,13 +30,18 @@ iteration a vertex takes q + λ (p - q) instead of p, q itself where λ = 0. For
 is the central step with a per-vertex weight (see build()); the Repeat zone mixes p and q only when
 some vertex has λ < 1, so without a painted group it evaluates the unweighted step alone.
 
-The Deviation Limit r is core's max_deviation=: every iteration ends with p = o + d min(1, r / |d|), d = p - o,
-after the influence (0 = no limit). Plain and central Laplacian then run in the Repeat zone too (one Blur
-node cannot stop after each iteration); without a limit the zone is built without it.
+The Deviation Limit r is core's max_deviation= in world space, as the operators take it (they run core on the
+world-space shape, core.world): every iteration ends with p = o + d min(1, r / |L d|), d = p - o, L the 3x3
+part of the object's world matrix (Object Info on the Self Object), after the influence (0 = no limit). The
+steps themselves are linear in the positions, so they are the same in object and world space. Plain and
+central Laplacian then run in the Repeat zone too (one Blur node cannot stop after each iteration); without a
+limit the zone is built without it. Reading the object's matrix makes Blender evaluate the group again when
+the object's transform changes.
 
 Deviation Map stores each vertex's signed move along its input normal as the point attribute hc_deviation, as
-the mesh operators do (core.normal_deviation): the input's positions and area-weighted vertex normals are
-captured first and carried to the end, where (position - start) . normal is stored. Off, neither is evaluated.
+the mesh operators do (core.normal_deviation), in world space: the input's positions and area-weighted vertex
+normals (taken through L's inverse transpose, as normals transform) are captured first and carried to the end,
+where L (position - start) . normal is stored. Off, neither is evaluated.
 
 Guards (the modifier cannot write garbage, whoever sets its inputs: the panel, a script writing the modifier's
 ID properties, NaN included): each single-value input is clamped to its range inside the tree by comparisons
@@ -53,7 +58,7 @@ from ..core.smoothing import BLOW_UP_FACTOR
 
 GROUP_NAME = "HC Smooth"
 # Bump whenever the nodes or the interface change: an older group in a file is then rebuilt in place.
-VERSION = 4
+VERSION = 5
 DEVIATION_ATTRIBUTE = "hc_deviation"  # the Deviation Map's output, as the mesh operators store it
 VERSION_KEY = "hc_smooth_version"
 
@@ -282,6 +287,10 @@ class _Tree:
     def position(self):
         return self.node("GeometryNodeInputPosition").outputs[0]
 
+    def world(self, direction, transform):
+        """A direction (a move, a vector between points) through ``transform``'s 3x3 part."""
+        return self.node_output("FunctionNodeTransformDirection", "Direction", inputs=[direction, transform])
+
     def umbrella_of_positions(self):
         """T q on points: the mean of the neighbours' positions (a vertex without edges gets -q; it is fixed)."""
         ends = self.node("GeometryNodeInputMeshEdgeVertices")
@@ -316,9 +325,14 @@ def build(tree):
 
     alpha, beta, iterations, limit, refused = _checked_inputs(t, value, is_method(HC))
 
+    # The object's world matrix: the limit and the map measure lengths in world space.
+    info = t.node("GeometryNodeObjectInfo", transform_space="ORIGINAL")
+    t.feed(info.inputs["Object"], t.node("GeometryNodeSelfObject").outputs[0])
+    transform = info.outputs["Transform"]
+
     # With Deviation Map on, the input's positions and normals ride along (captured) to the end.
     deviation_map = value(settings_spec.MODIFIER_DEVIATION_MAP)
-    geometry, start_position, start_normal = _start_of_map(t, inputs["Geometry"], deviation_map)
+    geometry, start_position, start_normal = _start_of_map(t, inputs["Geometry"], deviation_map, transform)
 
     # Who moves: outside the fixed group (inside it, inverted), not on a pinned boundary, with neighbours.
     in_group = t.math("GREATER_THAN", value(settings_spec.VERTEX_GROUP), 0.0)
@@ -375,9 +389,10 @@ def build(tree):
     limited = t.math("GREATER_THAN", limit, 0.0)  # a single value: the limit's nodes are evaluated only if on
 
     def bounded(p):
-        """The Deviation Limit r as core applies it: p = o + d r / |d| where |d| > r (d = p - o), else p itself."""
+        """The Deviation Limit r as core applies it in world space: p = o + d r / |L d| where |L d| > r (d = p - o,
+        L the object's 3x3 transform), else p itself: the world-space ball's point on the line from o to p."""
         away = t.subtract(p, original)
-        length = t.node_output("ShaderNodeVectorMath", "Value", operation="LENGTH", inputs=[away])
+        length = t.node_output("ShaderNodeVectorMath", "Value", operation="LENGTH", inputs=[t.world(away, transform)])
         projected = t.add(original, t.scale(away, t.math("DIVIDE", limit, length)))
         return t.switch("VECTOR", limited, p, t.switch("VECTOR", t.math("GREATER_THAN", length, limit), p, projected))
 
@@ -415,29 +430,36 @@ def build(tree):
     uses_blur = t.boolean("AND", t.boolean("OR", is_method(LAPLACIAN), is_method(CENTRAL)), t.boolean("NOT", limited))
     smoothed = t.switch("GEOMETRY", uses_blur, iterated, blurred)
     result = _guarded(t, geometry, smoothed, refused)
-    t.feed(group_output.inputs["Geometry"], _deviation_map(t, result, deviation_map, start_position, start_normal))
+    t.feed(
+        group_output.inputs["Geometry"],
+        _deviation_map(t, result, deviation_map, start_position, start_normal, transform),
+    )
 
     sockets[input_name(settings_spec.METHOD)].default_value = METHOD_NAMES[settings_spec.METHOD.default]
     return sockets
 
 
-def _start_of_map(t, geometry, on):
-    """(geometry, position, normal): the input with its positions and unit area-weighted vertex normals (core's:
-    the faces' normals times their areas, averaged on the vertices, normalised; 0 without a face) captured where
-    ``on`` (a single value: the capture is evaluated only then), else the input as it is."""
+def _start_of_map(t, geometry, on, transform):
+    """(geometry, position, normal): the input with its positions and its unit area-weighted vertex normals in
+    world space (core's on the world-space shape: the faces' normals times their areas, summed on the vertices,
+    through ``transform``'s inverse transpose, normalised; 0 without a face) captured where ``on`` (a single
+    value: the capture is evaluated only then), else the input as it is."""
     face = t.node("GeometryNodeInputNormal").outputs[0]
     area = t.node("GeometryNodeInputMeshFaceArea").outputs[0]
     summed = t.on_domain(t.scale(face, area), "FACE", "FLOAT_VECTOR")
-    normal = t.node_output("ShaderNodeVectorMath", "Vector", operation="NORMALIZE", inputs=[summed])
+    inverse = t.node_output("FunctionNodeInvertMatrix", "Matrix", inputs=[transform])
+    normals = t.node_output("FunctionNodeTransposeMatrix", "Matrix", inputs=[inverse])
+    normal = t.node_output("ShaderNodeVectorMath", "Vector", operation="NORMALIZE", inputs=[t.world(summed, normals)])
     captured, (position, normal) = t.capture(
         geometry, [("VECTOR", "Start Position", t.position()), ("VECTOR", "Start Normal", normal)]
     )
     return t.switch("GEOMETRY", on, geometry, captured), position, normal
 
 
-def _deviation_map(t, geometry, on, start_position, start_normal):
-    """``geometry`` with, where ``on``, the point attribute hc_deviation: (position - start) . start normal."""
-    moved = t.subtract(t.position(), start_position)
+def _deviation_map(t, geometry, on, start_position, start_normal, transform):
+    """``geometry`` with, where ``on``, the point attribute hc_deviation: the world-space move (position - start
+    through ``transform``) along the world-space start normal."""
+    moved = t.world(t.subtract(t.position(), start_position), transform)
     deviation = t.node_output("ShaderNodeVectorMath", "Value", operation="DOT_PRODUCT", inputs=[moved, start_normal])
     store = t.node("GeometryNodeStoreNamedAttribute", data_type="FLOAT", domain="POINT")
     t.feed(store.inputs["Geometry"], geometry)

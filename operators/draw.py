@@ -9,14 +9,9 @@ Plain drawing on a layout, without bpy: the operators' redo panels and ui/panel.
 
 from .. import settings_spec
 from ..core.convergence import convergence_lines
+from ..settings_spec import values_of
 
 CORE_METHOD = {choice.identifier: choice.core for choice in settings_spec.METHOD.items}
-
-
-def values_of(props, settings):
-    """{name: value} of ``settings`` on ``props`` (an operator's properties, the scene settings, a snapshot):
-    what the declared drawing rules read."""
-    return {setting.name: getattr(props, setting.name) for setting in settings}
 
 
 def draw_settings(layout, props, settings, obj=None, shown=None):

@@ -2,6 +2,12 @@
 
 Shared by the Object-mode and Edit-mode operators (and the command line): every job is read and
 validated before any mesh is written, so a failure leaves every mesh as it was.
+
+A scaled object is smoothed as it stands in the world (core.world): its positions are taken through its
+stretch, so the Deviation Limit, the Automatic Amount's noise and limit, Keep Sharp Edges' angles, the report
+and the deviation map measure world-space lengths in scene units; the result is mapped back to object space
+on writing. An object without scale (identity, rotation, mirror) runs in object space, bit for bit as before.
+A mesh shared by several objects is smoothed once, as the first of them (the active one) stands.
 """
 
 import math
@@ -21,7 +27,7 @@ METHOD_LABEL = {choice.identifier: choice.short for choice in settings_spec.METH
 class Job:
     obj: object
     mesh: object
-    positions: np.ndarray  # (n, 3): the mesh's or its active shape key's (float32), or a file's
+    positions: np.ndarray  # (n, 3): the mesh's or its active shape key's (float32) in ``frame``, or a file's
     edges: np.ndarray
     faces: np.ndarray  # (t, 3) triangles (a fan of each face), None for a mesh without faces
     fixed: np.ndarray  # bool (n,)
@@ -34,6 +40,11 @@ class Job:
     change: object = None  # core.Change of the result, measured once for every report
     measured_input: object = None  # Future of the core.metrics.InputMeasure the report compares with
     deviation: object = None  # the core.DeviationMap of the result (Deviation Map on), made before any write
+    map_names: object = None  # mesh_io.DeviationNames: where the map goes (Deviation Map on), chosen on reading
+    # The object's stretch (core.world.frame): ``positions`` and ``result`` are in world-space lengths, the
+    # object-space positions read are ``local``. None: object space measures as world space does.
+    frame: np.ndarray = None
+    local: np.ndarray = None
 
 
 def core_options(props, given=frozenset()):
@@ -44,8 +55,8 @@ def core_options(props, given=frozenset()):
 
     Numbers are taken in single precision, as Blender's float properties hold them, so every route runs
     the same numbers."""
-    values = {setting.name: getattr(props, setting.name) for setting in settings_spec.MESH}
-    automatic = settings_spec.automatic(values) and not set(settings_spec.SWITCHES_OFF_THE_AMOUNT) & set(given)
+    values = settings_spec.values_of(props, settings_spec.MESH)
+    automatic = settings_spec.automatic(values, given)
     options = {}
     for setting in settings_spec.MESH:
         if setting.argument is None:
@@ -97,6 +108,7 @@ def make_job(obj, props, extra_fixed=None):
             "Use Object > HC Smooth Points (object.hc_smooth_points) instead"
         )
     positions, key_block = objects.read_positions(obj)
+    frame = objects.world_frame(obj)
     edges = mesh_io.read_edges(mesh)
     corner_verts, corner_edges = mesh_io.read_corners(mesh)
     corners = None
@@ -130,7 +142,7 @@ def make_job(obj, props, extra_fixed=None):
     return Job(
         obj=obj,
         mesh=mesh,
-        positions=positions,
+        positions=positions if frame is None else core.world.to_frame(positions, frame),
         edges=edges,
         faces=faces,
         fixed=fixed,
@@ -138,6 +150,9 @@ def make_job(obj, props, extra_fixed=None):
         corners=corners,
         key_block=key_block,
         influence=influence,
+        map_names=mesh_io.deviation_names(obj) if props.deviation_map else None,
+        frame=frame,
+        local=None if frame is None else positions,
     )
 
 
@@ -171,8 +186,8 @@ def make_smoother(job, options):
 
 
 def write_all(jobs, props):
-    """Write every job's result (``write``); with Deviation Map on, every map is made before anything is
-    written, so a failure leaves every mesh as it was."""
+    """Write every job's result (``write``); with Deviation Map on, every map is made (and where it goes was
+    chosen when the job was read) before anything is written, so a failure leaves every mesh as it was."""
     if props.deviation_map:
         for job in jobs:
             deviation_map(job)
@@ -185,23 +200,42 @@ def write(job, props):
     Map on, also its map as point attributes of the mesh."""
     if props.deviation_map:
         deviation = deviation_map(job)
-        mesh_io.write_deviation(job.mesh, deviation.deviation, deviation.colors)
+        mesh_io.write_deviation(job.mesh, job.map_names, deviation.deviation, deviation.colors)
+    before, result = local_result(job)
     if props.output == "SHAPE_KEY":
         if job.mesh.shape_keys is None:
             job.obj.shape_key_add(name="Basis", from_mix=False)
         key = job.obj.shape_key_add(name=METHOD_LABEL[props.method] + " Smooth", from_mix=False)
-        mesh_io.write_shape_key(key, job.result)
+        mesh_io.write_shape_key(key, result)
         return
-    objects.write_positions(job.obj, job.key_block, job.positions, job.result)
+    objects.write_positions(job.obj, job.key_block, before, result)
+
+
+def local_result(job):
+    """(the positions read, the result) of a job in object space."""
+    if job.frame is None:
+        return job.positions, job.result
+    return job.local, core.world.from_frame(job.local, job.positions, job.result, job.frame)
 
 
 def deviation_map(job):
     """The job's core.DeviationMap, made once: the move along the input's vertex normals (those the report
-    measures along), in linear colours as Blender's float colour attributes hold them."""
+    measures along; world-space lengths, as the job's positions), in linear colours as Blender's float colour
+    attributes hold them."""
     if job.deviation is None:
         normals = input_measure(job).result().normals
         job.deviation = core.deviation_map(job.positions, job.result, normals=normals, linear=True)
     return job.deviation
+
+
+def map_legend(job, length=None):
+    """The deviation map's legend (core.DeviationMap.legend), and where the map went when a name of the user's
+    kept it from hc_deviation and hc_deviation_color."""
+    text = deviation_map(job).legend(length)
+    names = job.map_names
+    if names is not None and not names.usual:
+        text += f", stored in '{names.value}' and '{names.color}'"
+    return text
 
 
 def input_measure(job):
@@ -232,7 +266,7 @@ def release(job):
     measure(job)
     if job.deviation is not None:
         job.deviation = replace(job.deviation, deviation=None, colors=None)
-    job.positions = job.result = job.edges = job.faces = job.fixed = job.influence = None
+    job.positions = job.result = job.local = job.edges = job.faces = job.fixed = job.influence = None
     job.corners = job.measured_input = None
 
 
@@ -252,7 +286,7 @@ def summary(jobs, props, length=None):
     smoother = "Keep Sharp Edges" if any(report.keep_sharp_edges for report in reports) else METHOD_LABEL[props.method]
     text = f"{smoother} on {names}{where}: {ran}, {seconds:.2f} s; {changed}"
     if props.deviation_map:
-        legends = [deviation_map(job).legend(length) for job in jobs]
+        legends = [map_legend(job, length) for job in jobs]
         text += "; " + (
             "; ".join(f"'{j.obj.name}': {t}" for j, t in zip(jobs, legends)) if len(jobs) > 1 else legends[0]
         )

@@ -5,6 +5,7 @@ is written back whole or not at all.
 """
 
 import contextlib
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -70,27 +71,79 @@ def read_faces(mesh, corner_verts=None):
 
 DEVIATION_ATTRIBUTE = "hc_deviation"  # the deviation map: float, on points
 DEVIATION_COLOR_ATTRIBUTE = "hc_deviation_color"  # its colours: float colour, on points
+_MAP_TYPES = {DEVIATION_ATTRIBUTE: "FLOAT", DEVIATION_COLOR_ATTRIBUTE: "FLOAT_COLOR"}
 
 
-def write_deviation(mesh, deviation, colors):
-    """Store a deviation map as point attributes (replacing any of those names) and make its colours the
-    active colour attribute (what Solid shading's Attribute colour shows). ``colors``: linear RGBA (n, 4),
-    written through the float colour's fast path (the sRGB one converts per value: ~50 times slower)."""
-    values = _point_attribute(mesh, DEVIATION_ATTRIBUTE, "FLOAT")
+@dataclass(frozen=True)
+class DeviationNames:
+    """Where a mesh's deviation map goes (``deviation_names``)."""
+
+    value: str  # the float point attribute of the map
+    color: str  # its colours, a float colour point attribute
+    render: bool  # also the colours renders and exporters use: the mesh has no colour attributes of its own
+
+    @property
+    def usual(self):
+        return (self.value, self.color) == (DEVIATION_ATTRIBUTE, DEVIATION_COLOR_ATTRIBUTE)
+
+
+def deviation_names(obj):
+    """Where ``obj``'s mesh takes a deviation map; reads only. Each of the two attributes goes to the first of
+    "hc_deviation", "hc_deviation.001", "hc_deviation.002", ... (as Blender numbers names) that no vertex group
+    has and that no attribute has, or an earlier map only: a point attribute of the map's type under one of
+    those names (the add-on made it; it is overwritten). What the user made (a UV map, an attribute of another
+    type or domain, a vertex group, whose names Geometry Nodes read as attributes) keeps its name and data."""
+    mesh = obj.data
+    groups = {group.name for group in obj.vertex_groups}
+    value, color = (_map_name(mesh, groups, base) for base in (DEVIATION_ATTRIBUTE, DEVIATION_COLOR_ATTRIBUTE))
+    own = [attribute for attribute in mesh.color_attributes if _map_base(attribute) is None]
+    return DeviationNames(value, color, render=not own)
+
+
+def _map_name(mesh, groups, base):
+    def free(name):
+        attribute = mesh.attributes.get(name)
+        return name not in groups and (attribute is None or _map_base(attribute) == base)
+
+    return next(name for name in _numbered(base) if free(name))
+
+
+def _numbered(base):
+    yield base
+    count = 1
+    while True:
+        yield f"{base}.{count:03d}"
+        count += 1
+
+
+def _map_base(attribute):
+    """The map attribute ("hc_deviation" or "hc_deviation_color") that ``attribute`` holds an earlier one of,
+    None for anything else: its name is the base or a numbered one, on points, of the base's type."""
+    base, dot, number = attribute.name.rpartition(".")
+    if not (dot and number.isdigit() and len(number) >= 3):
+        base = attribute.name
+    if base not in _MAP_TYPES or attribute.domain != "POINT" or attribute.data_type != _MAP_TYPES[base]:
+        return None
+    return base
+
+
+def write_deviation(mesh, names, deviation, colors):
+    """Store a deviation map as the point attributes ``names`` (a DeviationNames of this mesh) and make its
+    colours the active colour attribute (what Solid shading's Attribute colour shows), and the render colour
+    where ``names.render``. ``colors``: linear RGBA (n, 4), written through the float colour's fast path (the
+    sRGB one converts per value: ~50 times slower)."""
+    values = _attribute(mesh, names.value, "FLOAT")
     values.data.foreach_set("value", np.ascontiguousarray(deviation, np.float32))
-    color = _point_attribute(mesh, DEVIATION_COLOR_ATTRIBUTE, "FLOAT_COLOR")
+    color = _attribute(mesh, names.color, "FLOAT_COLOR")
     color.data.foreach_set("color", np.ascontiguousarray(colors, np.float32).ravel())
-    mesh.color_attributes.active_color_name = DEVIATION_COLOR_ATTRIBUTE
-    mesh.color_attributes.default_color_name = DEVIATION_COLOR_ATTRIBUTE  # the one renders and exports use
+    mesh.color_attributes.active_color_name = names.color
+    if names.render:
+        mesh.color_attributes.default_color_name = names.color  # the one renders and exports use
 
 
-def _point_attribute(mesh, name, data_type):
-    """The mesh's point attribute ``name`` of ``data_type``, made anew where one of that name is of another
-    type or domain."""
+def _attribute(mesh, name, data_type):
+    """The point attribute ``name`` of ``data_type``, made where the mesh has none of that name."""
     attribute = mesh.attributes.get(name)
-    if attribute is not None and (attribute.domain, attribute.data_type) != ("POINT", data_type):
-        mesh.attributes.remove(attribute)
-        attribute = None
     return attribute if attribute is not None else mesh.attributes.new(name, data_type, "POINT")
 
 

@@ -56,10 +56,13 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
         if message:
             self.report({"WARNING"}, message)
 
+    def _given(self):
+        """The numbers the caller set (used as given)."""
+        return frozenset(name for name in settings_spec.CHOSEN if self.properties.is_property_set(name))
+
     def _run(self, jobs, chunk=None):
         """The run's generator, on the settings' snapshot and with the numbers the caller set."""
-        given = frozenset(name for name in settings_spec.CHOSEN if self.properties.is_property_set(name))
-        return jobs_module.run(jobs, self._settings, chunk=chunk, given=given)
+        return jobs_module.run(jobs, self._settings, chunk=chunk, given=self._given())
 
     def execute(self, context):
         self._settings = settings_spec.MeshSettings.of(self)  # what prepare, run, write and report read
@@ -97,7 +100,8 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         vertices = sum(len(job.positions) for job in self._jobs)
-        iterations = core.mesh_amount.MAX_ITERATIONS if self.auto_amount else self.iterations
+        automatic = settings_spec.automatic(settings_spec.values_of(self._settings, settings_spec.MESH), self._given())
+        iterations = core.mesh_amount.MAX_ITERATIONS if automatic else self.iterations
         if vertices * iterations < MODAL_WORK:
             return self._run_now(context, self._jobs)
         return self.start_modal(context, self._run(self._jobs, chunk=max(1, MODAL_WORK // max(1, vertices))))

@@ -56,6 +56,15 @@ def read_positions(obj, noun=("vertex", "vertices")):
     return positions, key_block
 
 
+def world_frame(obj):
+    """The stretch that takes ``obj``'s coordinates to its world-space shape (core.world.frame), None where its
+    transform keeps lengths; InputError for a transform that flattens it."""
+    try:
+        return core.world.frame(obj.matrix_world)
+    except ValueError as error:
+        raise InputError(f"Object '{obj.name}': {error}") from None
+
+
 def write_positions(obj, key_block, before, result):
     """Write ``result`` where ``before`` was read. Keys relative to a smoothed key (directly or through
     a chain) move by the same displacement, as Blender's own tools do; the mesh follows its basis."""

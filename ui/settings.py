@@ -23,7 +23,7 @@ class HCSmoothSettings(bpy.types.PropertyGroup):
         """Set these settings on an operator's properties (a button's OperatorProperties). What the
         operator takes as set it uses as given, so with the Automatic Amount on, the settings it chooses
         are passed only where the user changed them, and Alpha and Iterations (greyed out) never."""
-        automatic = settings_spec.automatic({"method": self.method, "auto_amount": self.auto_amount})
+        automatic = settings_spec.automatic(settings_spec.values_of(self, settings_spec.MESH))
         for name in names:
             chosen = name in settings_spec.CHOSEN
             if (

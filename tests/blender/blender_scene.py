@@ -61,3 +61,18 @@ def noisy_grid(name="Grid", size=12, sigma=0.05, seed=1):
     obj.data.vertices.foreach_set("co", positions.ravel())
     obj.data.update()
     return obj
+
+
+def transformed(obj, **transform):
+    """``obj`` with its transform set (scale, rotation_euler, location, ...) and its world matrix up to date."""
+    for name, value in transform.items():
+        setattr(obj, name, value)
+    bpy.context.view_layer.update()
+    return obj
+
+
+def in_world(obj, positions):
+    """Object-space ``positions`` in world space, without the translation (float64): what a world-space length
+    is measured on."""
+    linear = np.array(obj.matrix_world, dtype=np.float64)[:3, :3]
+    return positions.astype(np.float64) @ linear.T

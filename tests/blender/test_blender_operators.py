@@ -5,7 +5,16 @@ import re
 import bpy
 import numpy as np
 import pytest
-from blender_scene import edges_of, faces_of, noisy_grid, noisy_sphere, positions_of, select_only
+from blender_scene import (
+    edges_of,
+    faces_of,
+    in_world,
+    noisy_grid,
+    noisy_sphere,
+    positions_of,
+    select_only,
+    transformed,
+)
 
 import core
 
@@ -328,3 +337,85 @@ def test_the_automatic_amount_keeps_to_a_multiple_of_its_noise(scene, capfd):
     amount = core.choose_amount(before, edges_of(obj.data))
     assert limit == pytest.approx(core.mesh_smoother.DEVIATION_IN_NOISE * amount.sigma, rel=1e-2)
     assert np.linalg.norm(positions_of(obj.data).astype(float) - before, axis=1).max() <= limit * 1.001 + 1e-7
+
+
+# --- world space: a Deviation Limit and a report in scene units are measured on the object as it stands -----
+
+TRANSFORMS = {
+    "scaled x10": dict(scale=(10.0, 10.0, 10.0)),
+    "scaled (1, 1, 10)": dict(scale=(1.0, 1.0, 10.0)),
+    "scaled (1, 1, 10), rotated": dict(scale=(1.0, 1.0, 10.0), rotation_euler=(0.4, -0.3, 1.1)),
+    "mirrored, scaled (-2, 0.5, 3), rotated": dict(scale=(-2.0, 0.5, 3.0), rotation_euler=(1.2, 0.1, -0.7)),
+}
+
+
+def world_moves(obj, before):
+    return np.linalg.norm(in_world(obj, positions_of(obj.data)) - in_world(obj, before), axis=1)
+
+
+def rounding(obj, positions):
+    """How far single-precision object-space coordinates can put a world-space length off."""
+    return 4 * float(np.finfo(np.float32).eps) * float(np.abs(in_world(obj, positions)).max())
+
+
+def reported(text, words):
+    """The number a report gives after ``words`` (its scene-unit value in parentheses, if any)."""
+    return float(re.search(re.escape(words) + r" (?:[-+0-9.]+% \()?([-+0-9.e]+)", text).group(1))
+
+
+@pytest.mark.parametrize("transform", TRANSFORMS)
+def test_the_deviation_limit_and_the_report_are_in_world_space(scene, capfd, transform):
+    """A Deviation Limit of 0.01 on a scaled (rotated, mirrored) object: no vertex moves more than 0.01 in the
+    world, and the report's largest move is the world's; the same numbers as core on the world-space shape."""
+    obj = transformed(noisy_sphere(), **TRANSFORMS[transform])
+    before = positions_of(obj.data)
+    limit = float(np.float32(0.01))
+    capfd.readouterr()
+    assert bpy.ops.object.hc_smooth(iterations=10, max_deviation=0.01) == {"FINISHED"}
+    moves = world_moves(obj, before)
+    assert moves.max() <= limit + rounding(obj, before) and moves.max() > 0.99 * limit  # kept, and binding
+    assert reported(capfd.readouterr().out, "largest move") == pytest.approx(moves.max(), rel=2e-3)
+    # Linear steps: without the limit the run is the object-space one (to rounding).
+    obj.data.vertices.foreach_set("co", before.ravel())
+    obj.data.update()
+    assert bpy.ops.object.hc_smooth(iterations=10) == {"FINISHED"}
+    free = core.hc_smooth(before, edges_of(obj.data), alpha=ALPHA, beta=BETA, iterations=10)
+    np.testing.assert_allclose(positions_of(obj.data), free, rtol=0, atol=1e-5 * np.abs(before).max())
+
+
+@pytest.mark.filterwarnings("ignore:HC is proven to converge only")
+@pytest.mark.parametrize("transform", ["scaled (1, 1, 10), rotated", "mirrored, scaled (-2, 0.5, 3), rotated"])
+def test_the_automatic_amounts_limit_is_in_world_space(scene, capfd, transform):
+    obj = transformed(noisy_sphere(), **TRANSFORMS[transform])
+    before = positions_of(obj.data)
+    capfd.readouterr()
+    assert bpy.ops.object.hc_smooth() == {"FINISHED"}
+    said = capfd.readouterr().out
+    limit = reported(said, "moves at most")
+    moves = world_moves(obj, before)
+    assert moves.max() <= limit * 1.001 + rounding(obj, before)
+    assert reported(said, "largest move") == pytest.approx(moves.max(), rel=2e-3)
+
+
+@pytest.mark.filterwarnings("ignore:HC is proven to converge only")
+def test_a_uniform_scale_scales_the_automatic_amount_with_it(scene, capfd):
+    """Object x8 (mirrored too): the Automatic Amount runs on the world-space shape, which is the unscaled one
+    times 8: the same vertices in object space, and a limit 8 times the unscaled object's."""
+    plain = noisy_sphere("Plain")
+    big = transformed(noisy_sphere("Big"), scale=(-8.0, 8.0, 8.0))
+    select_only(plain)
+    capfd.readouterr()
+    assert bpy.ops.object.hc_smooth() == {"FINISHED"}
+    plain_limit = reported(capfd.readouterr().out, "moves at most")
+    select_only(big)
+    assert bpy.ops.object.hc_smooth() == {"FINISHED"}
+    assert reported(capfd.readouterr().out, "moves at most") == pytest.approx(8 * plain_limit, rel=2e-3)
+    np.testing.assert_allclose(positions_of(big.data), positions_of(plain.data), rtol=0, atol=1e-6)
+
+
+def test_an_object_scaled_to_nothing_is_refused(scene):
+    obj = transformed(noisy_sphere(), scale=(1.0, 0.0, 1.0))
+    before = positions_of(obj.data)
+    with pytest.raises(RuntimeError, match="Object 'Sphere': the object's scale is zero, or nearly, along an axis"):
+        bpy.ops.object.hc_smooth(max_deviation=0.01)
+    assert np.array_equal(bits(positions_of(obj.data)), bits(before))

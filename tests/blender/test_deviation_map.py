@@ -9,7 +9,16 @@ import bmesh
 import bpy
 import numpy as np
 import pytest
-from blender_scene import ADDON, make_mesh_object, noisy_grid, noisy_sphere, positions_of, select_only
+from blender_scene import (
+    ADDON,
+    in_world,
+    make_mesh_object,
+    noisy_grid,
+    noisy_sphere,
+    positions_of,
+    select_only,
+    transformed,
+)
 from test_undo import ctrl_z, run_as_from_the_ui
 
 import core
@@ -49,8 +58,8 @@ def attribute_values(mesh, name=ATTRIBUTE):
     return values
 
 
-def colors_of(mesh):
-    attribute = mesh.attributes[COLORS]
+def colors_of(mesh, name=COLORS):
+    attribute = mesh.attributes[name]
     assert (attribute.domain, attribute.data_type) == ("POINT", "FLOAT_COLOR")
     values = np.empty(4 * len(mesh.vertices), dtype=np.float32)
     attribute.data.foreach_get("color", values)
@@ -62,20 +71,21 @@ def attribute_names(mesh):
     return sorted(attribute.name for attribute in mesh.attributes if not attribute.name.startswith("."))
 
 
-def check_map(mesh, before, triangles):
-    """hc_deviation is the move along the input's normals; the colours are core's ramp of it, active."""
+def check_map(mesh, before, triangles, names=(ATTRIBUTE, COLORS)):
+    """hc_deviation (or the ``names`` given) is the move along the input's normals; the colours are core's ramp
+    of it, active."""
     after = positions_of(mesh)
     assert not np.array_equal(after, before), "nothing moved: the map would be vacuous"
-    values = attribute_values(mesh)
+    values = attribute_values(mesh, names[0])
     expected = expected_deviation(before, after, triangles)
     scale = np.abs(expected).max()
     assert scale > 0
     np.testing.assert_allclose(values, expected, rtol=0, atol=1e-5 * scale)
     extent = core.deviation_extent(values)
-    np.testing.assert_array_equal(colors_of(mesh), core.deviation_colors(values, extent, linear=True))
-    assert mesh.color_attributes.active_color_name == COLORS
+    np.testing.assert_array_equal(colors_of(mesh, names[1]), core.deviation_colors(values, extent, linear=True))
+    assert mesh.color_attributes.active_color_name == names[1]
     # Outwards is red, inwards blue.
-    colors = colors_of(mesh)
+    colors = colors_of(mesh, names[1])
     assert np.all(colors[values > extent / 2, 0] > colors[values > extent / 2, 2])
     assert np.all(colors[values < -extent / 2, 2] > colors[values < -extent / 2, 0])
     return values
@@ -93,6 +103,28 @@ def test_object_mode_stores_the_move_along_the_normals(scene, capfd):
     assert "deviation map -" in said and "(blue: inwards, red: outwards" in said
     shown = bpy.utils.units.to_string("METRIC", "LENGTH", extent, precision=3)
     assert f"deviation map -{shown} to +{shown}" in said
+
+
+@pytest.mark.parametrize("modifier", [False, True])
+def test_a_scaled_objects_map_and_legend_are_in_world_space(scene, capfd, modifier):
+    """On an object scaled (1, 1, 10) and rotated the map is the world-space move along the world-space
+    normals, and the legend gives its range in scene units; the modifier's map is the same."""
+    obj = transformed(noisy_sphere(sigma=0.05), scale=(1.0, 1.0, 10.0), rotation_euler=(0.4, -0.3, 1.1))
+    before, triangles = positions_of(obj.data), triangles_of(obj.data)
+    if modifier:
+        add_modifier(obj, deviation_map=True, alpha=0.1, iterations=6)
+        mesh = evaluated(obj)
+    else:
+        assert bpy.ops.object.hc_smooth(deviation_map=True, auto_amount=False, iterations=6) == {"FINISHED"}
+        mesh = obj.data
+    after = positions_of(mesh)
+    values = attribute_values(mesh)
+    expected = expected_deviation(in_world(obj, before), in_world(obj, after), triangles)
+    np.testing.assert_allclose(values, expected, rtol=0, atol=1e-5 * np.abs(expected).max())
+    if not modifier:
+        extent = core.deviation_extent(values)
+        shown = bpy.utils.units.to_string("METRIC", "LENGTH", extent, precision=3)
+        assert f"deviation map -{shown} to +{shown}" in capfd.readouterr().out
 
 
 def test_off_adds_nothing(scene, capfd):
@@ -191,13 +223,84 @@ def test_edit_mode_undo_removes_the_attributes(scene):
     np.testing.assert_array_equal(positions_of(mesh), before)
 
 
-def test_existing_attributes_of_those_names_are_replaced(scene):
+def attribute_data(mesh, name):
+    """(domain, type, values) of an attribute, its values read through its type's own property."""
+    attribute = mesh.attributes[name]
+    prop = {"FLOAT2": "vector", "INT": "value", "BYTE_COLOR": "color", "FLOAT": "value"}[attribute.data_type]
+    width = {"vector": 2, "color": 4}.get(prop, 1)
+    values = np.empty(width * len(attribute.data), dtype=np.int32 if attribute.data_type == "INT" else np.float32)
+    attribute.data.foreach_get(prop, values)
+    return attribute.domain, attribute.data_type, values
+
+
+def vertex_group_weights(obj, name):
+    group = obj.vertex_groups[name]
+    return [(v.index, g.weight) for v in obj.data.vertices for g in v.groups if g.group == group.index]
+
+
+def test_an_earlier_map_is_replaced_and_no_names_pile_up(scene):
     obj = noisy_sphere(sigma=0.05)
-    obj.data.attributes.new(ATTRIBUTE, "INT", "FACE")
-    obj.data.attributes.new(COLORS, "BYTE_COLOR", "CORNER")
-    before, triangles = positions_of(obj.data), triangles_of(obj.data)
+    assert obj.data.color_attributes.default_color_name == ""  # no colours of its own
     assert bpy.ops.object.hc_smooth(deviation_map=True) == {"FINISHED"}
+    names = attribute_names(obj.data)
+    before, triangles = positions_of(obj.data), triangles_of(obj.data)
+    assert bpy.ops.object.hc_smooth(deviation_map=True, auto_amount=False, iterations=3) == {"FINISHED"}
+    assert attribute_names(obj.data) == names  # written into the same two attributes
     check_map(obj.data, before, triangles)
+    assert obj.data.color_attributes.default_color_name == COLORS  # its only colours: also the render colours
+
+
+@pytest.mark.parametrize("name", [ATTRIBUTE, COLORS])
+def test_a_vertex_group_of_a_maps_name_keeps_it_on_every_object(scene, capfd, name):
+    """A vertex group named like the map (Geometry Nodes read it as an attribute of that name): every selected
+    mesh is smoothed and mapped, the map under the next free name, the group as it was, nothing stray."""
+    sphere, grid = noisy_sphere(sigma=0.05), noisy_grid()
+    grid.vertex_groups.new(name=name).add([0, 5, 9], 0.75, "REPLACE")
+    weights = vertex_group_weights(grid, name)
+    select_only(sphere, grid)
+    befores = {obj.name: (positions_of(obj.data), triangles_of(obj.data)) for obj in (sphere, grid)}
+    assert bpy.ops.object.hc_smooth(deviation_map=True) == {"FINISHED"}
+    check_map(sphere.data, *befores["Sphere"])
+    moved = (f"{ATTRIBUTE}.001", COLORS) if name == ATTRIBUTE else (ATTRIBUTE, f"{COLORS}.001")
+    check_map(grid.data, *befores["Grid"], names=moved)
+    assert sorted(set(attribute_names(grid.data)) - set(moved)) == sorted(
+        set(attribute_names(sphere.data)) - {ATTRIBUTE, COLORS}
+    )  # no stray map attribute beside them
+    assert [group.name for group in grid.vertex_groups] == [name] and vertex_group_weights(grid, name) == weights
+    said = capfd.readouterr().out
+    assert "'Grid': deviation map -" in said and f"stored in '{moved[0]}' and '{moved[1]}'" in said
+    assert said.count("stored in") == 1  # the sphere's went where it always goes
+
+
+def test_user_attributes_of_the_maps_names_are_kept_and_so_is_the_render_colour(scene, capfd):
+    """A UV map named hc_deviation, an integer face attribute named hc_deviation_color, the scan's own colours
+    as the render colour: all stay as they were; the map goes to the next free names and says so."""
+    obj = noisy_sphere(sigma=0.05)
+    mesh = obj.data
+    uv = mesh.uv_layers.new(name=ATTRIBUTE)
+    uv_values = np.random.default_rng(5).random(2 * len(mesh.loops)).astype(np.float32)
+    uv.data.foreach_set("uv", uv_values)
+    faces = mesh.attributes.new(COLORS, "INT", "FACE")
+    faces.data.foreach_set("value", np.arange(len(mesh.polygons), dtype=np.int32))
+    scan = mesh.color_attributes.new("Col", "BYTE_COLOR", "POINT")
+    scan.data.foreach_set("color", np.random.default_rng(6).random(4 * len(mesh.vertices)).astype(np.float32))
+    mesh.color_attributes.active_color_name = mesh.color_attributes.default_color_name = "Col"
+    kept = {name: attribute_data(mesh, name) for name in (ATTRIBUTE, COLORS, "Col")}
+    uv_maps = [layer.name for layer in mesh.uv_layers]
+    before, triangles = positions_of(mesh), triangles_of(mesh)
+    assert bpy.ops.object.hc_smooth(deviation_map=True) == {"FINISHED"}
+    for name, (domain, data_type, values) in kept.items():
+        got = attribute_data(mesh, name)
+        assert got[:2] == (domain, data_type) and np.array_equal(got[2], values), name
+    assert [layer.name for layer in mesh.uv_layers] == uv_maps
+    moved = (f"{ATTRIBUTE}.001", f"{COLORS}.001")
+    check_map(mesh, before, triangles, names=moved)
+    assert mesh.color_attributes.default_color_name == "Col"  # renders and exporters keep the scan's colours
+    assert f"stored in '{moved[0]}' and '{moved[1]}'" in capfd.readouterr().out
+    # Run again: the same two attributes take the new map.
+    names = attribute_names(mesh)
+    assert bpy.ops.object.hc_smooth(deviation_map=True, auto_amount=False, iterations=2) == {"FINISHED"}
+    assert attribute_names(mesh) == names
 
 
 def test_a_mesh_without_faces_maps_zero(scene):

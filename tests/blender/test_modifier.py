@@ -13,7 +13,16 @@ import numpy as np
 import pytest
 import scipy.sparse
 import scipy.sparse.csgraph
-from blender_scene import ADDON, edges_of, noisy_grid, noisy_sphere, positions_of, select_only
+from blender_scene import (
+    ADDON,
+    edges_of,
+    in_world,
+    noisy_grid,
+    noisy_sphere,
+    positions_of,
+    select_only,
+    transformed,
+)
 from test_ui import RecordingLayout
 
 import core
@@ -502,6 +511,45 @@ def test_applying_gives_what_the_operator_gives(scene, method, influence):
     if influence:
         still = (inverted(weights) if settings["invert_influence_group"] else weights) == 0.0
         assert still[30:].any() and np.array_equal(applied[still], before[still])
+
+
+@pytest.mark.parametrize("method", ["HC", "LAPLACIAN"])
+@pytest.mark.parametrize(
+    "transform",
+    [
+        dict(scale=(10.0, 10.0, 10.0)),
+        dict(scale=(1.0, 1.0, 10.0), rotation_euler=(0.4, -0.3, 1.1)),
+        dict(scale=(-2.0, 0.5, 3.0), rotation_euler=(1.2, 0.1, -0.7)),
+    ],
+    ids=["x10", "(1, 1, 10) rotated", "(-2, 0.5, 3) rotated"],
+)
+def test_the_deviation_limit_is_in_world_space_and_applying_gives_what_the_operator_gives(scene, method, transform):
+    """A Deviation Limit of 0.01 on a scaled object: no vertex of the modifier's result moves more than 0.01
+    in the world, and applying it gives what the operator gives; scaling the object again re-evaluates it."""
+    obj = transformed(noisy_sphere(), **transform)
+    before = positions_of(obj.data)
+    limit = f32(0.01)
+    settings = dict(method=method, alpha=ALPHA, beta=BETA, iterations=ITERATIONS, max_deviation=0.01)
+    twin = obj.copy()
+    twin.data = obj.data.copy()
+    bpy.context.scene.collection.objects.link(twin)
+    select_only(twin)
+    assert bpy.ops.object.hc_smooth(**manual(**settings)) == {"FINISHED"}
+    add_modifier(obj, **settings)
+    got = evaluated_positions(obj)
+    moves = np.linalg.norm(in_world(obj, got) - in_world(obj, before), axis=1)
+    rounding = 4 * float(np.finfo(np.float32).eps) * float(np.abs(in_world(obj, before)).max())
+    assert moves.max() <= limit + rounding and moves.max() > 0.99 * limit  # kept, and binding
+    assert bpy.ops.object.modifier_apply(modifier=obj.modifiers[-1].name) == {"FINISHED"}
+    applied, smoothed = positions_of(obj.data), positions_of(twin.data)
+    assert np.abs(applied - smoothed).max() <= TOLERANCE * diagonal(smoothed)
+    # The modifier follows the object's scale.
+    obj.data.vertices.foreach_set("co", before.ravel())
+    obj.data.update()
+    add_modifier(obj, **settings)
+    transformed(obj, scale=tuple(2 * value for value in obj.scale))
+    moves = np.linalg.norm(in_world(obj, evaluated_positions(obj)) - in_world(obj, before), axis=1)
+    assert moves.max() <= limit + 2 * rounding and moves.max() > 0.99 * limit
 
 
 def test_redo_panel_offers_add_as_modifier_with_the_same_settings(scene):

@@ -342,6 +342,25 @@ def test_buttons_leave_the_automatic_amount_its_numbers(settings):
     assert passed["beta"] == pytest.approx(0.7) and not {"alpha", "iterations"} & set(passed)
 
 
+@pytest.mark.parametrize("method", ["LAPLACIAN", "LAPLACIAN_CENTRAL", "LAPLACIAN_ORIGINAL"])
+def test_keep_sharp_edges_button_runs_its_automatic_amount_with_any_method(settings, capfd, method):
+    """Keep Sharp Edges has its own Automatic Amount whatever the method: the panel greys Alpha and Iterations
+    out, and the button passes none of the numbers it chooses, so the run is the Automatic Amount's."""
+    spec = importlib.import_module(f"{ADDON}.settings_spec")
+    noisy_sphere(subdivisions=2)
+    settings.method, settings.keep_sharp_edges, settings.auto_amount = method, True, True
+    values = {setting.name: getattr(settings, setting.name) for setting in spec.MESH}
+    assert not spec.ALPHA.active(values) and not spec.ITERATIONS.active(values)  # greyed out
+    layout = draw(bpy.types.VIEW3D_PT_hc_smooth, bpy.context)
+    ((_, properties),) = [button for button in layout.buttons() if button[0] == "object.hc_smooth"]
+    passed = vars(properties)
+    assert passed["keep_sharp_edges"] is True and passed["auto_amount"] is True
+    assert not {"alpha", "beta", "iterations", "max_deviation"} & set(passed)
+    capfd.readouterr()
+    assert bpy.ops.object.hc_smooth(**passed) == {"FINISHED"}
+    assert "automatic amount" in capfd.readouterr().out
+
+
 # --- presets --------------------------------------------------------------------------------------------
 
 

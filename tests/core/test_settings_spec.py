@@ -247,3 +247,14 @@ def test_keep_sharp_edges_defaults_are_cores():
     values = {s.name: s.default for s in spec.MESH}
     assert spec.automatic(values) and spec.automatic({**values, "method": "LAPLACIAN", "keep_sharp_edges": True})
     assert not spec.automatic({**values, "method": "LAPLACIAN"})
+
+
+def test_one_rule_for_the_automatic_amount():
+    """Alpha or Iterations given switch it off, Beta and the Deviation Limit do not; the modifier's settings
+    (no auto_amount) have none; a caller that leaves out a setting the rule reads fails loudly."""
+    values = {s.name: s.default for s in spec.MESH}
+    assert not spec.automatic(values, given={"alpha"}) and not spec.automatic(values, given={"iterations"})
+    assert spec.automatic(values, given={"beta", "max_deviation"})
+    assert not spec.automatic({s.name: s.default for s in spec.MODIFIER})
+    with pytest.raises(KeyError):
+        spec.automatic({"method": "LAPLACIAN", "auto_amount": True})
