@@ -20,12 +20,16 @@ gets its input back too (``smooth_residual``; HC's default only). Parts of core.
 vertices or more, which the Automatic Amount treats as big scans, are not asked: the test takes a pass of
 normals over them (about 1.3 s on 5M vertices, a quarter of the default's own time there).
 
-Keep Sharp Edges has a rule of its own (``moved_beyond_noise``). Taking noise of standard deviation sigma
-along the normals away moves a surface by sigma RMS along its normals; a result that ends at an error e
+Both smoothers also have a rule read from how far they moved (``moved_beyond_noise``; HC's asks the parts
+its correlation rule asks). Taking noise of standard deviation sigma along the normals away moves a
+surface by sigma RMS along its normals; a result that ends at an error e
 from the shape, e independent of the noise, has moved by sqrt(sigma^2 + e^2). A part moved by more than
 ``MOVED_IN_NOISE`` = sqrt(2) sigma ended farther from its shape than the input was (e > sigma), by the
-noise model alone: nothing here is tuned. Its filter flattens coarse curved parts (a UV Sphere, a Torus,
-adjacent faces meeting at near its own angle) that way, and their input comes back.
+noise model alone: nothing here is tuned. Keep Sharp Edges' filter flattens coarse curved parts (a UV
+Sphere, a Torus, adjacent faces meeting at near its own angle) that way, and HC rounds the edges and
+corners of a coarse noisy box (Blender's Cube subdivided and triangulated) that way; their input comes
+back. A part whose shape inflates its noise estimate (a box of a few cuts, sigma read as a quarter of
+an edge) is beyond this rule: it moves less than its estimate.
 """
 
 import math

@@ -376,16 +376,20 @@ class MeshSmoother:
         return offset, held
 
     def _held_parts(self, result, noise, residual):
-        """(parts,) bool: the parts core.collapse gives their input back (collapsed, or their shape taken
-        away with the noise, read from the residual as ``residual`` says)."""
+        """(parts,) bool: the parts core.collapse gives their input back: collapsed, moved by more than
+        their noise, or (``residual`` "correlation": HC's) their shape taken away with the noise, as the
+        residual's neighbour correlation reads it."""
         parts = collapse.collapsed(self.positions, result, noise.part_of_vertex, noise.sigma)
         if residual == "correlation" and self.faces is not None:
             parts |= collapse.smooth_residual(
                 self.positions, result, self.faces, self.surface_operator, noise.part_of_vertex, parts.size
             )
-        elif residual == "move" and self.faces is not None:
+        if self.faces is not None:
+            asked = noise.noisy
+            if residual == "correlation":  # HC: as its correlation rule, big scans are not asked (a pass of normals)
+                asked = asked & (np.bincount(noise.part_of_vertex, minlength=parts.size) < collapse.PATCH_FROM)
             parts |= collapse.moved_beyond_noise(
-                self.positions, result, self.faces, noise.part_of_vertex, noise.sigma, noise.noisy
+                self.positions, result, self.faces, noise.part_of_vertex, noise.sigma, asked
             )
         return parts
 

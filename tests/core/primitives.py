@@ -278,6 +278,36 @@ def tube(segments=32, outer=1.0, inner=0.5, depth=1.0, rings=2):
     return mesh(p, faces)
 
 
+def subdivided_cube(cuts=3, triangulate=True):
+    """Blender's Cube with Subdivide (``cuts`` cuts, each face a (cuts + 1)^2 grid of quads), optionally
+    triangulated: vertices shared along the edges, faces outward."""
+    side = cuts + 2
+    t = np.linspace(-1.0, 1.0, side)
+    index, positions, faces = {}, [], []
+
+    def vertex(point):
+        key = tuple(np.round(point, 9))
+        if key not in index:
+            index[key] = len(positions)
+            positions.append(point)
+        return index[key]
+
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            u_axis, v_axis = [(axis + 1) % 3, (axis + 2) % 3][:: int(sign)]
+            grid = np.empty((side, side), dtype=int)
+            for i, u in enumerate(t):
+                for j, v in enumerate(t):
+                    point = np.zeros(3)
+                    point[axis], point[u_axis], point[v_axis] = sign, u, v
+                    grid[i, j] = vertex(point)
+            for i in range(side - 1):
+                for j in range(side - 1):
+                    quad = [grid[i, j], grid[i + 1, j], grid[i + 1, j + 1], grid[i, j + 1]]
+                    faces += [quad[:3], [quad[0], quad[2], quad[3]]] if triangulate else [quad]
+    return mesh(np.array(positions), faces)
+
+
 CAD = {"rounded_box": rounded_box, "chamfered_box": lambda: rounded_box(segments=2), "tube": tube}
 
 

@@ -5,7 +5,7 @@ import warnings
 
 import numpy as np
 import pytest
-from primitives import CAD, PRIMITIVES, TINY, joined, moved, with_noise
+from primitives import CAD, PRIMITIVES, TINY, joined, moved, subdivided_cube, with_noise
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
@@ -248,3 +248,27 @@ def test_open_and_closed_parts_each_as_it_is(sphere_cube_cone):
     triangles = PRIMITIVES["uv_sphere"]().triangles()
     before, after = core.metrics.enclosed_volumes(triangles, mesh.positions[:n], result[:n])
     assert after == pytest.approx(before, rel=1e-6)
+
+
+def cube_distance(points):
+    """Distance to the surface of the cube [-1, 1]^3."""
+    q = np.abs(points) - 1.0
+    return np.linalg.norm(np.maximum(q, 0.0), axis=1) + np.abs(np.minimum(q.max(axis=1), 0.0))
+
+
+@pytest.mark.parametrize("kind", ["isotropic", "normal"])
+def test_a_coarse_noisy_box_never_ends_farther_from_its_shape(kind):
+    """The reproducer (issue 32, item 7): Blender's Cube subdivided (9 cuts) and triangulated, noise of 0.25 %
+    of its size: one HC iteration rounded its edges and corners, 1.5-1.7 times the input's distance to the
+    cube. The move rule (core.collapse.moved_beyond_noise) now gives such a part its input back; where HC
+    does not round it, it is smoothed. Five seeds; never farther from the cube than the input."""
+    box = subdivided_cube(9)
+    for seed in range(5):
+        noisy, _ = with_noise(box, 0.005 / 0.2, kind, seed=seed)  # sigma 0.25 % of its size 2 (edges 0.2)
+        result, report = default_run(noisy)
+
+        def rms(points):
+            return np.sqrt(np.mean(cube_distance(points) ** 2))
+
+        assert rms(result) <= rms(noisy.positions) * (1 + 1e-9)
+        assert report.held_parts or rms(result) < rms(noisy.positions)
