@@ -124,12 +124,13 @@ def hc_default_settings():
 BORDER = "free"  # the open-border rule hc_default runs with (core.borders)
 
 
-def hc_default(case):
+def hc_default(case, **options):
     """HC Smooth's default result: what the operator and the command line give with nothing changed
     (core.smooth_mesh, the pipeline they all run, with the options the add-on passes: split vertices
-    welded)."""
+    welded). ``options`` go to core.smooth_mesh as well (``keep_in_place=False``: the default that lets
+    vertices slide along the surface)."""
     result, report = core.smooth_mesh(
-        case.noisy, case.edges, faces=case.faces, weld=True, border=BORDER, return_report=True
+        case.noisy, case.edges, faces=case.faces, weld=True, border=BORDER, return_report=True, **options
     )
     settings = {"alpha": report.alpha, "beta": report.beta, "iterations": report.iterations}
     if report.amount is not None:
@@ -156,14 +157,18 @@ def hc_fixed(case, params):
     )
 
 
-def walk_grid(case, alphas, betas, checkpoints, rows=None, border="free"):
+def walk_grid(case, alphas, betas, checkpoints, rows=None, border="free", measures=None):
     """RMS of HC (on ``rows``, all vertices if None) at every (alpha, beta, checkpoint), NaN past the end
     of a path: each path runs once, read at its checkpoints, and stops past its minimum. ``border``: the
-    open-border rule of the runs (core.borders; "free" is the paper's algorithm)."""
+    open-border rule of the runs (core.borders; "free" is the paper's algorithm). ``measures``: {name:
+    function of the positions (all vertices) -> float}, read at the same checkpoints; then a path stops
+    once every measure is past its minimum, and the return is (grid, {name: grid of that measure})."""
     operator = core.umbrella_operator(case.edges, len(case.noisy))
     held = np.zeros(len(case.noisy), dtype=bool)
     operator, held = core.borders.apply_border(border, operator, case.faces, held)
-    grid = np.full((len(alphas), len(betas), len(checkpoints)), np.nan)
+    shape = (len(alphas), len(betas), len(checkpoints))
+    grid = np.full(shape, np.nan)
+    extra = {name: np.full(shape, np.nan) for name in measures or {}}
     for ia, alpha in enumerate(alphas):
         for ib, beta in enumerate(betas):
             run = quiet(
@@ -184,11 +189,14 @@ def walk_grid(case, alphas, betas, checkpoints, rows=None, border="free"):
                 except core.DivergenceError:
                     break
                 done = checkpoint
-                grid[ia, ib, ic] = case.rms(run.result().positions, rows)
-                path = grid[ia, ib, : ic + 1]
-                if ic >= 3 and path[-1] > GRID_GIVE_UP * path.min() and path[-1] > path[-2]:
-                    break  # past this path's minimum: the error only grows from here
-    return grid
+                positions = run.result().positions
+                grid[ia, ib, ic] = case.rms(positions, rows)
+                for name, function in (measures or {}).items():
+                    extra[name][ia, ib, ic] = function(positions)
+                paths = [grid[ia, ib, : ic + 1]] + [values[ia, ib, : ic + 1] for values in extra.values()]
+                if ic >= 3 and all(p[-1] > GRID_GIVE_UP * p.min() and p[-1] > p[-2] for p in paths):
+                    break  # past every path's minimum: the errors only grow from here
+    return (grid, extra) if measures else grid
 
 
 def hc_grid(case, seed):
