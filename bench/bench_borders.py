@@ -24,6 +24,14 @@ of one vertex (% of the diagonal); the RMS distance to the clean scan, border an
     .envs/bench/bin/python bench/bench_borders.py --scans face --noises 0 --rules free,curve
     .envs/bench/bin/python bench/bench_borders.py --timing 1M   # the cost of welding and borders instead
 
+``--primitives``: Blender's Plane, Grid and open Cylinder (tests/core/primitives.py, as Blender builds
+them) and a 20 x 20 Grid with a hole (its middle 2 x 2 quads taken out: 8 vertices around it), noise of
+0.1 and 0.3 median edge lengths along the normals and on every axis, 5 seeds: each border loop's length
+and enclosed area (the magnitude of its vector area) over the clean loop's, for the noisy input, the
+default (Keep in Place) and the sliding default (``keep_in_place=False``); mean and range over the seeds.
+
+    .envs/bench/bin/python bench/bench_borders.py --primitives          # a few seconds
+
 ``--timing N``: on a noisy torus of N vertices, its triangle soup (about N vertices, one sixth of them
 welded) and the torus cut open (two border loops), the time of core.welding.weld alone and of
 core.smooth_mesh (alpha 0.1, beta 0.6, 10 iterations) under each rule, best of ``--repeats``.
@@ -38,7 +46,7 @@ import time
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
+sys.path[:0] = [str(ROOT), str(ROOT / "bench"), str(ROOT / "tests" / "core")]
 import bench_quality_inputs as inputs  # noqa: E402
 import meshes  # noqa: E402
 from report import Report  # noqa: E402
@@ -163,6 +171,139 @@ def measure(scan, noisy, result):
     )
 
 
+# --- outlines of open primitives ----------------------------------------------------------------------
+
+PRIMITIVE_RATIOS = (0.1, 0.3)  # noise, median edge lengths
+PRIMITIVE_SEEDS = (0, 1, 2, 3, 4)
+
+
+def grid_with_hole(subdivisions=20, size=2.0, hole=2):
+    """Blender's Grid of ``subdivisions`` quads a side with its middle ``hole`` x ``hole`` quads taken out
+    (4 * hole boundary vertices around the hole; the vertices inside it dropped)."""
+    import primitives
+
+    part = primitives.grid(subdivisions, size)
+    side, low = subdivisions + 1, (subdivisions - hole) // 2
+    kept = [
+        face
+        for index, face in enumerate(part.faces)  # row j = index // subdivisions, column i = index % subdivisions
+        if not (low <= index % subdivisions < low + hole and low <= index // subdivisions < low + hole)
+    ]
+    used = np.unique(np.concatenate(kept))
+    number = np.full(side * side, -1)
+    number[used] = np.arange(used.size)
+    return primitives.mesh(part.positions[used], [[int(number[v]) for v in face] for face in kept])
+
+
+def open_primitives():
+    import primitives
+
+    return {
+        "plane": primitives.plane(),
+        "grid": primitives.grid(),
+        "cylinder_open": primitives.cylinder(fill="NOTHING"),
+        "grid_with_hole": grid_with_hole(),
+    }
+
+
+def border_loops(faces):
+    """The open borders (edges of one polygon) as closed loops of vertex indices, in order, longest first."""
+    count = {}
+    for face in faces:
+        for a, b in zip(face, list(face[1:]) + [face[0]]):
+            key = (min(a, b), max(a, b))
+            count[key] = count.get(key, 0) + 1
+    neighbours = {}
+    for (a, b), n in count.items():
+        if n == 1:
+            neighbours.setdefault(a, []).append(b)
+            neighbours.setdefault(b, []).append(a)
+    loops, seen = [], set()
+    for start in sorted(neighbours):
+        if start in seen:
+            continue
+        loop, previous, current = [start], None, start
+        seen.add(start)
+        while True:
+            following = [v for v in neighbours[current] if v != previous and (v not in seen or v == start)]
+            if not following or following[0] == start:
+                break
+            previous, current = current, following[0]
+            loop.append(current)
+            seen.add(current)
+        loops.append(np.array(loop))
+    return sorted(loops, key=len, reverse=True)
+
+
+def loop_length(points):
+    return float(np.linalg.norm(points - np.roll(points, -1, axis=0), axis=1).sum())
+
+
+def loop_area(points):
+    """The magnitude of the closed polygon's vector area (its area where it is flat)."""
+    centre = points.mean(axis=0)
+    return float(0.5 * np.linalg.norm(np.cross(points - centre, np.roll(points, -1, axis=0) - centre).sum(axis=0)))
+
+
+def outline_rows():
+    """[(shape, loop name, vertices on it, kind, ratio, {run: (length ratios, area ratios)})] over the seeds."""
+    import primitives
+
+    rows = []
+    for name, part in open_primitives().items():
+        loops = border_loops(part.faces)
+        names = ["outline"] if len(loops) == 1 else ([f"ring {k + 1}" for k in range(len(loops))])
+        if name == "grid_with_hole":
+            names = ["outline", "hole"]
+        for kind in ("normal", "isotropic"):
+            for ratio in PRIMITIVE_RATIOS:
+                runs = {"input": [], "default": [], "sliding": []}
+                for seed in PRIMITIVE_SEEDS:
+                    noisy = primitives.with_noise(part, ratio, kind, seed=seed)[0].positions
+                    results = {
+                        "input": noisy,
+                        "default": core.smooth_mesh(noisy, part.edges, faces=part.faces, weld=True),
+                        "sliding": core.smooth_mesh(
+                            noisy, part.edges, faces=part.faces, weld=True, keep_in_place=False
+                        ),
+                    }
+                    for run, positions in results.items():
+                        runs[run].append(
+                            [
+                                (
+                                    loop_length(positions[loop]) / loop_length(part.positions[loop]),
+                                    loop_area(positions[loop]) / loop_area(part.positions[loop]),
+                                )
+                                for loop in loops
+                            ]
+                        )
+                for k, loop in enumerate(loops):
+                    values = {run: np.array([seed_values[k] for seed_values in v]) for run, v in runs.items()}
+                    rows.append((name, names[k], len(loop), kind, ratio, values))
+    return rows
+
+
+def outlines(out):
+    out(
+        "Open primitives: each border loop's length and enclosed area (magnitude of its vector area) over the "
+        f"clean loop's, mean (min–max) over seeds {', '.join(map(str, PRIMITIVE_SEEDS))}; noise in median edge "
+        "lengths. default: core.smooth_mesh(..., weld=True) (Keep in Place); sliding: keep_in_place=False.\n"
+    )
+    out(
+        "| shape | loop | vertices | noise | σ / edge | length: input | default | sliding "
+        "| area: input | default | sliding |"
+    )
+    out("|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|")
+
+    def text(values):
+        return f"{values.mean():.3f} ({values.min():.3f}–{values.max():.3f})"
+
+    for name, loop, count, kind, ratio, values in outline_rows():
+        cells = [text(values[run][:, 0]) for run in ("input", "default", "sliding")]
+        cells += [text(values[run][:, 1]) for run in ("input", "default", "sliding")]
+        out(f"| {name} | {loop} | {count} | {kind} | {ratio:g} | " + " | ".join(cells) + " |")
+
+
 def best_time(repeats, function, *args, **kwargs):
     """The least wall time of ``repeats`` calls of function(*args, **kwargs)."""
     times = []
@@ -208,7 +349,13 @@ def main():
     parser.add_argument("--rules", default=",".join(RULES))
     parser.add_argument("--timing", default=None, help="vertex count (e.g. 1M): time welding and the rules instead")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--primitives", action="store_true", help="outline length and area of open primitives")
     args = parser.parse_args()
+    if args.primitives:
+        with Report("bench_borders_primitives") as out:
+            out(f"`{' '.join(['bench/bench_borders.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
+            outlines(out)
+        return
     if args.timing:
         size = int(float(args.timing.upper().replace("M", "e6").replace("K", "e3")))
         with Report("bench_borders_timing") as out:
