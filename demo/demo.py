@@ -94,6 +94,12 @@ def distances(signed, diagonal):
     )
 
 
+def signed(value, digits):
+    """``value`` with its sign, a value that rounds to zero as +0 (never "-0.00")."""
+    text = f"{value:+.{digits}f}"
+    return "+" + text[1:] if float(text) == 0 else text
+
+
 def print_table(rows):
     header = ("", "iterations", "volume change", "vs clean", "RMS distance", "mean distance", "max distance", "time")
     lines = [header]
@@ -103,10 +109,10 @@ def print_table(rows):
             (
                 row["name"],
                 str(row["iterations"]),
-                "" if row["change"] is None else f"{100 * row['change']:+.2f} %",
-                f"{100 * row['vs_clean']:+.2f} %",
+                "" if row["change"] is None else f"{signed(100 * row['change'], 2)} %",
+                f"{signed(100 * row['vs_clean'], 2)} %",
                 f"{rms:.3f} %",
-                f"{mean:+.3f} %",
+                f"{signed(mean, 3)} %",
                 f"{worst:.3f} %",
                 "" if row["seconds"] is None else f"{row['seconds']:.2f} s",
             )
