@@ -17,13 +17,16 @@ neighbours; its corners take back part of the smoother's slide, as much as unfol
 """
 
 import numpy as np
-import scipy.sparse as sp
 
+from . import parallel
 from .volume import vertex_normals
 
 FOLDED = 0.25  # a kept triangle whose shadow on the smoothed surface is under this share of its input's ...
 FLAT = 0.1  # ... or whose shadow is under this share of its input's area is flattened
-_ROUNDS = 3  # each round halves the kept part of the slide at the corners of the triangles still folded
+_ROUNDS = 2  # the first rounds halve the kept part of the slide at the corners of the triangles still folded ...
+_HALVED = 0.1  # (not where more than this share of the triangles folds at first: a layout noise folded) ...
+_LAST = 8  # ... later ones take it all back; at most this many rounds
+_BLOCK = 1 << 16  # triangles per block of the first check: bounds the temporaries
 
 
 def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray) -> np.ndarray:
@@ -58,58 +61,74 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray) 
 
 def unfold(kept, start, result, triangles):
     """Where ``kept`` folds or flattens a triangle, its corners take back part of the slide to ``result``,
-    in place: half of what is left of it for each round the triangle stays folded, all of it after
-    _ROUNDS rounds (until no triangle with a corner off the result is folded). Shadows are read along the
-    smoothed triangle's normal: a kept triangle is folded where its shadow is not positive, flattened
-    where it is under FOLDED times the input's shadow or FLAT times the input's area. Later rounds read
-    only the triangles at the corners just moved."""
+    in place: half of what is left of it for each of the first _ROUNDS rounds the triangle stays folded
+    (where at most _HALVED of the triangles fold at first), then all of it, until no triangle with a
+    corner off the result is folded (at most _LAST rounds; then the corners of those still folded take all
+    of it). Shadows are read along the smoothed triangle's normal: a kept triangle is folded where its
+    shadow is not positive, flattened where it is under FOLDED times the input's shadow or FLAT times the
+    input's area. Later rounds read only the triangles at the corners just moved. Shadows in single
+    precision, blocks of triangles on threads (core.parallel)."""
+    t = len(triangles)
     corners_of = [np.ascontiguousarray(triangles[:, k]) for k in range(3)]
-    facing = _cross(result, corners_of)
-    length = np.sqrt(_dot(facing, facing))
-    facing /= np.where(length > 0, length, 1.0)
-    before = _cross(start, corners_of)
-    least = np.maximum(FOLDED * _dot(before, facing), FLAT * np.sqrt(_dot(before, before)))
-    least[length == 0] = -np.inf  # a smoothed triangle without area has no side to fold to
-    checked = slice(None)
-    share, away, at_vertex = None, None, None
-    round_ = 0
-    while True:
-        picked = [column[checked] for column in corners_of]
-        shadow = _dot(_cross(kept, picked), facing[:, checked])
-        bound = least[checked]
-        folded = (shadow <= 0.0) & (bound > -np.inf) | (shadow < bound)
+    facing, least = np.empty((3, t), dtype=np.float32), np.empty(t, dtype=np.float32)
+    planar, smoothed, before = _planar(kept), _planar(result), _planar(start)
+    folded = np.concatenate(
+        parallel.run_chunks(
+            lambda low, high: _first_check(planar, smoothed, before, corners_of, facing, least, low, high), t, _BLOCK
+        )
+    )
+    share = away = checked = None
+    for round_ in range(1, _LAST + 1):
         if share is not None:  # a triangle all of whose corners are back at the result stays as it is
+            picked = [column[checked] for column in corners_of]
+            folded = _folded(planar, picked, facing[:, checked], least[checked])
             folded &= (share[picked[0]] > 0) | (share[picked[1]] > 0) | (share[picked[2]] > 0)
-        folded = np.flatnonzero(folded)
+            folded = checked[folded]
+        else:
+            folded = np.flatnonzero(folded)
+            halving = folded.size <= _HALVED * t
         if folded.size == 0:
             return
-        corners = np.zeros(len(kept), dtype=bool)
-        for column in picked:
-            corners[column[folded]] = True
-        corners = np.flatnonzero(corners)
+        moved = np.zeros(len(kept), dtype=bool)
+        for column in corners_of:
+            moved[column[folded]] = True
+        corners = np.flatnonzero(moved)
         if share is None:
-            share, away = np.ones(len(kept)), kept - result
-            at_vertex = _triangles_at(triangles, len(kept))
-        round_ += 1
-        share[corners] = 0.0 if round_ > _ROUNDS else 0.5 * share[corners]
+            share, away = np.ones(len(kept), dtype=np.float32), kept - result
+        share[corners] = 0.5 * share[corners] if halving and round_ <= _ROUNDS and round_ < _LAST else 0.0
         kept[corners] = result[corners] + share[corners, None] * away[corners]
-        near = np.zeros(len(triangles), dtype=bool)
-        near[at_vertex[corners].indices] = True
-        checked = np.flatnonzero(near)
+        planar[:, corners] = kept[corners].T
+        checked = np.flatnonzero(moved[corners_of[0]] | moved[corners_of[1]] | moved[corners_of[2]])
 
 
-def _triangles_at(triangles, n):
-    """(n, t) CSR: row v lists the triangles with corner v."""
-    t = len(triangles)
-    rows = triangles.ravel()
-    columns = np.repeat(np.arange(t), 3)
-    return sp.csr_matrix((np.ones(rows.size, dtype=np.int8), (rows, columns)), shape=(n, t))
+def _first_check(planar, smoothed, before, corners_of, facing, least, low, high):
+    """Triangles low:high: their smoothed unit normals into ``facing``, their least shadows into ``least``,
+    and whether the kept ``planar`` one is folded (returned)."""
+    picked = [column[low:high] for column in corners_of]
+    normal = _cross(smoothed, picked)
+    length = np.sqrt(_dot(normal, normal))
+    normal /= np.where(length > 0, length, 1.0)
+    area = _cross(before, picked)
+    bound = np.maximum(FOLDED * _dot(area, normal), FLAT * np.sqrt(_dot(area, area)))
+    bound[length == 0] = -np.inf  # a smoothed triangle without area has no side to fold to
+    facing[:, low:high], least[low:high] = normal, bound
+    return _folded(planar, picked, normal, bound)
 
 
-def _cross(points, corners_of):
+def _folded(planar, picked, facing, least):
+    """Whether the triangles of corner arrays ``picked`` over ``planar`` fold against ``facing``/``least``."""
+    shadow = _dot(_cross(planar, picked), facing)
+    return (shadow <= 0.0) & (least > -np.inf) | (shadow < least)
+
+
+def _planar(points):
+    """(3, n) single-precision coordinate rows of (n, 3) ``points``."""
+    return np.ascontiguousarray(points.T, dtype=np.float32)
+
+
+def _cross(planar, corners_of):
     """(3, t) twice-area normals of the triangles whose corners are the index arrays ``corners_of``
-    (a, b, c), over (n, 3) ``points``, float64, coordinate by coordinate."""
-    planar = np.ascontiguousarray(points.T, dtype=np.float64)
+    (a, b, c), over (3, n) ``planar`` coordinates, coordinate by coordinate."""
     a, b, c = corners_of
     u = [row.take(b) - row.take(a) for row in planar]
     v = [row.take(c) - row.take(a) for row in planar]
