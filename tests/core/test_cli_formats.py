@@ -408,3 +408,49 @@ def test_obj_groups_name_the_vertices_of_their_faces():
         "right": [1, 2, 3],
         "both": [0, 1, 2, 3],
     }
+
+
+FAR = np.array([500000.0, 5000000.0, 250.0])  # a georeferenced scan: single precision steps by 0.5 here
+
+
+def far_files():
+    """{ext: bytes} of a noisy unit sphere at FAR, as an OBJ with exact digits and a binary double PLY."""
+    positions, faces = scan_files.octahedron(noise=0.01)
+    positions = positions + FAR
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in positions.tolist()] + [
+        f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces
+    ]
+    vertex = [("x", "double"), ("y", "double"), ("z", "double")]
+    face = [("vertex_indices", ("list", "uchar", "int"))]
+    double = scan_files.ply(
+        [("vertex", vertex, positions.tolist()), ("face", face, [[f] for f in faces.tolist()])], "binary_little_endian"
+    )
+    return positions, {".obj": ("\n".join(lines) + "\n").encode(), ".ply": double}
+
+
+@pytest.mark.parametrize("source", [".obj", ".ply"])
+@pytest.mark.parametrize("target", [".ply", ".obj"])
+def test_conversions_keep_double_precision(source, target):
+    """--format writes float64 positions so that they read back exactly: PLY double properties, OBJ digits."""
+    positions, data = far_files()
+    mesh = formats.parse(data[source], source)
+    assert mesh.precision == np.float64
+    result = positions + np.random.default_rng(2).normal(scale=0.001, size=positions.shape)
+    out = formats.parse(formats.converted(mesh, result, target), target)
+    np.testing.assert_array_equal(out.positions, result)
+    assert len(np.unique(out.positions[:, 1])) == len(np.unique(result[:, 1]))
+    single = result.astype(np.float32)  # a float32 result is written in single precision
+    written = formats.converted(mesh, single, target)
+    assert (b"property float x" in written) == (target == ".ply")
+    np.testing.assert_array_equal(formats.parse(written, target).positions.astype(np.float32), single)
+
+
+@pytest.mark.parametrize("source", [".obj", ".ply"])
+def test_conversion_to_stl_refuses_what_single_precision_would_move(source):
+    positions, data = far_files()
+    mesh = formats.parse(data[source], source)
+    with pytest.raises(FormatError, match="STL file holds single-precision coordinates.*write PLY or OBJ"):
+        formats.converted(mesh, positions, ".stl")
+    near = positions - FAR  # near the origin, single precision moves it by far less than its size
+    out = formats.parse(formats.converted(mesh, near, ".stl"), ".stl")
+    np.testing.assert_allclose(out.positions[out.corners], near[mesh.corners], rtol=0, atol=1e-6)
