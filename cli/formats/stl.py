@@ -37,21 +37,9 @@ class StlFile:
             corners = self.records["corners"].reshape(-1, 3).astype(np.float64)
         else:
             self.tokens = tokens = Tokens(data)
-            index = np.arange(len(tokens))
-            self.vertex = index[tokens.is_word(index, b"vertex")]
-            facet = index[tokens.is_word(index, b"facet")]
+            facet = _facets(tokens)
             self.normal = facet + 1
-            if self.normal.size and (
-                self.normal[-1] + 3 >= len(tokens) or not tokens.is_word(self.normal, b"normal").all()
-            ):
-                raise FormatError("ASCII STL: 'facet' without 'normal'")
-            if len(self.vertex) != 3 * len(facet) or (
-                len(facet)
-                and not np.array_equal(np.searchsorted(facet, self.vertex), np.repeat(np.arange(1, len(facet) + 1), 3))
-            ):
-                raise FormatError("ASCII STL: every facet needs exactly three vertices")
-            if self.vertex.size and self.vertex[-1] + 3 >= len(tokens):
-                raise FormatError("ASCII STL ends inside a vertex")
+            self.vertex = (facet[:, None] + VERTICES).ravel()
             corners = tokens.numbers(self.vertex[:, None] + np.arange(1, 4), "STL vertex")
         if not np.isfinite(corners).all():
             self.positions = corners  # refused by the caller with the others
@@ -74,6 +62,42 @@ class StlFile:
         where = np.concatenate([corner_tokens.ravel(), normal_tokens.ravel()])
         texts = number_texts(np.concatenate([corners.ravel(), facet_normals.ravel()]), np.float32)
         return splice(self.data, tokens.starts[where], tokens.ends[where], texts)
+
+
+# An ASCII facet, token by token: `facet normal x y z`, `outer loop`, three `vertex x y z`, `endloop`, `endfacet`.
+FACET_WORDS = (
+    (0, b"facet"),
+    (1, b"normal"),
+    (5, b"outer"),
+    (6, b"loop"),
+    (7, b"vertex"),
+    (11, b"vertex"),
+    (15, b"vertex"),
+    (19, b"endloop"),
+    (20, b"endfacet"),
+)
+VERTICES = np.array([offset for offset, word in FACET_WORDS if word == b"vertex"])
+FACET_TOKENS = 21
+
+
+def _facets(tokens):
+    """The index of each facet's `facet` token; raises FormatError for a facet out of the layout above,
+    a vertex outside a facet, or a file that ends before `endsolid` follows its last facet."""
+    index = np.arange(len(tokens))
+    facet = index[tokens.is_word(index, b"facet")]
+    if len(facet) and facet[-1] + FACET_TOKENS > len(tokens):
+        raise FormatError(f"ASCII STL ends inside facet {len(facet) - 1} (the file is cut short)")
+    for offset, word in FACET_WORDS:
+        wrong = np.flatnonzero(~tokens.is_word(facet + offset, word))
+        if wrong.size:
+            found = tokens.text(facet[wrong[:1]] + offset).strip().decode("ascii", "replace")
+            raise FormatError(f"ASCII STL facet {wrong[0]}: '{found}' where '{word.decode()}' belongs")
+    if np.count_nonzero(tokens.is_word(index, b"vertex")) != len(VERTICES) * len(facet):
+        raise FormatError("ASCII STL: every facet needs exactly three vertices")
+    after = index[facet[-1] + FACET_TOKENS :] if len(facet) else index
+    if not tokens.is_word(after, b"endsolid").any():
+        raise FormatError("ASCII STL ends early: no 'endsolid' after its last facet (the file is cut short)")
+    return facet
 
 
 def _merge(corners):

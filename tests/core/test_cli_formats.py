@@ -262,6 +262,7 @@ def test_stl_keeps_header_and_attribute_bytes(binary):
 
 PLY_HEAD = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
 FACE_HEAD = b"element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+STL_FACET = b"facet normal 0 0 1\n outer loop\n  vertex 0 0 0\n  vertex 1 0 0\n  vertex 0 1 0\n endloop\nendfacet\n"
 
 
 @pytest.mark.parametrize(
@@ -306,6 +307,9 @@ FACE_HEAD = b"element face 1\nproperty list uchar int vertex_indices\nend_header
         (".obj", b"v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n", "vertex index -3 is out of range"),
         (".obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "index 0 (OBJ indices start at 1)"),
         (".obj", b"v 0 0 zero\n", "'zero' is not a number"),
+        (".stl", b"solid a\n" + STL_FACET[: STL_FACET.index(b"endfacet")], "ASCII STL ends inside facet 0"),
+        (".stl", b"solid a\n" + STL_FACET * 2, "no 'endsolid' after its last facet"),
+        (".stl", b"solid a\n" + STL_FACET.replace(b"outer", b"outre") + b"endsolid a\n", "'outre' where 'outer'"),
     ],
     ids=[
         "ply-nan",
@@ -319,6 +323,9 @@ FACE_HEAD = b"element face 1\nproperty list uchar int vertex_indices\nend_header
         "obj-relative",
         "obj-zero",
         "obj-word",
+        "stl-cut-after-endloop",
+        "stl-without-endsolid",
+        "stl-misspelt",
     ],
 )
 def test_bad_files_are_refused_with_the_reason(ext, data, message):
