@@ -2,6 +2,7 @@
 with the positions and normals rewritten and nothing else; bad files are refused with a reason."""
 
 import gzip
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -461,3 +462,51 @@ def test_conversion_to_stl_refuses_what_single_precision_would_move(source):
     near = positions - FAR  # near the origin, single precision moves it by far less than its size
     out = formats.parse(formats.converted(mesh, near, ".stl"), ".stl")
     np.testing.assert_allclose(out.positions[out.corners], near[mesh.corners], rtol=0, atol=1e-6)
+
+
+def small_ply(encoding):
+    """A tetrahedron as PLY bytes: vertices with a double, faces with a char list."""
+    positions, faces = np.eye(4, 3), [[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]]
+    vertex = [("x", "float"), ("y", "float"), ("z", "float"), ("quality", "double")]
+    face = [("vertex_indices", ("list", "char", "int"))]
+    data = scan_files.ply(
+        [("vertex", vertex, [[*p, 1.0] for p in positions]), ("face", face, [[f] for f in faces])], encoding
+    )
+    return data
+
+
+def peak_bytes(function):
+    """The most memory ``function()`` held at once (NumPy's arrays included), and what it raised."""
+    tracemalloc.start()
+    try:
+        function()
+    except FormatError as error:
+        return tracemalloc.get_traced_memory()[1], error
+    finally:
+        tracemalloc.stop()
+    return None, None
+
+
+@pytest.mark.parametrize("element", ["vertex", "face"])
+@pytest.mark.parametrize("encoding", ENCODINGS)
+def test_counts_the_file_cannot_hold_are_refused_before_anything_is_allocated(encoding, element):
+    """A few hundred bytes claiming 100 million records: refused at once, not after gigabytes of arrays."""
+    bomb = small_ply(encoding).replace(f"element {element} 4".encode(), f"element {element} 100000000".encode())
+    peak, error = peak_bytes(lambda: formats.parse(bomb, ".ply"))
+    assert f"ends before its 100000000 {element} records" in str(error) and "wrong count in the header" in str(error)
+    assert peak < 100_000
+
+
+@pytest.mark.parametrize("encoding", ENCODINGS)
+def test_a_negative_list_length_is_refused_with_the_reason(encoding):
+    data = small_ply(encoding)
+    body = data.index(b"end_header\n") + len(b"end_header\n")
+    if encoding == "ascii":
+        lines = data[body:].split(b"\n")
+        lines[4] = b"-" + lines[4]  # the first face: -3 0 1 2
+        bad = data[:body] + b"\n".join(lines)
+    else:
+        face = body + 4 * (3 * 4 + 8)  # past the vertex records (three floats and a double)
+        bad = data[:face] + np.int8(-3).tobytes() + data[face + 1 :]
+    with pytest.raises(FormatError, match=r"PLY face record 0: its vertex_indices list has a negative length \(-3\)"):
+        formats.parse(bad, ".ply")
