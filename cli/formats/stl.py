@@ -14,10 +14,12 @@ RECORD = np.dtype([("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attribute
 
 
 def is_binary(data):
-    """A binary STL is 84 bytes plus 50 per facet (its 80-byte header may itself start with `solid`)."""
+    """A binary STL is 84 bytes plus 50 per facet. Its 80-byte header may itself start with `solid`: then a
+    NUL byte tells it from an ASCII STL, also when it is cut short (text has none; a facet count below 16
+    million has one)."""
     if len(data) >= 84 and len(data) == 84 + 50 * int(np.frombuffer(data, "<u4", 1, 80)[0]):
         return True
-    return not data[:1024].lstrip().lower().startswith(b"solid")
+    return not data[:1024].lstrip().lower().startswith(b"solid") or b"\0" in data
 
 
 class StlFile:
@@ -31,8 +33,14 @@ class StlFile:
         self.data = data
         self.binary = is_binary(data)
         if self.binary:
-            if len(data) < 84 or len(data) != 84 + 50 * int(np.frombuffer(data, "<u4", 1, 80)[0]):
-                raise FormatError("binary STL whose size does not match its facet count")
+            if len(data) < 84:
+                raise FormatError(f"binary STL cut short: {len(data)} bytes, less than its 84-byte header")
+            count = int(np.frombuffer(data, "<u4", 1, 80)[0])
+            if len(data) != 84 + 50 * count:
+                raise FormatError(
+                    f"binary STL cut short or invalid: its header counts {count} facets (84 + 50 x {count} = "
+                    f"{84 + 50 * count} bytes), and the file has {len(data)} bytes"
+                )
             self.records = np.frombuffer(data, RECORD, offset=84)
             corners = self.records["corners"].reshape(-1, 3).astype(np.float64)
         else:

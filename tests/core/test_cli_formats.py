@@ -510,3 +510,14 @@ def test_a_negative_list_length_is_refused_with_the_reason(encoding):
         bad = data[:face] + np.int8(-3).tobytes() + data[face + 1 :]
     with pytest.raises(FormatError, match=r"PLY face record 0: its vertex_indices list has a negative length \(-3\)"):
         formats.parse(bad, ".ply")
+
+
+@pytest.mark.parametrize("cut", ["truncated", "count"])
+def test_a_broken_binary_stl_with_a_solid_header_is_called_binary(cut):
+    records = np.zeros(4, formats.RECORD)
+    records["corners"] = np.eye(3)
+    data = b"solid part, as some CAD tools head a binary STL".ljust(80) + np.uint32(4).tobytes() + records.tobytes()
+    assert formats.parse(data, ".stl").binary
+    bad = data[:-7] if cut == "truncated" else data[:80] + np.uint32(9).tobytes() + data[84:]
+    with pytest.raises(FormatError, match="binary STL cut short or invalid: its header counts"):
+        formats.parse(bad, ".stl")
