@@ -7,6 +7,8 @@ vertex property can be added (the deviation map's ``hc_deviation``): one line in
 vertex's last property, one value at the end of each vertex record; one the file has is rewritten.
 """
 
+import re
+
 import numpy as np
 
 from .tokens import FormatError, Tokens, integers, number_texts, splice
@@ -57,15 +59,23 @@ class Element:
         return next((p for p in self.properties if p.name == name), None)
 
 
+# The line that ends the header: end_header alone on it (a comment may hold the word).
+END_HEADER = re.compile(rb"(?:\A|\n)[ \t]*end_header[ \t\r]*(?:\n|\Z)")
+
+
+def header_end(data):
+    """(offset of the end_header line, offset of the body after it)."""
+    found = END_HEADER.search(data)
+    if found is None:
+        raise FormatError("PLY header without an end_header line")
+    return found.start(), found.end()
+
+
 def parse_header(data):
     """(format word, [Element], offset of the body)."""
     if not data.startswith(b"ply") or data[3:4] not in (b"\n", b"\r"):
         raise FormatError("not a PLY file (it does not start with 'ply')")
-    end = data.find(b"end_header")
-    if end < 0:
-        raise FormatError("PLY header without end_header")
-    newline = data.find(b"\n", end)
-    body = len(data) if newline < 0 else newline + 1
+    end, body = header_end(data)
     fmt, elements = None, []
     for line in data[:end].decode("ascii", "replace").splitlines()[1:]:
         words = line.split()
@@ -286,9 +296,7 @@ class PlyFile:
 
     def _header_end(self):
         """The offset of the line after end_header (the body's start)."""
-        end = self.data.find(b"end_header")
-        newline = self.data.find(b"\n", end)
-        return len(self.data) if newline < 0 else newline + 1
+        return header_end(self.data)[1]
 
     def _header_with(self, new):
         """The header with a ``property float NAME`` line per new name after the vertex element's last property

@@ -521,3 +521,20 @@ def test_a_broken_binary_stl_with_a_solid_header_is_called_binary(cut):
     bad = data[:-7] if cut == "truncated" else data[:80] + np.uint32(9).tobytes() + data[84:]
     with pytest.raises(FormatError, match="binary STL cut short or invalid: its header counts"):
         formats.parse(bad, ".stl")
+
+
+@pytest.mark.parametrize("encoding", ENCODINGS)
+def test_only_an_end_header_line_ends_the_header(encoding):
+    positions, faces = scan_files.octahedron(noise=0.01)
+    vertex, face = [("x", "float"), ("y", "float"), ("z", "float")], [("vertex_indices", ("list", "uchar", "int"))]
+    elements = [("vertex", vertex, positions.tolist()), ("face", face, [[f] for f in faces.tolist()])]
+    data = scan_files.ply(elements, encoding, comments=("exported by a tool that writes end_header last",))
+    mesh = formats.parse(data, ".ply")
+    np.testing.assert_array_equal(mesh.positions, positions.astype(np.float32))
+    np.testing.assert_array_equal(mesh.corners.reshape(-1, 3), faces)
+    result = smoothed(mesh.positions)
+    out = formats.updated(mesh, result, {"hc_deviation": np.arange(len(positions), dtype=np.float32)})
+    assert b"comment exported by a tool that writes end_header last\n" in out
+    _, values = ply_values(out)
+    np.testing.assert_array_equal(np.stack([values["vertex"][a] for a in "xyz"], axis=1).astype(np.float32), result)
+    np.testing.assert_array_equal(values["vertex"]["hc_deviation"], np.arange(len(positions)))
