@@ -124,6 +124,21 @@ def test_bad_files_fail_and_nothing_is_written(cli, capsys, tmp_path, name):
     assert source.read_bytes() == BAD_FILES[name] and os.listdir(tmp_path) == [name]
 
 
+@pytest.mark.parametrize("ext", [".ply", ".blend"])
+def test_a_name_of_250_characters_is_written(cli, tmp_path, ext):
+    """The temporary a result is written to first is short: any name the folder takes works."""
+    source = tmp_path / ("s" * (250 - len(ext)) + ext)
+    if ext == ".blend":
+        saved_blend(source)
+    else:
+        source.write_bytes(scan_files.rich_ply("binary_little_endian")[0])
+    out = tmp_path / "out"
+    assert cli.main([str(source), "-o", str(out), "--iterations", "2"]) == 0
+    assert os.listdir(out) == [source.name]
+    assert cli.main([str(source), "--in-place", "--iterations", "2"]) == 0
+    assert sorted(os.listdir(tmp_path)) == sorted(["out", source.name])
+
+
 def saved_blend(path, newer=False, packer=None):
     bpy.ops.wm.read_homefile(use_empty=True)
     bpy.ops.mesh.primitive_ico_sphere_add()

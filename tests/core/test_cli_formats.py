@@ -2,6 +2,7 @@
 with the positions and normals rewritten and nothing else; bad files are refused with a reason."""
 
 import gzip
+import os
 import tracemalloc
 
 import numpy as np
@@ -544,3 +545,16 @@ def test_only_an_end_header_line_ends_the_header(encoding):
     _, values = ply_values(out)
     np.testing.assert_array_equal(np.stack([values["vertex"][a] for a in "xyz"], axis=1).astype(np.float32), result)
     np.testing.assert_array_equal(values["vertex"]["hc_deviation"], np.arange(len(positions)))
+
+
+def test_temporary_names_are_short_and_recognised(tmp_path):
+    target = str(tmp_path / ("a" * 246 + ".ply"))  # a 250-character name: valid, with no room to spare
+    first, second = files.temporary_path(target), files.temporary_path(target)
+    assert first != second and os.path.dirname(first) == str(tmp_path)
+    name = os.path.basename(first)
+    assert name.startswith(".hc_smooth-") and name.endswith(".ply") and len(name) < 40
+    assert files.TEMPORARY.match(name).group(1) == str(os.getpid())
+    with open(first, "wb"):  # the folder takes the name
+        pass
+    assert files.TEMPORARY.match(".scan.hc_smooth-123.ply").group(1) == "123"  # the longer names of older runs
+    assert files.TEMPORARY.match(".notes.hc_smooth-abc.ply") is None
