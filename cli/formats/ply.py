@@ -38,7 +38,7 @@ NORMALS = ("nx", "ny", "nz")
 
 class Property:
     def __init__(self, words):
-        if words[1] == "list":
+        if len(words) > 1 and words[1] == "list":
             if len(words) != 5 or words[2] not in TYPES or words[3] not in TYPES:
                 raise FormatError(f"PLY header: bad list property '{' '.join(words)}'")
             self.count_type, self.type, self.name = TYPES[words[2]], TYPES[words[3]], words[4]
@@ -225,7 +225,8 @@ class PlyFile:
             return self.tokens.numbers(where, f"PLY {element.name} {name}")
         prop = element.property(name)
         raw = np.frombuffer(self.data, dtype=np.uint8)
-        return _gather(raw, where, FORMATS[self.format] + prop.type).astype(np.float64)
+        with np.errstate(invalid="ignore"):  # a signalling NaN: refused with the others by formats.check
+            return _gather(raw, where, FORMATS[self.format] + prop.type).astype(np.float64)
 
     def _read_list(self, element, name):
         prop, counts, where = element.property(name), element.counts[name], element.where[name]

@@ -42,7 +42,8 @@ class StlFile:
                     f"{84 + 50 * count} bytes), and the file has {len(data)} bytes"
                 )
             self.records = np.frombuffer(data, RECORD, offset=84)
-            corners = self.records["corners"].reshape(-1, 3).astype(np.float64)
+            with np.errstate(invalid="ignore"):  # a signalling NaN: refused with the others by formats.check
+                corners = self.records["corners"].reshape(-1, 3).astype(np.float64)
         else:
             self.tokens = tokens = Tokens(data)
             facet = _facets(tokens)

@@ -4,6 +4,7 @@ with the positions and normals rewritten and nothing else; bad files are refused
 import gzip
 import os
 import tracemalloc
+import warnings
 
 import numpy as np
 import pytest
@@ -558,3 +559,25 @@ def test_temporary_names_are_short_and_recognised(tmp_path):
         pass
     assert files.TEMPORARY.match(".scan.hc_smooth-123.ply").group(1) == "123"  # the longer names of older runs
     assert files.TEMPORARY.match(".notes.hc_smooth-abc.ply") is None
+
+
+def test_a_signalling_nan_is_refused_without_a_numpy_warning():
+    """A float32 signalling NaN warns when cast to float64: the readers refuse it as any NaN, quietly."""
+    signalling = np.array([0x7F800001], "<u4").view("<f4")[0]
+    records = np.zeros(2, formats.RECORD)
+    records["corners"][1, 2, 0] = signalling
+    stl = bytes(80) + np.uint32(2).tobytes() + records.tobytes()
+    ply_data = scan_files.ply(
+        [("vertex", [("x", "float"), ("y", "float"), ("z", "float")], [[0, 0, 0]])], "binary_little_endian"
+    )
+    ply_data = ply_data[:-12] + signalling.tobytes() + bytes(8)
+    for data, ext in ((stl, ".stl"), (ply_data, ".ply")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with pytest.raises(FormatError, match="not a finite number"):
+                formats.parse(data, ext)
+
+
+def test_a_property_line_without_a_type_is_refused():
+    with pytest.raises(FormatError, match="PLY header: bad property 'property'"):
+        formats.parse(PLY_HEAD + b"property\nend_header\n0 0 0\n1 0 0\n0 1 0\n", ".ply")
