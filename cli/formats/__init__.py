@@ -36,7 +36,8 @@ def parse(data, ext):
 
 
 def check(mesh):
-    """Refuse coordinates that are not finite and faces that name a vertex the file does not have."""
+    """Refuse coordinates that are not finite or that the file's precision cannot hold, and faces that name a
+    vertex the file does not have."""
     bad = ~np.isfinite(mesh.positions)
     if bad.any():
         rows = np.flatnonzero(bad.any(axis=1))
@@ -50,6 +51,13 @@ def check(mesh):
         )
         raise FormatError(
             f"vertex {rows[0]} has a coordinate that is not a finite number ({value}){others}; nothing was written"
+        )
+    beyond = np.abs(mesh.positions) > np.finfo(mesh.precision).max  # text read as double, kept as float
+    if beyond.any():
+        row = int(np.flatnonzero(beyond.any(axis=1))[0])
+        raise FormatError(
+            f"vertex {row} has a coordinate ({mesh.positions[row][beyond[row]][0]:g}) beyond the single-precision "
+            "range the file keeps its positions in; nothing was written"
         )
     if mesh.corners.size:
         outside = (mesh.corners < 0) | (mesh.corners >= len(mesh.positions))

@@ -581,3 +581,16 @@ def test_a_signalling_nan_is_refused_without_a_numpy_warning():
 def test_a_property_line_without_a_type_is_refused():
     with pytest.raises(FormatError, match="PLY header: bad property 'property'"):
         formats.parse(PLY_HEAD + b"property\nend_header\n0 0 0\n1 0 0\n0 1 0\n", ".ply")
+
+
+@pytest.mark.parametrize("ext", [".ply", ".stl"])
+def test_text_beyond_single_precision_is_refused(ext):
+    """ASCII float properties and ASCII STL are single precision: 1e39 would become inf when smoothed."""
+    if ext == ".ply":
+        data = PLY_HEAD + b"end_header\n0 0 0\n1e39 1 0\n0 1 0\n"
+    else:
+        data = b"solid a\n" + STL_FACET.replace(b"vertex 1 0 0", b"vertex 1e39 0 0") + b"endsolid a\n"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(FormatError, match=r"vertex 1 has a coordinate \(1e\+39\) beyond the single-precision"):
+            formats.parse(data, ext)
