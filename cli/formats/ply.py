@@ -86,7 +86,7 @@ def parse_header(data):
                 raise FormatError(f"PLY header: unknown format '{line.strip()}'")
             fmt = words[1]
         elif words[0] == "element":
-            if len(words) != 3 or not words[2].isascii() or not words[2].isdigit() or len(words[2]) > 18:
+            if len(words) != 3 or not words[2].isdigit() or len(words[2]) > 18:
                 raise FormatError(f"PLY header: bad element line '{line.strip()}' (a count of 0 to 18 digits)")
             elements.append(Element(words[1], int(words[2])))
         elif words[0] == "property":

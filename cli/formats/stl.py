@@ -15,11 +15,11 @@ RECORD = np.dtype([("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attribute
 
 def is_binary(data):
     """A binary STL is 84 bytes plus 50 per facet. Its 80-byte header may itself start with `solid`: then a
-    NUL byte tells it from an ASCII STL, also when it is cut short (text has none; a facet count below 16
-    million has one)."""
+    NUL byte among the first 84 tells it from an ASCII STL, also when it is cut short (text has none; the
+    facet count has one below 16 million facets)."""
     if len(data) >= 84 and len(data) == 84 + 50 * int(np.frombuffer(data, "<u4", 1, 80)[0]):
         return True
-    return not data[:1024].lstrip().lower().startswith(b"solid") or b"\0" in data
+    return not data[:1024].lstrip().lower().startswith(b"solid") or b"\0" in data[:84]
 
 
 class StlFile:
