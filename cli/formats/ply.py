@@ -318,8 +318,12 @@ class PlyFile:
 
 
 def _lengths(counts, element, prop, first=0):
-    """The list lengths ``counts`` (of records ``first`` on) as int64; raises FormatError for a negative one."""
-    counts = np.asarray(counts).astype(np.int64)
+    """The list lengths ``counts`` (of records ``first`` on) as int64; raises FormatError for one that is
+    negative or, read from a float or double, not a whole number."""
+    counts = np.asarray(counts)
+    if counts.dtype.kind == "f":
+        counts = integers(counts.astype(np.float64), f"PLY {element.name} {prop.name} list length")
+    counts = counts.astype(np.int64)
     negative = np.flatnonzero(counts < 0)
     if negative.size:
         raise FormatError(

@@ -594,3 +594,13 @@ def test_text_beyond_single_precision_is_refused(ext):
         warnings.simplefilter("error")
         with pytest.raises(FormatError, match=r"vertex 1 has a coordinate \(1e\+39\) beyond the single-precision"):
             formats.parse(data, ext)
+
+
+@pytest.mark.parametrize("length", [2.5, np.nan, np.inf, 1e30])
+def test_a_float_list_length_must_be_a_whole_number(length):
+    head = PLY_HEAD.replace(b"ascii", b"binary_little_endian") + FACE_HEAD.replace(b"uchar", b"float")
+    data = head + bytes(36) + np.float32(length).tobytes() + np.arange(3, dtype="<i4").tobytes()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no 'invalid value encountered in cast' on the way
+        with pytest.raises(FormatError, match="PLY face vertex_indices list length: .* is not a whole number"):
+            formats.parse(data, ".ply")
