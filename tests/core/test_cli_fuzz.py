@@ -1,7 +1,7 @@
 """The scan-file readers (cli/formats) on broken files: valid small files of every format cut short,
-with bytes flipped and with header counts inflated are read (and can be written back), or refused with
-FormatError: no other exception, no warning, and never much more memory than the valid file takes.
-Seeded: the same cases every run."""
+with bytes flipped, with header counts inflated and (PLY) property types changed are read (and can be
+written back), or refused with FormatError: no other exception, no warning, and never much more memory
+than the valid file takes. Seeded: the same cases every run."""
 
 import tracemalloc
 import warnings
@@ -124,6 +124,25 @@ def inflated_variants(ext, data):
     return variants
 
 
+TYPES = ["char", "uchar", "short", "ushort", "int", "uint", "float", "double"]
+
+
+def retyped_variants(ext, data, rng):
+    """Each type word of a PLY header replaced by another type."""
+    if ext != ".ply":
+        return []
+    end = data.index(b"end_header")
+    words = data[:end].split(b" ")
+    variants = []
+    for i, word in enumerate(words):
+        kind = word.split(b"\n")[0].decode()
+        if kind in TYPES:
+            new = rng.choice([other for other in TYPES if other != kind])
+            changed = words[:i] + [word.replace(kind.encode(), new.encode(), 1)] + words[i + 1 :]
+            variants.append((f"type {i} {kind} as {new}", b" ".join(changed) + data[end:]))
+    return variants
+
+
 def parse_measured(data, ext):
     """(mesh or None, FormatError or None, peak bytes held while parsing); a warning raises."""
     tracemalloc.start()
@@ -148,6 +167,7 @@ def test_broken_files_are_read_or_refused_cleanly_within_bounded_memory(name):
     mesh, error, need = parse_measured(data, ext)
     assert error is None and len(mesh.positions)
     variants = cut_variants(ext, data, rng) + flip_variants(data, rng) + inflated_variants(ext, data)
+    variants += retyped_variants(ext, data, rng)
     refused = 0
     for what, variant in variants:
         try:
