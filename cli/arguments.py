@@ -36,6 +36,14 @@ def _kept_with_points(setting):
 MESH_ONLY = {name: _kept_with_points(s) for name, s in MESH_OPTIONS.items() if name not in POINT_OPTIONS}
 
 
+# Options that mean nothing without another (the panels grey them out): (option, the option it needs).
+NEEDS = (
+    ("invert_group", "fixed_group"),
+    ("invert_influence", "influence_group"),
+    ("sharpness_angle", "keep_sharp_edges"),
+)
+
+
 def _option(name):
     return "--" + name.replace("_", "-")
 
@@ -241,10 +249,16 @@ def parse(argv, prog=PROG):
     args = make_parser(prog).parse_args(list(argv))
     if args.in_place == bool(args.output_dir):
         raise UsageError("give either -o OUTDIR or --in-place (inputs are never overwritten otherwise)")
-    if args.invert_group and not args.fixed_group:
-        raise UsageError("--invert-group needs --fixed-group NAME")
-    if args.invert_influence and not args.influence_group:
-        raise UsageError("--invert-influence needs --influence-group NAME")
+    for option, needed in NEEDS:
+        if getattr(args, option) not in (None, False) and not getattr(args, needed):
+            metavar = MESH_OPTIONS[needed].metavar
+            raise UsageError(f"{_option(option)} needs {_option(needed)}{f' {metavar}' if metavar else ''}")
+    most = settings_spec.COMMAND_MAX_ITERATIONS
+    if args.iterations is not None and args.iterations > most:
+        raise UsageError(
+            f"--iterations {args.iterations} is above {most}, the most the command line runs (as the HC Smooth "
+            "modifier): it runs unattended, and a mistyped count must not keep it going without end"
+        )
     if args.points:
         refused = [_option(name) for name, keeps in MESH_ONLY.items() if getattr(args, name) not in (None, keeps)]
         if refused:

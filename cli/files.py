@@ -12,6 +12,7 @@ import contextlib
 import gzip
 import os
 import re
+import secrets
 
 from . import formats
 
@@ -52,15 +53,17 @@ def result_bytes(mesh, result, target, added=None):
 
 
 def temporary_path(target):
-    """A hidden sibling of ``target`` with the same extension."""
-    folder, base = os.path.split(target)
-    stem, ext = os.path.splitext(base)
-    return os.path.join(folder, f".{stem}.hc_smooth-{os.getpid()}{ext}")
+    """A hidden sibling of ``target`` with the same extension, `.hc_smooth-<pid>-<random>.<ext>`: short, so
+    that it fits wherever the target's name fits."""
+    folder = os.path.dirname(target)
+    return os.path.join(folder, f".hc_smooth-{os.getpid()}-{secrets.token_hex(4)}{os.path.splitext(target)[1]}")
 
 
-# temporary_path's names (with the .mtl and .tmp of earlier versions, and Blender's own save temporary,
-# name@); the pid is what tells whether the run that wrote it is still going.
-TEMPORARY = re.compile(r"^\..+\.hc_smooth-([1-9][0-9]*)\.(?:ply|obj|stl|mtl|blend)(?:\.tmp|@)?$", re.IGNORECASE)
+# temporary_path's names, the `.<name>.hc_smooth-<pid>.<ext>` ones (with .mtl and .tmp) of earlier
+# versions, and Blender's own save temporary (name@); the pid tells whether the run that wrote it is still going.
+TEMPORARY = re.compile(
+    r"^\.(?:.+\.)?hc_smooth-([1-9][0-9]*)(?:-[0-9a-f]+)?\.(?:ply|obj|stl|mtl|blend)(?:\.tmp|@)?$", re.IGNORECASE
+)
 
 
 def _running(pid):

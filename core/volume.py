@@ -317,7 +317,9 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
 
 
 def _centre(points):
-    """The mean of (n, 3) points, in float64."""
+    """The mean of (n, 3) points, in float64 (the origin for none)."""
+    if points.shape[0] == 0:
+        return np.zeros(3)
     if points.shape[0] <= _VERTEX_BLOCK:
         return np.asarray(points, dtype=np.float64).mean(axis=0)
     total = sum(

@@ -15,7 +15,7 @@ from . import normals as normal_maths
 from .obj import ObjFile
 from .ply import PlyFile
 from .stl import RECORD, StlFile, is_binary
-from .tokens import FormatError
+from .tokens import FormatError, number_texts
 
 READERS = {".ply": PlyFile, ".obj": ObjFile, ".stl": StlFile}
 __all__ = ["FormatError", "read", "parse", "updated", "converted", "is_binary"]
@@ -36,7 +36,8 @@ def parse(data, ext):
 
 
 def check(mesh):
-    """Refuse coordinates that are not finite and faces that name a vertex the file does not have."""
+    """Refuse coordinates that are not finite or that the file's precision cannot hold, and faces that name a
+    vertex the file does not have."""
     bad = ~np.isfinite(mesh.positions)
     if bad.any():
         rows = np.flatnonzero(bad.any(axis=1))
@@ -50,6 +51,13 @@ def check(mesh):
         )
         raise FormatError(
             f"vertex {rows[0]} has a coordinate that is not a finite number ({value}){others}; nothing was written"
+        )
+    beyond = np.abs(mesh.positions) > np.finfo(mesh.precision).max  # text read as double, kept as float
+    if beyond.any():
+        row = int(np.flatnonzero(beyond.any(axis=1))[0])
+        raise FormatError(
+            f"vertex {row} has a coordinate ({mesh.positions[row][beyond[row]][0]:g}) beyond the single-precision "
+            "range the file keeps its positions in; nothing was written"
         )
     if mesh.corners.size:
         outside = (mesh.corners < 0) | (mesh.corners >= len(mesh.positions))
@@ -139,9 +147,13 @@ def vertex_normals(mesh, result):
 def converted(mesh, result, ext, added=None):
     """The smoothed geometry of ``mesh`` as a new file in format ``ext``: positions, faces, vertex normals
     when the input has them, and ``added`` vertex values (PLY only; binary PLY and STL, as Blender's
-    exporters write them)."""
+    exporters write them). Positions keep the precision of ``result``: float64 ones become PLY ``double``
+    properties or OBJ numbers that read back exactly; STL holds single precision only, and refuses float64
+    positions that rounding to it would move visibly (``check_single``)."""
     _check_added(added, ext)
-    positions = np.asarray(result, dtype=np.float32)
+    positions = np.asarray(result)
+    if positions.dtype != np.float64:
+        positions = positions.astype(np.float32)
     corners, sizes, _ = surface(mesh)
     normals = vertex_normals(mesh, result)
     if ext == ".ply":
@@ -150,7 +162,28 @@ def converted(mesh, result, ext, added=None):
         return _obj_bytes(positions, corners, sizes, normals)
     if not len(sizes):
         raise FormatError("no faces: an STL file holds triangles only")
-    return _stl_bytes(positions, corners, sizes)
+    check_single(positions)
+    return _stl_bytes(positions.astype(np.float32), corners, sizes)
+
+
+# The largest move, as a share of the bounding-box diagonal, that rounding positions to single precision
+# may cause in a converted STL: a hundredth of the lightest scan noise smoothed (0.1 % of the diagonal).
+SINGLE_ROUNDING = 1e-5
+
+
+def check_single(positions):
+    """Refuse positions that single precision would move by more than SINGLE_ROUNDING of the mesh's size:
+    a mesh far from the origin for its size (georeferenced scans)."""
+    if positions.dtype != np.float64 or not len(positions):
+        return
+    moved = float(np.abs(positions.astype(np.float32) - positions).max())
+    size = float(np.linalg.norm(np.ptp(positions, axis=0)))
+    if moved > SINGLE_ROUNDING * size:
+        far = float(np.abs(positions).max())
+        raise FormatError(
+            f"an STL file holds single-precision coordinates, which would move these vertices by up to {moved:.3g} "
+            f"(they lie up to {far:.6g} from the origin, the mesh is {size:.3g} across): write PLY or OBJ instead"
+        )
 
 
 def _ply_bytes(positions, corners, sizes, normals, added=None):
@@ -162,14 +195,22 @@ def _ply_bytes(positions, corners, sizes, normals, added=None):
         "comment written by HC Smooth",
         f"element vertex {len(positions)}",
     ]
-    header += [f"property float {name}" for name in names]
+    # x, y, z in the positions' precision (double for float64), the other values as float.
+    types = {
+        name: ("double", "<f8") if positions.dtype == np.float64 and name in ("x", "y", "z") else ("float", "<f4")
+        for name in names
+    }
+    header += [f"property {types[name][0]} {name}" for name in names]
     if len(sizes):
         header += [f"element face {len(sizes)}", "property list uchar int vertex_indices"]
     header.append("end_header\n")
-    columns = positions if normals is None else np.hstack([positions, normals])
-    if added:
-        columns = np.column_stack([columns, *(np.asarray(values, np.float32) for values in added.values())])
-    body = np.ascontiguousarray(columns, dtype="<f4").tobytes()
+    columns = [positions[:, i] for i in range(3)]
+    columns += [] if normals is None else [normals[:, i] for i in range(3)]
+    columns += list(added.values())
+    records = np.empty(len(positions), dtype=[(name, types[name][1]) for name in names])
+    for name, values in zip(names, columns):
+        records[name] = values
+    body = records.tobytes()
     if len(sizes):
         if sizes.max() > 255:
             raise FormatError("a face with more than 255 corners cannot be written to PLY")
@@ -185,7 +226,8 @@ def _ply_bytes(positions, corners, sizes, normals, added=None):
 
 def _obj_bytes(positions, corners, sizes, normals):
     lines = [b"# written by HC Smooth"]
-    lines += [b"v %s %s %s" % tuple(row) for row in np.asarray(positions, np.float32).astype(bytes).tolist()]
+    texts = number_texts(positions.ravel(), positions.dtype)  # float64: digits that read back exactly
+    lines += [b"v %s %s %s" % row for row in zip(texts[0::3], texts[1::3], texts[2::3])]
     if normals is not None:
         lines += [b"vn %s %s %s" % tuple(row) for row in normals.astype(bytes).tolist()]
     numbers = (corners + 1).astype(bytes)

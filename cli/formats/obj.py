@@ -117,11 +117,14 @@ class ObjFile:
 def _absolute(given, before, total, what):
     """OBJ's 1-based (and negative, relative) indices as 0-based; raises FormatError for one out of range."""
     index = np.where(given > 0, given - 1, before + given)
-    bad = (given == 0) | (index < 0) | (index >= np.where(given > 0, total, before))
-    if bad.any():
+    limit = np.where(given > 0, total, before)  # a negative index counts back from the lines before its face
+    bad = np.flatnonzero((given == 0) | (index < 0) | (index >= limit))
+    if bad.size:
+        first = bad[0]
+        if given[first] == 0:
+            raise FormatError(f"OBJ face: {what} index 0 (OBJ indices start at 1)")
+        where = "at that point" if given[first] < 0 else "in all"
         raise FormatError(
-            f"OBJ face: {what} index {int(given[bad][0])} is out of range (the file has {total} at that point)"
-            if given[bad][0] != 0
-            else f"OBJ face: {what} index 0 (OBJ indices start at 1)"
+            f"OBJ face: {what} index {int(given[first])} is out of range (the file has {int(limit[first])} {where})"
         )
     return index.astype(np.int64)

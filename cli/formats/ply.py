@@ -7,6 +7,8 @@ vertex property can be added (the deviation map's ``hc_deviation``): one line in
 vertex's last property, one value at the end of each vertex record; one the file has is rewritten.
 """
 
+import re
+
 import numpy as np
 
 from .tokens import FormatError, Tokens, integers, number_texts, splice
@@ -36,7 +38,7 @@ NORMALS = ("nx", "ny", "nz")
 
 class Property:
     def __init__(self, words):
-        if words[1] == "list":
+        if len(words) > 1 and words[1] == "list":
             if len(words) != 5 or words[2] not in TYPES or words[3] not in TYPES:
                 raise FormatError(f"PLY header: bad list property '{' '.join(words)}'")
             self.count_type, self.type, self.name = TYPES[words[2]], TYPES[words[3]], words[4]
@@ -57,15 +59,23 @@ class Element:
         return next((p for p in self.properties if p.name == name), None)
 
 
+# The line that ends the header: end_header alone on it (a comment may hold the word).
+END_HEADER = re.compile(rb"(?:\A|\n)[ \t]*end_header[ \t\r]*(?:\n|\Z)")
+
+
+def header_end(data):
+    """(offset of the end_header line, offset of the body after it)."""
+    found = END_HEADER.search(data)
+    if found is None:
+        raise FormatError("PLY header without an end_header line")
+    return found.start(), found.end()
+
+
 def parse_header(data):
     """(format word, [Element], offset of the body)."""
     if not data.startswith(b"ply") or data[3:4] not in (b"\n", b"\r"):
         raise FormatError("not a PLY file (it does not start with 'ply')")
-    end = data.find(b"end_header")
-    if end < 0:
-        raise FormatError("PLY header without end_header")
-    newline = data.find(b"\n", end)
-    body = len(data) if newline < 0 else newline + 1
+    end, body = header_end(data)
     fmt, elements = None, []
     for line in data[:end].decode("ascii", "replace").splitlines()[1:]:
         words = line.split()
@@ -76,8 +86,8 @@ def parse_header(data):
                 raise FormatError(f"PLY header: unknown format '{line.strip()}'")
             fmt = words[1]
         elif words[0] == "element":
-            if len(words) != 3 or not words[2].isdigit():
-                raise FormatError(f"PLY header: bad element line '{line.strip()}'")
+            if len(words) != 3 or not words[2].isdigit() or len(words[2]) > 18:
+                raise FormatError(f"PLY header: bad element line '{line.strip()}' (a count of 0 to 18 digits)")
             elements.append(Element(words[1], int(words[2])))
         elif words[0] == "property":
             if not elements:
@@ -88,6 +98,25 @@ def parse_header(data):
     if fmt is None:
         raise FormatError("PLY header without a format line")
     return fmt, elements, body
+
+
+def check_counts(fmt, elements, available):
+    """Refuse element counts that need more than the ``available`` bytes after the header, before anything
+    is allocated for them: a binary record takes at least its fixed-size values and list lengths (a list
+    may be empty), an ASCII value at least a byte."""
+    need = 0
+    for element in elements:
+        if fmt == "ascii":
+            least = len(element.properties)
+        else:
+            least = sum(np.dtype(p.type if p.count_type is None else p.count_type).itemsize for p in element.properties)
+        need += element.count * least
+        if need > available:
+            raise FormatError(
+                f"PLY file ends before its {element.count} {element.name} records: with the elements before them "
+                f"they need at least {need} bytes after the header, and the file has {available} (cut short, or a "
+                "wrong count in the header)"
+            )
 
 
 class PlyFile:
@@ -108,6 +137,7 @@ class PlyFile:
                     f"PLY vertex property {axis} is not a float or double: it cannot take smoothed values"
                 )
         self.vertex = vertex
+        check_counts(self.format, self.elements, len(data) - body)
         if self.format == "ascii":
             self._locate_ascii(body)
         else:
@@ -140,21 +170,28 @@ class PlyFile:
             if record + element.count > len(first):
                 raise FormatError(f"PLY file ends before its {element.count} {element.name} records")
             start = first[record : record + element.count]
+            values = per_record[record : record + element.count]
             offset = np.zeros(element.count, dtype=np.int64)
             for prop in element.properties:
                 element.where[prop.name] = start + offset
                 if prop.count_type is None:
                     offset += 1
-                else:
-                    counts = tokens.numbers(start + offset, f"PLY {element.name} {prop.name}")
-                    element.counts[prop.name] = integers(counts, f"PLY {element.name} {prop.name} count")
-                    offset += 1 + element.counts[prop.name]
+                    continue
+                short = np.flatnonzero(offset >= values)  # the list's length lies past its record's line
+                if short.size:
+                    bad = short[0]
+                    raise FormatError(
+                        f"PLY {element.name} record {bad} has {values[bad]} values, fewer than the header says"
+                    )
+                counts = tokens.numbers(start + offset, f"PLY {element.name} {prop.name}")
+                counts = integers(counts, f"PLY {element.name} {prop.name} count")
+                element.counts[prop.name] = _lengths(counts, element, prop)
+                offset += 1 + element.counts[prop.name]
             element.ends = start + offset - 1
-            if not np.array_equal(offset, per_record[record : record + element.count]):
-                bad = int(np.flatnonzero(offset != per_record[record : record + element.count])[0])
+            if not np.array_equal(offset, values):
+                bad = int(np.flatnonzero(offset != values)[0])
                 raise FormatError(
-                    f"PLY {element.name} record {bad} has {per_record[record + bad]} values where the header "
-                    f"says {offset[bad]}"
+                    f"PLY {element.name} record {bad} has {values[bad]} values where the header says {offset[bad]}"
                 )
             record += element.count
 
@@ -163,6 +200,8 @@ class PlyFile:
         raw = np.frombuffer(self.data, dtype=np.uint8)
         position = body
         for element in self.elements:
+            if not element.properties:  # records of no bytes
+                continue
             starts = _record_starts(raw, position, element, order)
             offset = starts.copy()
             for prop in element.properties:
@@ -170,11 +209,9 @@ class PlyFile:
                 if prop.count_type is None:
                     offset += np.dtype(prop.type).itemsize
                 else:
-                    counts = _gather(raw, offset, order + prop.count_type)
-                    element.counts[prop.name] = counts.astype(np.int64)
-                    offset += (
-                        np.dtype(prop.count_type).itemsize + counts.astype(np.int64) * np.dtype(prop.type).itemsize
-                    )
+                    counts = _lengths(_gather(raw, offset, order + prop.count_type), element, prop)
+                    element.counts[prop.name] = counts
+                    offset += np.dtype(prop.count_type).itemsize + counts * np.dtype(prop.type).itemsize
             element.ends = offset
             position = int(offset[-1]) if element.count else position
             if position > len(self.data):
@@ -188,7 +225,8 @@ class PlyFile:
             return self.tokens.numbers(where, f"PLY {element.name} {name}")
         prop = element.property(name)
         raw = np.frombuffer(self.data, dtype=np.uint8)
-        return _gather(raw, where, FORMATS[self.format] + prop.type).astype(np.float64)
+        with np.errstate(invalid="ignore"):  # a signalling NaN: refused with the others by formats.check
+            return _gather(raw, where, FORMATS[self.format] + prop.type).astype(np.float64)
 
     def _read_list(self, element, name):
         prop, counts, where = element.property(name), element.counts[name], element.where[name]
@@ -259,9 +297,7 @@ class PlyFile:
 
     def _header_end(self):
         """The offset of the line after end_header (the body's start)."""
-        end = self.data.find(b"end_header")
-        newline = self.data.find(b"\n", end)
-        return len(self.data) if newline < 0 else newline + 1
+        return header_end(self.data)[1]
 
     def _header_with(self, new):
         """The header with a ``property float NAME`` line per new name after the vertex element's last property
@@ -281,6 +317,22 @@ class PlyFile:
         return b"".join(lines[: last + 1] + added + lines[last + 1 :])
 
 
+def _lengths(counts, element, prop, first=0):
+    """The list lengths ``counts`` (of records ``first`` on) as int64; raises FormatError for one that is
+    negative or, read from a float or double, not a whole number."""
+    counts = np.asarray(counts)
+    if counts.dtype.kind == "f":
+        counts = integers(counts.astype(np.float64), f"PLY {element.name} {prop.name} list length")
+    counts = counts.astype(np.int64)
+    negative = np.flatnonzero(counts < 0)
+    if negative.size:
+        raise FormatError(
+            f"PLY {element.name} record {first + negative[0]}: its {prop.name} list has a negative length "
+            f"({counts[negative[0]]})"
+        )
+    return counts
+
+
 def _gather(raw, offsets, dtype):
     """The values of ``dtype`` at byte ``offsets`` of ``raw``."""
     dtype = np.dtype(dtype)
@@ -294,23 +346,24 @@ def _record_starts(raw, position, element, order):
     list lengths (a mesh's faces are mostly one size): a run's records are checked in bulk, in windows
     that double while the run lasts."""
     sizes = [
-        (np.dtype(p.type).itemsize, None if p.count_type is None else np.dtype(order + p.count_type))
+        (np.dtype(p.type).itemsize, None if p.count_type is None else np.dtype(order + p.count_type), p)
         for p in element.properties
     ]
-    if all(count is None for _, count in sizes):
-        return position + np.arange(element.count, dtype=np.int64) * sum(size for size, _ in sizes)
-    starts = np.empty(element.count, dtype=np.int64)
+    if all(count is None for _, count, _ in sizes):
+        return position + np.arange(element.count, dtype=np.int64) * sum(size for size, _, _ in sizes)
+    runs = []
     done, window = 0, 16
     while done < element.count:
         # The list lengths of the record at ``position`` give its layout and size.
         layout, offset = [], 0
-        for size, count in sizes:
+        for size, count, prop in sizes:
             if count is None:
                 offset += size
                 continue
             if position + offset + count.itemsize > len(raw):
                 raise FormatError(f"PLY file ends inside its {element.name} records")
-            length = int(raw[position + offset : position + offset + count.itemsize].view(count)[0])
+            at = position + offset
+            length = int(_lengths(raw[at : at + count.itemsize].view(count), element, prop, done)[0])
             layout.append((offset, count, length))
             offset += count.itemsize + length * size
         record = offset
@@ -321,8 +374,8 @@ def _record_starts(raw, position, element, order):
         for at, count, length in layout:
             same &= _gather(raw, candidates + at, count) == length
         run = limit if same.all() else max(1, int(np.argmin(same)))
-        starts[done : done + run] = candidates[:run]
+        runs.append(candidates[:run])
         done += run
         position += run * record
         window = window * 2 if run == limit else 16
-    return starts
+    return np.concatenate(runs) if runs else np.zeros(0, dtype=np.int64)

@@ -138,20 +138,25 @@ def far_sphere():
     return positions_of(obj.data).astype(np.float64) + FAR, np.array(faces_of(obj.data))
 
 
+def far_file(folder, kind, positions, faces):
+    """The far sphere as an OBJ with every digit ("obj") or a binary PLY with double positions ("ply-double")."""
+    if kind == "obj":
+        source = folder / "scan.obj"
+        lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in positions.tolist()] + [
+            f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces
+        ]
+        source.write_text("\n".join(lines) + "\n")
+        return source
+    columns = [(axis, "double", positions[:, i]) for i, axis in enumerate("xyz")]
+    return write_ply(folder / "scan.ply", columns, faces, "binary_little_endian")
+
+
 @pytest.mark.parametrize("kind", ["ply-double", "obj"])
 def test_files_are_smoothed_in_the_precision_they_store(cli, addon, tmp_path, kind):
     """Doubles stay doubles: the run is core's on the file's float64 arrays, bit for bit, with the add-on's
     options; through single precision the sphere would be shattered into 0.5-unit steps."""
     positions, faces = far_sphere()
-    if kind == "obj":
-        source = tmp_path / "scan.obj"
-        lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in positions.tolist()] + [
-            f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces
-        ]
-        source.write_text("\n".join(lines) + "\n")
-    else:
-        columns = [(axis, "double", positions[:, i]) for i, axis in enumerate("xyz")]
-        source = write_ply(tmp_path / "scan.ply", columns, faces, "binary_little_endian")
+    source = far_file(tmp_path, kind, positions, faces)
     assert cli.main([str(source), "-o", str(tmp_path / "out")]) == 0
     out = tmp_path / "out" / source.name
     if kind == "obj":
@@ -166,6 +171,24 @@ def test_files_are_smoothed_in_the_precision_they_store(cli, addon, tmp_path, ki
     np.testing.assert_array_equal(smoothed, expected)
     radius = np.linalg.norm(smoothed - FAR, axis=1)
     assert np.abs(radius - 1.0).max() < 0.1  # on the sphere: no single-precision steps
+
+
+@pytest.mark.parametrize("kind, fmt", [("ply-double", "obj"), ("obj", "ply")])
+def test_format_change_keeps_double_precision(cli, capsys, tmp_path, kind, fmt):
+    """--format writes the smoothed doubles so that they read back exactly; STL, single precision only,
+    refuses a mesh that far from the origin."""
+    formats = sys.modules[ADDON + ".cli.formats"]
+    source = far_file(tmp_path, kind, *far_sphere())
+    assert cli.main([str(source), "-o", str(tmp_path / "same"), "--iterations", "3"]) == 0
+    assert cli.main([str(source), "-o", str(tmp_path / "other"), "--iterations", "3", "--format", fmt]) == 0
+    same = formats.read(str(tmp_path / "same" / source.name)).positions
+    other = formats.read(str(tmp_path / "other" / f"scan.{fmt}")).positions
+    np.testing.assert_array_equal(other, same)
+    assert len(np.unique(other[:, 1])) > len(other) // 2  # not a handful of single-precision steps
+    capsys.readouterr()
+    assert cli.main([str(source), "-o", str(tmp_path / "stl"), "--iterations", "3", "--format", "stl"]) == 1
+    assert "STL file holds single-precision coordinates" in capsys.readouterr().out
+    assert not (tmp_path / "stl").exists()
 
 
 def test_ply_keeps_colours_uvs_and_other_properties(cli, tmp_path):

@@ -102,26 +102,57 @@ def test_binary_stl_keeps_its_header_and_attribute_bytes(cli, formats, tmp_path)
     assert not np.allclose(after["corners"], records["corners"], atol=1e-4)
 
 
+PLY_TRIANGLE = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+FACE_LIST = b"element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+BINARY_TRIANGLE = PLY_TRIANGLE.replace(b"ascii", b"binary_little_endian")
+NEGATIVE_FACE = np.int8(-3).tobytes() + np.arange(3, dtype="<i4").tobytes()  # a char list length of -3
+STL_FACET = b"facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+# {name: (bytes, what the failure says)}
 BAD_FILES = {
-    "nan.ply": b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-    b"element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\nnan 1 0\n0 1 0\n3 0 1 2\n",
-    "index.ply": b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-    b"element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 1 0\n0 1 0\n3 0 1 7\n",
-    "nan.obj": b"v 0 0 0\nv nan 1 0\nv 0 1 0\nf 1 2 3\n",
-    "index.obj": b"v 0 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 -4\n",
+    "nan.ply": (PLY_TRIANGLE + FACE_LIST + b"0 0 0\nnan 1 0\n0 1 0\n3 0 1 2\n", "not a finite number"),
+    "index.ply": (PLY_TRIANGLE + FACE_LIST + b"0 0 0\n1 1 0\n0 1 0\n3 0 1 7\n", "uses vertex 7"),
+    "nan.obj": (b"v 0 0 0\nv nan 1 0\nv 0 1 0\nf 1 2 3\n", "not a finite number"),
+    "index.obj": (b"v 0 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 -4\n", "out of range"),
+    "cut.stl": (b"solid part\n" + STL_FACET[: STL_FACET.index(b"endfacet")], "ASCII STL ends inside facet 0"),
+    "cut-binary.stl": (b"solid part".ljust(80) + np.uint32(2).tobytes() + bytes(80), "binary STL cut short or invalid"),
+    "bomb.ply": (
+        BINARY_TRIANGLE.replace(b"vertex 3", b"vertex 100000000") + FACE_LIST + bytes(36) + NEGATIVE_FACE,
+        "ends before its 100000000 vertex records",
+    ),
+    "negative.ply": (
+        BINARY_TRIANGLE + FACE_LIST.replace(b"uchar", b"char") + bytes(36) + NEGATIVE_FACE,
+        "vertex_indices list has a negative length (-3)",
+    ),
 }
 
 
 @pytest.mark.parametrize("name", sorted(BAD_FILES))
-def test_bad_files_fail_and_nothing_is_written(cli, capsys, tmp_path, name):
+def test_bad_files_fail_and_nothing_is_written(cli, capfd, tmp_path, name):
+    data, message = BAD_FILES[name]
     source = tmp_path / name
-    source.write_bytes(BAD_FILES[name])
+    source.write_bytes(data)
     assert cli.main([str(source), "-o", str(tmp_path / "out")]) == 1
-    line = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("[1/1]"))
-    assert "FAILED" in line and ("not a finite number" in line or "out of range" in line or "uses vertex 7" in line)
+    out, err = capfd.readouterr()
+    line = next(line for line in out.splitlines() if line.startswith("[1/1]"))
+    assert "FAILED" in line and message in line and "Traceback" not in err
     assert not (tmp_path / "out").exists()
     assert cli.main([str(source), "--in-place"]) == 1
-    assert source.read_bytes() == BAD_FILES[name] and os.listdir(tmp_path) == [name]
+    assert source.read_bytes() == data and os.listdir(tmp_path) == [name]
+
+
+@pytest.mark.parametrize("ext", [".ply", ".blend"])
+def test_a_name_of_250_characters_is_written(cli, tmp_path, ext):
+    """The temporary a result is written to first is short: any name the folder takes works."""
+    source = tmp_path / ("s" * (250 - len(ext)) + ext)
+    if ext == ".blend":
+        saved_blend(source)
+    else:
+        source.write_bytes(scan_files.rich_ply("binary_little_endian")[0])
+    out = tmp_path / "out"
+    assert cli.main([str(source), "-o", str(out), "--iterations", "2"]) == 0
+    assert os.listdir(out) == [source.name]
+    assert cli.main([str(source), "--in-place", "--iterations", "2"]) == 0
+    assert sorted(os.listdir(tmp_path)) == sorted(["out", source.name])
 
 
 def saved_blend(path, newer=False, packer=None):

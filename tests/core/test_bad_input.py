@@ -1,5 +1,6 @@
 """Bad input raises ValueError with a message a user can act on, and changes nothing."""
 
+import warnings
 from decimal import Decimal
 from fractions import Fraction
 
@@ -89,6 +90,19 @@ def test_degenerate_but_valid_meshes(mode):
     assert np.array_equal(all_fixed.positions, POSITIONS)
     zero = core.smooth(POSITIONS, EDGES, alpha=0.1, beta=0.6, iterations=0, mode=mode)
     assert np.array_equal(zero.positions, POSITIONS) and zero.iterations == 0
+
+
+@pytest.mark.parametrize("options", [{}, {"iterations": 3}, {"border": "curve"}, {"weld": True}], ids=repr)
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_smooth_mesh_returns_an_empty_mesh_quietly(dtype, options):
+    """No vertices, no faces: an empty result of the same dtype, as hc_smooth gives, and no NumPy warning."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = core.smooth_mesh(
+            np.zeros((0, 3), dtype), np.zeros((0, 2), int), faces=np.zeros((0, 3), int), **options
+        )
+    assert result.shape == (0, 3) and result.dtype == dtype
+    assert [str(warning.message) for warning in caught] == []
 
 
 def test_coincident_points_give_no_nan():

@@ -53,6 +53,12 @@ def test_cli_package_imports_no_blender_module():
         (["a.ply", "-o", "out", "--iterations", "-1"], "negative"),
         (["a.ply", "-o", "out", "--invert-group"], "--invert-group needs --fixed-group"),
         (["a.ply", "-o", "out", "--invert-influence"], "--invert-influence needs --influence-group"),
+        (["a.ply", "-o", "out", "--sharpness-angle", "45"], "--sharpness-angle needs --keep-sharp-edges"),
+        (
+            ["a.ply", "-o", "out", "--iterations", "100000000000"],
+            "--iterations 100000000000 is above 1000, the most the command line runs (as the HC Smooth modifier): "
+            "it runs unattended",
+        ),
         (["a.ply", "-o", "out", "--method", "taubin"], "invalid choice"),
         (["x/a.ply", "y/a.ply", "-o", "out"], "would both be written"),
         # Numbers that are not finite pass no range check by comparison: refused by name, before any file is read.
@@ -106,11 +112,16 @@ def test_a_good_command_line_makes_a_plan(tmp_path, monkeypatch):
     plan = arguments.parse(["points.ply", "-o", "out", "--points", "--rounds", "2", "--alpha", "0.2"])
     assert plan.points and plan.point_options["rounds"] == 2 and plan.point_options["alpha"] == 0.2
     assert plan.point_options["auto_amount"] is False  # a manual amount, as the operator with alpha set
+    plan = arguments.parse(
+        ["scan.ply", "-o", "out", "--keep-sharp-edges", "--sharpness-angle", "45", "--iterations", "1000"]
+    )
+    assert plan.settings.sharpness_angle == pytest.approx(math.radians(45)) and plan.settings.iterations == 1000
 
 
 def declared_options():
-    """{option name: (setting, the argument that makes the option apply)} for every setting with a flag."""
-    options = {s.flag: (s, []) for s in spec.MESH if s.flag}
+    """{option name: (setting, the arguments that make the option apply)} for every setting with a flag."""
+    needs = {option: ["--" + needed.replace("_", "-")] for option, needed in arguments.NEEDS}
+    options = {s.flag: (s, needs.get(s.flag.replace("-", "_"), [])) for s in spec.MESH if s.flag}
     options.update({s.flag: (s, ["--points"]) for s in spec.POINTS if s.flag and s.flag not in options})
     return options
 
@@ -137,7 +148,7 @@ def test_options_are_built_from_the_declarations(tmp_path, monkeypatch):
                 continue
             shown = round(math.degrees(bound), 9) if degrees else bound
             plan = arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", f"{shown:g}" if degrees else str(bound)])
-            given = plan.point_options if extra else vars(plan.settings)
+            given = plan.point_options if "--points" in extra else vars(plan.settings)
             assert given[setting.name] == pytest.approx(bound, rel=1e-12), flag
             with pytest.raises(arguments.UsageError):
                 arguments.parse(["a.ply", "-o", "out", *extra, f"--{flag}", str(shown + beyond)])

@@ -2,6 +2,9 @@
 with the positions and normals rewritten and nothing else; bad files are refused with a reason."""
 
 import gzip
+import os
+import tracemalloc
+import warnings
 
 import numpy as np
 import pytest
@@ -262,6 +265,7 @@ def test_stl_keeps_header_and_attribute_bytes(binary):
 
 PLY_HEAD = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
 FACE_HEAD = b"element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+STL_FACET = b"facet normal 0 0 1\n outer loop\n  vertex 0 0 0\n  vertex 1 0 0\n  vertex 0 1 0\n endloop\nendfacet\n"
 
 
 @pytest.mark.parametrize(
@@ -302,10 +306,18 @@ FACE_HEAD = b"element face 1\nproperty list uchar int vertex_indices\nend_header
             b"v 0 0 0\nv 1 0 inf\nv 0 1 0\nf 1 2 3\n",
             "vertex 1 has a coordinate that is not a finite number (inf)",
         ),
-        (".obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "vertex index 4 is out of range"),
-        (".obj", b"v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n", "vertex index -3 is out of range"),
+        (".obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "vertex index 4 is out of range (the file has 3 in all)"),
+        (
+            ".obj",
+            b"v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n",
+            "vertex index -3 is out of range (the file has 2 at that point)",
+        ),
+        (".obj", b"f -1 -2 -3\n" + b"v 0 0 0\n" * 178, "index -1 is out of range (the file has 0 at that point)"),
         (".obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "index 0 (OBJ indices start at 1)"),
         (".obj", b"v 0 0 zero\n", "'zero' is not a number"),
+        (".stl", b"solid a\n" + STL_FACET[: STL_FACET.index(b"endfacet")], "ASCII STL ends inside facet 0"),
+        (".stl", b"solid a\n" + STL_FACET * 2, "no 'endsolid' after its last facet"),
+        (".stl", b"solid a\n" + STL_FACET.replace(b"outer", b"outre") + b"endsolid a\n", "'outre' where 'outer'"),
     ],
     ids=[
         "ply-nan",
@@ -317,8 +329,12 @@ FACE_HEAD = b"element face 1\nproperty list uchar int vertex_indices\nend_header
         "obj-inf",
         "obj-index",
         "obj-relative",
+        "obj-relative-before-any-vertex",
         "obj-zero",
         "obj-word",
+        "stl-cut-after-endloop",
+        "stl-without-endsolid",
+        "stl-misspelt",
     ],
 )
 def test_bad_files_are_refused_with_the_reason(ext, data, message):
@@ -408,3 +424,183 @@ def test_obj_groups_name_the_vertices_of_their_faces():
         "right": [1, 2, 3],
         "both": [0, 1, 2, 3],
     }
+
+
+FAR = np.array([500000.0, 5000000.0, 250.0])  # a georeferenced scan: single precision steps by 0.5 here
+
+
+def far_files():
+    """{ext: bytes} of a noisy unit sphere at FAR, as an OBJ with exact digits and a binary double PLY."""
+    positions, faces = scan_files.octahedron(noise=0.01)
+    positions = positions + FAR
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in positions.tolist()] + [
+        f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces
+    ]
+    vertex = [("x", "double"), ("y", "double"), ("z", "double")]
+    face = [("vertex_indices", ("list", "uchar", "int"))]
+    double = scan_files.ply(
+        [("vertex", vertex, positions.tolist()), ("face", face, [[f] for f in faces.tolist()])], "binary_little_endian"
+    )
+    return positions, {".obj": ("\n".join(lines) + "\n").encode(), ".ply": double}
+
+
+@pytest.mark.parametrize("source", [".obj", ".ply"])
+@pytest.mark.parametrize("target", [".ply", ".obj"])
+def test_conversions_keep_double_precision(source, target):
+    """--format writes float64 positions so that they read back exactly: PLY double properties, OBJ digits."""
+    positions, data = far_files()
+    mesh = formats.parse(data[source], source)
+    assert mesh.precision == np.float64
+    result = positions + np.random.default_rng(2).normal(scale=0.001, size=positions.shape)
+    out = formats.parse(formats.converted(mesh, result, target), target)
+    np.testing.assert_array_equal(out.positions, result)
+    assert len(np.unique(out.positions[:, 1])) == len(np.unique(result[:, 1]))
+    single = result.astype(np.float32)  # a float32 result is written in single precision
+    written = formats.converted(mesh, single, target)
+    assert (b"property float x" in written) == (target == ".ply")
+    np.testing.assert_array_equal(formats.parse(written, target).positions.astype(np.float32), single)
+
+
+@pytest.mark.parametrize("source", [".obj", ".ply"])
+def test_conversion_to_stl_refuses_what_single_precision_would_move(source):
+    positions, data = far_files()
+    mesh = formats.parse(data[source], source)
+    with pytest.raises(FormatError, match="STL file holds single-precision coordinates.*write PLY or OBJ"):
+        formats.converted(mesh, positions, ".stl")
+    near = positions - FAR  # near the origin, single precision moves it by far less than its size
+    out = formats.parse(formats.converted(mesh, near, ".stl"), ".stl")
+    np.testing.assert_allclose(out.positions[out.corners], near[mesh.corners], rtol=0, atol=1e-6)
+
+
+def small_ply(encoding):
+    """A tetrahedron as PLY bytes: vertices with a double, faces with a char list."""
+    positions, faces = np.eye(4, 3), [[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]]
+    vertex = [("x", "float"), ("y", "float"), ("z", "float"), ("quality", "double")]
+    face = [("vertex_indices", ("list", "char", "int"))]
+    data = scan_files.ply(
+        [("vertex", vertex, [[*p, 1.0] for p in positions]), ("face", face, [[f] for f in faces])], encoding
+    )
+    return data
+
+
+def peak_bytes(function):
+    """The most memory ``function()`` held at once (NumPy's arrays included), and what it raised."""
+    tracemalloc.start()
+    try:
+        function()
+    except FormatError as error:
+        return tracemalloc.get_traced_memory()[1], error
+    finally:
+        tracemalloc.stop()
+    return None, None
+
+
+@pytest.mark.parametrize("element", ["vertex", "face"])
+@pytest.mark.parametrize("encoding", ENCODINGS)
+def test_counts_the_file_cannot_hold_are_refused_before_anything_is_allocated(encoding, element):
+    """A few hundred bytes claiming 100 million records: refused at once, not after gigabytes of arrays."""
+    bomb = small_ply(encoding).replace(f"element {element} 4".encode(), f"element {element} 100000000".encode())
+    peak, error = peak_bytes(lambda: formats.parse(bomb, ".ply"))
+    assert f"ends before its 100000000 {element} records" in str(error) and "wrong count in the header" in str(error)
+    assert peak < 100_000
+
+
+@pytest.mark.parametrize("encoding", ENCODINGS)
+def test_a_negative_list_length_is_refused_with_the_reason(encoding):
+    data = small_ply(encoding)
+    body = data.index(b"end_header\n") + len(b"end_header\n")
+    if encoding == "ascii":
+        lines = data[body:].split(b"\n")
+        lines[4] = b"-" + lines[4]  # the first face: -3 0 1 2
+        bad = data[:body] + b"\n".join(lines)
+    else:
+        face = body + 4 * (3 * 4 + 8)  # past the vertex records (three floats and a double)
+        bad = data[:face] + np.int8(-3).tobytes() + data[face + 1 :]
+    with pytest.raises(FormatError, match=r"PLY face record 0: its vertex_indices list has a negative length \(-3\)"):
+        formats.parse(bad, ".ply")
+
+
+@pytest.mark.parametrize("cut", ["truncated", "count"])
+def test_a_broken_binary_stl_with_a_solid_header_is_called_binary(cut):
+    records = np.zeros(4, formats.RECORD)
+    records["corners"] = np.eye(3)
+    data = b"solid part, as some CAD tools head a binary STL".ljust(80) + np.uint32(4).tobytes() + records.tobytes()
+    assert formats.parse(data, ".stl").binary
+    bad = data[:-7] if cut == "truncated" else data[:80] + np.uint32(9).tobytes() + data[84:]
+    with pytest.raises(FormatError, match="binary STL cut short or invalid: its header counts"):
+        formats.parse(bad, ".stl")
+
+
+@pytest.mark.parametrize("encoding", ENCODINGS)
+def test_only_an_end_header_line_ends_the_header(encoding):
+    positions, faces = scan_files.octahedron(noise=0.01)
+    vertex, face = [("x", "float"), ("y", "float"), ("z", "float")], [("vertex_indices", ("list", "uchar", "int"))]
+    elements = [("vertex", vertex, positions.tolist()), ("face", face, [[f] for f in faces.tolist()])]
+    data = scan_files.ply(elements, encoding, comments=("exported by a tool that writes end_header last",))
+    mesh = formats.parse(data, ".ply")
+    np.testing.assert_array_equal(mesh.positions, positions.astype(np.float32))
+    np.testing.assert_array_equal(mesh.corners.reshape(-1, 3), faces)
+    result = smoothed(mesh.positions)
+    out = formats.updated(mesh, result, {"hc_deviation": np.arange(len(positions), dtype=np.float32)})
+    assert b"comment exported by a tool that writes end_header last\n" in out
+    _, values = ply_values(out)
+    np.testing.assert_array_equal(np.stack([values["vertex"][a] for a in "xyz"], axis=1).astype(np.float32), result)
+    np.testing.assert_array_equal(values["vertex"]["hc_deviation"], np.arange(len(positions)))
+
+
+def test_temporary_names_are_short_and_recognised(tmp_path):
+    target = str(tmp_path / ("a" * 246 + ".ply"))  # a 250-character name: valid, with no room to spare
+    first, second = files.temporary_path(target), files.temporary_path(target)
+    assert first != second and os.path.dirname(first) == str(tmp_path)
+    name = os.path.basename(first)
+    assert name.startswith(".hc_smooth-") and name.endswith(".ply") and len(name) < 40
+    assert files.TEMPORARY.match(name).group(1) == str(os.getpid())
+    with open(first, "wb"):  # the folder takes the name
+        pass
+    assert files.TEMPORARY.match(".scan.hc_smooth-123.ply").group(1) == "123"  # the longer names of older runs
+    assert files.TEMPORARY.match(".notes.hc_smooth-abc.ply") is None
+
+
+def test_a_signalling_nan_is_refused_without_a_numpy_warning():
+    """A float32 signalling NaN warns when cast to float64: the readers refuse it as any NaN, quietly."""
+    signalling = np.array([0x7F800001], "<u4").view("<f4")[0]
+    records = np.zeros(2, formats.RECORD)
+    records["corners"][1, 2, 0] = signalling
+    stl = bytes(80) + np.uint32(2).tobytes() + records.tobytes()
+    ply_data = scan_files.ply(
+        [("vertex", [("x", "float"), ("y", "float"), ("z", "float")], [[0, 0, 0]])], "binary_little_endian"
+    )
+    ply_data = ply_data[:-12] + signalling.tobytes() + bytes(8)
+    for data, ext in ((stl, ".stl"), (ply_data, ".ply")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with pytest.raises(FormatError, match="not a finite number"):
+                formats.parse(data, ext)
+
+
+def test_a_property_line_without_a_type_is_refused():
+    with pytest.raises(FormatError, match="PLY header: bad property 'property'"):
+        formats.parse(PLY_HEAD + b"property\nend_header\n0 0 0\n1 0 0\n0 1 0\n", ".ply")
+
+
+@pytest.mark.parametrize("ext", [".ply", ".stl"])
+def test_text_beyond_single_precision_is_refused(ext):
+    """ASCII float properties and ASCII STL are single precision: 1e39 would become inf when smoothed."""
+    if ext == ".ply":
+        data = PLY_HEAD + b"end_header\n0 0 0\n1e39 1 0\n0 1 0\n"
+    else:
+        data = b"solid a\n" + STL_FACET.replace(b"vertex 1 0 0", b"vertex 1e39 0 0") + b"endsolid a\n"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(FormatError, match=r"vertex 1 has a coordinate \(1e\+39\) beyond the single-precision"):
+            formats.parse(data, ext)
+
+
+@pytest.mark.parametrize("length", [2.5, np.nan, np.inf, 1e30])
+def test_a_float_list_length_must_be_a_whole_number(length):
+    head = PLY_HEAD.replace(b"ascii", b"binary_little_endian") + FACE_HEAD.replace(b"uchar", b"float")
+    data = head + bytes(36) + np.float32(length).tobytes() + np.arange(3, dtype="<i4").tobytes()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no 'invalid value encountered in cast' on the way
+        with pytest.raises(FormatError, match="PLY face vertex_indices list length: .* is not a whole number"):
+            formats.parse(data, ".ply")
