@@ -280,6 +280,35 @@ def render_error_figure(
     render_front(filepath, centre_x, width, 1.12, samples=samples, resolution=resolution, percentage=percentage)
 
 
+def figure_scene(samples):
+    """The figures' look on the current scene: key and fill sun lights, a dark background, colours as given
+    (no tone mapping), Cycles on the CPU with ``samples`` samples and denoising, PNG in RGB. Returns it."""
+    scene = bpy.context.scene
+    for name, energy, rotation in (("Key", 3.0, (0.9, 0.2, -0.6)), ("Fill", 1.2, (1.2, -0.3, 0.9))):
+        light = bpy.data.objects.new(name, bpy.data.lights.new(name, "SUN"))
+        light.data.energy = energy
+        light.rotation_euler = rotation
+        scene.collection.objects.link(light)
+    world = bpy.data.worlds.new("World")
+    world.use_nodes = True
+    background = world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (0.045, 0.047, 0.052, 1.0)
+    background.inputs["Strength"].default_value = 1.0
+    scene.world = world
+    scene.view_settings.view_transform = "Standard"  # the colour map's colours as given, no tone mapping
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = True
+    # Direct light and one diffuse bounce are all these pictures need; deeper paths only cost time.
+    scene.cycles.max_bounces, scene.cycles.diffuse_bounces, scene.cycles.glossy_bounces = 2, 1, 1
+    scene.cycles.transmission_bounces = scene.cycles.volume_bounces = 0
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.image_settings.color_mode = "RGB"
+    scene.render.dither_intensity = 0.0  # dither noise would double the PNG's size
+    return scene
+
+
 def render_front(filepath, centre_x, width, top, *, samples=8, resolution=(1300, 471), percentage=100):
     """Render the scene from the front (looking along +Y) with an orthographic camera ``width`` wide, centred
     on ``centre_x`` with its top edge at height ``top``, under the figures' key and fill lights and dark
@@ -292,32 +321,10 @@ def render_front(filepath, centre_x, width, top, *, samples=8, resolution=(1300,
     camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
     scene.collection.objects.link(camera)
     scene.camera = camera
-    for name, energy, rotation in (("Key", 3.0, (0.9, 0.2, -0.6)), ("Fill", 1.2, (1.2, -0.3, 0.9))):
-        light = bpy.data.objects.new(name, bpy.data.lights.new(name, "SUN"))
-        light.data.energy = energy
-        light.rotation_euler = rotation
-        scene.collection.objects.link(light)
-
-    world = bpy.data.worlds.new("World")
-    world.use_nodes = True
-    background = world.node_tree.nodes["Background"]
-    background.inputs["Color"].default_value = (0.045, 0.047, 0.052, 1.0)
-    background.inputs["Strength"].default_value = 1.0
-    scene.world = world
-    scene.view_settings.view_transform = "Standard"  # the colour map's colours as given, no tone mapping
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = samples
-    scene.cycles.use_denoising = True
-    # Direct light and one diffuse bounce are all this picture needs; deeper paths only cost time.
-    scene.cycles.max_bounces, scene.cycles.diffuse_bounces, scene.cycles.glossy_bounces = 2, 1, 1
-    scene.cycles.transmission_bounces = scene.cycles.volume_bounces = 0
+    figure_scene(samples)
     scene.render.resolution_x, scene.render.resolution_y = resolution
     scene.render.resolution_percentage = percentage
-    scene.render.image_settings.file_format = "PNG"
-    scene.render.image_settings.color_mode = "RGB"
     scene.render.image_settings.compression = 100
-    scene.render.dither_intensity = 0.0  # dither noise would double the PNG's size
     for field in (
         "date",
         "time",

@@ -194,29 +194,10 @@ def _mesh_object(name, points, triangles, uvs, material):
 
 
 def _scene(samples):
-    """Cycles on the CPU, the figures' key and fill lights, dark background, no stamps (demo/scene_setup.py)."""
-    import bpy
+    """The figures' look (demo/scene_setup.figure_scene), no stamps."""
+    import scene_setup
 
-    scene = bpy.context.scene
-    for name, energy, rotation in (("Key", 3.0, (0.9, 0.2, -0.6)), ("Fill", 1.2, (1.2, -0.3, 0.9))):
-        light = bpy.data.objects.new(name, bpy.data.lights.new(name, "SUN"))
-        light.data.energy = energy
-        light.rotation_euler = rotation
-        scene.collection.objects.link(light)
-    world = bpy.data.worlds.new("World")
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.045, 0.047, 0.052, 1.0)
-    scene.world = world
-    scene.view_settings.view_transform = "Standard"
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = samples
-    scene.cycles.use_denoising = True
-    scene.cycles.max_bounces, scene.cycles.diffuse_bounces, scene.cycles.glossy_bounces = 2, 1, 1
-    scene.cycles.transmission_bounces = scene.cycles.volume_bounces = 0
-    scene.render.image_settings.file_format = "PNG"
-    scene.render.image_settings.color_mode = "RGB"
-    scene.render.dither_intensity = 0.0
+    scene = scene_setup.figure_scene(samples)
     scene.render.use_stamp = False
     return scene
 
