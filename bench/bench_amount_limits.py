@@ -1,4 +1,4 @@
-"""How far can any automatic amount go on the light-noise mesh cells? (bench/README.md, "Mesh quality on real scans")
+"""How far can any automatic amount go on the light-noise mesh cells? (bench/README.md, "Other benchmarks")
 
 For each cell of bench_quality.py's benchmark: the best peer at its defaults (Blender's modifiers left
 out), HC Smooth's default, and along HC paths with alpha 0 (beta 0.6, 0.75, 0.9; 1 to --iterations

@@ -1,8 +1,8 @@
-"""The point-cloud figure of the README (docs/images/point_clouds.png): a real scan sampled to points,
+"""The point-cloud figure of docs/point_clouds.md (docs/images/point_clouds.png): a real scan sampled to points,
 Gaussian noise, then CGAL jet smoothing and HC Smooth (core.smooth_point_cloud at its defaults), each
 cloud coloured by its distance to the clean surface on one shared scale.
 
-    .envs/bench/bin/python bench/figure_points.py                 # the README's figure
+    .envs/bench/bin/python bench/figure_points.py                 # the figure of docs/point_clouds.md
     .envs/bench/bin/python bench/figure_points.py --object cow --sigma 0.01 --output /tmp/cow.png
 
 Input: the pymeshlab wheel's Stanford bunny (a closed scan), area-uniform samples (bench_quality_inputs.py),

@@ -9,7 +9,7 @@ towards the centre of their neighbours, so irregular scans drift and open border
 result's unit vertex normal. The vertex then lies on the smoothed surface's tangent plane at the place
 the smoother took it to, over its input. It runs once, after the iterations: projecting every
 iteration's move instead leaves the mesh as irregular as the noise made it, and the umbrella's normal
-component on an irregular mesh brings bumps back (bench/README.md, "Keep in Place").
+component on an irregular mesh brings bumps back (bench/bench_keep_in_place.py, docs/keep_in_place.md).
 
 Where the input's own layout on the surface is folded (noise along the surface larger than the edges),
 or large moves along turning normals would fold it, a triangle kept in place would overlap its

@@ -4,7 +4,7 @@ as the operator reports it (Cycles, headless bpy).
 
     .envs/bpy45/bin/python docs/render_deviation_map_picture.py --scan PATH [--output docs/images/deviation_map.png]
 
-``--scan``: an OBJ or PLY scan (the picture in the README: the pymeshlab wheel's bunny.obj, a range scan
+``--scan``: an OBJ or PLY scan (the picture of docs/deviation_map.md: the pymeshlab wheel's bunny.obj, a range scan
 merged into one closed mesh, ``<site-packages>/pymeshlab/tests/sample_meshes/bunny.obj``); without it, a
 closed subdivided Suzanne. Gaussian noise of NOISE times the bounding-box diagonal is added along the
 normals. The right panel is what the operator wrote: the mesh's ``hc_deviation_color`` attribute, rendered

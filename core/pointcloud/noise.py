@@ -164,7 +164,7 @@ def estimate_noise(index):
 # reach has to grow with the noise over the spacing, r, so T grows as r^2, and alpha = PULL / T
 # keeps the pull from cancelling the extra steps. Too much reach on a nearly clean, sparse sample
 # flattens the surface between the samples and rounds sharp edges; too little leaves noise. Sweeps
-# of T with bench/bench_points.py (bench/results/2026-11-23-point-clouds.md, "How the amount of
+# of T with bench/bench_points.py (bench/results/2026-11-23-point-clouds.md at commit 555017f, "How the amount of
 # smoothing is chosen") put the best T between 300 r^2 and 1200 r^2 on smooth shapes and lower on
 # sharp edges; the rule takes the low end: too few steps leave some noise, too many distort the shape.
 # The rule: T = STEPS_PER_RATIO_SQUARED r^2 within [MIN_STEPS, MAX_STEPS], alpha = PULL / T.

@@ -20,7 +20,7 @@ It works on distinct points (``NeighbourIndex`` rows) and uses one number per po
   |pq| <= ``spacing_factor`` x min(h(p), h(q)). The number of neighbours per point therefore follows
   the local density (median 6 on a clean even surface sampling with factor 2, 9 with 2.5, 12 with
   3; a little more on noisy samples; each point proposes at most ``neighbours``: wider
-  neighbourhoods smooth noisy data better, see bench/results/2026-11-23-point-clouds.md), and the
+  neighbourhoods smooth noisy data better, see bench/results/2026-11-23-point-clouds.md at commit 555017f), and the
   min keeps a sparse point from reaching deep into a denser region.
 
 The defaults of ``surface_description_graph`` (both factors 3) are the rule's own; smooth_point_cloud

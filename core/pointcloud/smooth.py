@@ -165,7 +165,7 @@ def smooth_point_cloud(
     either option is used as given (``iterations_per_round`` alone: alpha matched to the total steps;
     ``alpha`` alone: the steps still follow the noise), e.g. ``iterations_per_round=22, alpha=0.01``
     for 66 steps over the default 3 rounds. beta 0.55 and neighbours up to 2.5 local spacings were
-    chosen with bench/bench_points.py (bench/results/2026-11-23-point-clouds.md), as was swapping
+    chosen with bench/bench_points.py (bench/results/2026-11-23-point-clouds.md at commit 555017f), as was swapping
     between rounds rather than after every step as in the paper (nearly the same result for a
     fraction of the swapping).
 

@@ -280,7 +280,7 @@ def _query_by_bits(tree_points, label_code, ask, bound):
 # Below this many askers left after the sample, growing-k queries on the full tree may beat the bit
 # search (a pilot decides). Every search is a single bounded query: once each search after the first
 # is bounded by the best point found so far, a dual-tree traversal per group of askers is slower
-# (bench/results/2026-11-23-point-clouds.md, "Exact EMST of scan lines").
+# (bench/results/2026-11-23-point-clouds.md at commit 555017f, "Exact EMST of scan lines").
 _FEW_ASKERS = 2048
 
 

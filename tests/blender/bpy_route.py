@@ -11,10 +11,12 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 ROUTE = "python scripts/hc_smooth_bpy.py"
-# Every file that shows the route: the README, the two docs, the examples' and the script's docstrings.
+# Every file that shows the route: the README, the docs, the examples' and the script's docstrings.
 DOCUMENTS = (
     ROOT / "README.md",
     ROOT / "docs" / "command_line.md",
+    ROOT / "docs" / "install.md",
+    ROOT / "docs" / "scripts.md",
     ROOT / "docs" / "python_api.md",
     *sorted((ROOT / "examples").glob("*.py")),
     ROOT / "scripts" / "hc_smooth_bpy.py",
