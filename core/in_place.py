@@ -26,6 +26,7 @@ FLAT = 0.1  # ... or whose shadow is under this share of its input's area is fla
 _ROUNDS = 2  # the first rounds halve the kept part of the slide at the corners of the triangles still folded ...
 _HALVED = 0.1  # (not where more than this share of the triangles folds at first: a layout noise folded) ...
 _LAST = 8  # ... later ones take it all back; at most this many rounds
+_FOLDED_LAYOUT = 0.25  # more than this share of the triangles folded at first: every vertex takes its slide back
 _BLOCK = 1 << 16  # triangles per block of the first check: bounds the temporaries
 
 
@@ -61,13 +62,16 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray) 
 
 def unfold(kept, start, result, triangles):
     """Where ``kept`` folds or flattens a triangle, its corners take back part of the slide to ``result``,
-    in place: half of what is left of it for each of the first _ROUNDS rounds the triangle stays folded
-    (where at most _HALVED of the triangles fold at first), then all of it, until no triangle with a
-    corner off the result is folded (at most _LAST rounds; then the corners of those still folded take all
-    of it). Shadows are read along the smoothed triangle's normal: a kept triangle is folded where its
+    in place. Shadows are read along the smoothed triangle's normal: a kept triangle is folded where its
     shadow is not positive, flattened where it is under FOLDED times the input's shadow or FLAT times the
-    input's area. Later rounds read only the triangles at the corners just moved. Shadows in single
-    precision, blocks of triangles on threads (core.parallel)."""
+    input's area.
+
+    Where at most _HALVED of the triangles fold at first, the corners of a folded triangle take back half
+    of what is left of the slide for each of the first _ROUNDS rounds it stays folded, then all of it; where
+    more do, all of it at once; where more than _FOLDED_LAYOUT do (noise folded the layout nearly
+    everywhere), every vertex does. Rounds go on until no triangle with a corner off the result is folded,
+    _LAST at most (the corners of those still folded then take all of it), each reading only the triangles
+    at the corners just moved. Shadows in single precision, blocks of triangles on threads."""
     t = len(triangles)
     corners_of = [np.ascontiguousarray(triangles[:, k]) for k in range(3)]
     facing, least = np.empty((3, t), dtype=np.float32), np.empty(t, dtype=np.float32)
@@ -87,6 +91,9 @@ def unfold(kept, start, result, triangles):
         else:
             folded = np.flatnonzero(folded)
             halving = folded.size <= _HALVED * t
+            if folded.size > _FOLDED_LAYOUT * t:  # noise folded the layout nearly everywhere: nothing to keep
+                kept[:] = result
+                return
         if folded.size == 0:
             return
         moved = np.zeros(len(kept), dtype=bool)
