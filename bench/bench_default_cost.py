@@ -1,6 +1,7 @@
 """What the default costs on a big scan: core.smooth_mesh with the Automatic Amount, as the core's
 defaults and as the add-on runs it (``weld=True``), against the fixed 10-iteration HC
-run (alpha 0.1, beta 0.6), on the same noisy mesh, in the same process.
+run (alpha 0.1, beta 0.6), on the same noisy mesh, in the same process; and the default with Keep in
+Place off (``keep_in_place=False``), whose difference is what keeping every move across the surface costs.
 
 Time: median wall time of ``--repeat`` runs each, alternating. Memory: the peak of what NumPy and SciPy
 allocate during one more run of each (tracemalloc, which NumPy reports its buffers to, and which slows
@@ -169,6 +170,7 @@ def main():
         "fixed: alpha 0.1, beta 0.6, 10 iterations": dict(FIXED),
         "default: Automatic Amount": {},
         "add-on default: weld, border curve": dict(ADDON),
+        "default, sliding: Keep in Place off": {"keep_in_place": False},
     }
     figures = {label: [] for label in runs}
     for _ in range(args.repeat):
@@ -206,6 +208,10 @@ def main():
                 f"| {label} | {report.iterations} | {seconds:.2f} s | {peaks[label] / 2**30:.2f} GiB | "
                 f"{seconds / fixed_time:.2f}x | {peaks[label] / peaks[fixed_label]:.2f}x | {gap:.2f} s |"
             )
+        kept = statistics.median(row[0] for row in figures["default: Automatic Amount"])
+        sliding = statistics.median(row[0] for row in figures["default, sliding: Keep in Place off"])
+        out()
+        out(f"Keep in Place costs {kept - sliding:+.2f} s, {(kept - sliding) / kept:+.1%} of the default's run.")
         if errors:
             out()
             out("RMS distance to the clean surface, % of the diagonal:")
