@@ -351,15 +351,14 @@ class MeshSmoother:
         ``measuring`` holds the input's measure: the Automatic Amount) within the deviation limit, give the
         parts the run collapsed their input back (with the ``noise`` core.mesh_noise found: the Automatic
         Amount; core.collapse), and the parts whose shape it took away too, read from the residual as
-        ``residual`` says ("correlation": HC's rule, "move": Keep Sharp Edges'), and set ``result`` in the
+        ``residual`` says ("correlation": HC's rules, "move": Keep Sharp Edges'), and set ``result`` in the
         caller's numbering; returns (the largest offset, the parts given back), yielding ``progress``
-        between the restore's slices. With Keep in Place the parts are judged on the run's own moves,
-        before they are kept across the surface: the same parts are given back either way."""
+        between the restore's slices and the rules. With Keep in Place the parts are judged on the run's own
+        moves, before they are kept across the surface (and before the volume restore)."""
         offset, parts = 0.0, None
         if self.in_place and ran > 0:
             if noise is not None:
-                parts = self._held_parts(result, noise, residual)
-                yield progress
+                parts = yield from self._held_parts(result, noise, residual, progress)
             result = project_in_place(self.positions, result, self.faces)
         if measuring is not None and ran > 0:
             limited = volume.NOISE_OFFSETS * amount.sigma
@@ -367,7 +366,7 @@ class MeshSmoother:
             if np.any(limit):  # the offset keeps to the limit too
                 _within(result, self.positions, limit)
         if parts is None and noise is not None and ran > 0:
-            parts = self._held_parts(result, noise, residual)
+            parts = yield from self._held_parts(result, noise, residual, progress)
         held = 0 if parts is None else int(np.count_nonzero(parts))
         if held:
             back = parts[noise.part_of_vertex]
@@ -375,11 +374,12 @@ class MeshSmoother:
         self.result = result if self.welding is None else self.welding.scatter(result)
         return offset, held
 
-    def _held_parts(self, result, noise, residual):
+    def _held_parts(self, result, noise, residual, progress):
         """(parts,) bool: the parts core.collapse gives their input back: collapsed, moved by more than
         their noise, or (``residual`` "correlation": HC's) their shape taken away with the noise, as the
-        residual's neighbour correlation reads it."""
+        residual's neighbour correlation reads it; yields ``progress`` between the rules."""
         parts = collapse.collapsed(self.positions, result, noise.part_of_vertex, noise.sigma)
+        yield progress  # a second or so each on millions of vertices: a cancel waits for one at most
         if residual == "correlation" and self.faces is not None:
             parts |= collapse.smooth_residual(
                 self.positions, result, self.faces, self.surface_operator, noise.part_of_vertex, parts.size
