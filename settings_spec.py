@@ -94,6 +94,12 @@ def automatic(values, given=()):
     return bool(smoother and values["auto_amount"]) and not set(SWITCHES_OFF_THE_AMOUNT) & set(given)
 
 
+def keeps_in_place(values, given=()):
+    """Whether Keep in Place applies: HC's Automatic Amount runs (not Keep Sharp Edges', not set numbers).
+    The checkbox then decides; where it does not apply the paper's moves run."""
+    return automatic(values, given) and not values["keep_sharp_edges"]
+
+
 def values_of(props, settings):
     """{name: value} of ``settings`` on ``props`` (an operator's properties, the scene settings, a snapshot):
     what the declared rules (``automatic``, each setting's ``active`` and ``text``) read."""
@@ -197,7 +203,7 @@ KEEP_IN_PLACE = Setting(
     help="let vertices slide along the surface as the paper's HC moves them (textures, UVs and outlines move "
     "with them); by default the Automatic Amount moves every vertex only across the surface",
     argument="keep_in_place",
-    active=lambda values: automatic(values) and not values.get("keep_sharp_edges", False),
+    active=lambda values: keeps_in_place(values),
 )
 ALPHA = Setting(
     "alpha",

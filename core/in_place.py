@@ -21,12 +21,17 @@ import numpy as np
 from . import parallel
 from .volume import vertex_normals
 
-FOLDED = 0.25  # a kept triangle whose shadow on the smoothed surface is under this share of its input's ...
-FLAT = 0.1  # ... or whose shadow is under this share of its input's area is flattened
-_ROUNDS = 2  # the first rounds halve the kept part of the slide at the corners of the triangles still folded ...
-_HALVED = 0.1  # (not where more than this share of the triangles folds at first: a layout noise folded) ...
-_LAST = 8  # ... later ones take it all back; at most this many rounds
-_FOLDED_LAYOUT = 0.25  # more than this share of the triangles folded at first: every vertex takes its slide back
+# A kept triangle is flattened where its shadow on the smoothed surface is under FOLDED times its input's
+# shadow, or under FLAT times its input's area (folded where the shadow is not positive).
+FOLDED = 0.25
+FLAT = 0.1
+# How the corners of such triangles take their slide back: half of what is left for each of the first
+# _ROUNDS rounds, where at most _HALVED of the triangles fold at first; all of it at once where more do;
+# every vertex at once where more than _FOLDED_LAYOUT do (noise folded the layout). _LAST rounds at most.
+_ROUNDS = 2
+_HALVED = 0.1
+_FOLDED_LAYOUT = 0.25
+_LAST = 8
 _BLOCK = 1 << 16  # triangles per block of the first check: bounds the temporaries
 
 

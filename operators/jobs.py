@@ -62,8 +62,8 @@ def core_options(props, given=frozenset()):
         if setting.argument is None:
             continue
         value = values[setting.name]
-        if setting is settings_spec.KEEP_IN_PLACE:  # applies where HC's Automatic Amount runs, else off
-            value = core.AUTO if value and automatic else False
+        if setting is settings_spec.KEEP_IN_PLACE:  # on where it applies (core then decides as "auto"), else off
+            value = core.AUTO if value and settings_spec.keeps_in_place(values, given) else False
         elif automatic and setting.chosen and setting.name not in given:
             value = core.AUTO
         elif setting.kind == "enum":
