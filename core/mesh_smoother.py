@@ -35,7 +35,7 @@ from .adjacency import Umbrella, umbrella_operator
 from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
 from .in_place import keep_in_place as project_in_place
-from .mesh_amount import PATCH_FROM, AmountChooser, MeshAmount
+from .mesh_amount import PATCH_FROM, WORK_BUDGET, AmountChooser, MeshAmount
 from .mesh_noise import noise_steps
 from .metrics import fan_triangles
 from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
@@ -171,6 +171,8 @@ class MeshSmoother:
         keep_sharp_edges: bool = False,
         sharpness_angle: float = DEFAULT_SHARPNESS_ANGLE,
         keep_in_place: bool | str = AUTO,
+        work_budget: float = WORK_BUDGET,
+        hold_parts: bool = True,
     ) -> None:
         self.positions = start = check_positions(positions)
         n = start.shape[0]
@@ -211,6 +213,7 @@ class MeshSmoother:
                 "or border='free'"
             )
         self.operator, self.weld = operator, bool(weld)
+        self.work_budget, self.hold_parts = work_budget, bool(hold_parts)
         # Every number checked now, as core.Smoothing checks them.
         check_choice(mode, "mode", MODES)
         self.alpha = check_unit_interval(self.alpha, "alpha")  # float: a Fraction reports as the number ran
@@ -301,7 +304,13 @@ class MeshSmoother:
         if restoring:  # what the restore needs of the input, on another thread while the choice runs on one
             measuring = parallel.in_background(lambda: volume.measure_before(self.positions, self.faces, self.surface))
         if self.automatic:
-            chooser = AmountChooser(self.positions, operator=self.surface_operator, beta=self.beta, fixed=self.fixed)
+            chooser = AmountChooser(
+                self.positions,
+                operator=self.surface_operator,
+                beta=self.beta,
+                fixed=self.fixed,
+                work_budget=self.work_budget,
+            )
             if self.beta_given:
                 chooser.fine_beta = None  # the caller's beta is used as given
             share = CHOOSING_SHARE if self.operator.n_vertices < PATCH_FROM else PATCH_CHOOSING_SHARE
@@ -357,7 +366,7 @@ class MeshSmoother:
         moves, before they are kept across the surface (and before the volume restore)."""
         offset, parts = 0.0, None
         if self.in_place and ran > 0:
-            if noise is not None:
+            if noise is not None and self.hold_parts:
                 parts = yield from self._held_parts(result, noise, residual, progress)
             result = project_in_place(self.positions, result, self.faces)
         if measuring is not None and ran > 0:
@@ -365,7 +374,7 @@ class MeshSmoother:
             result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), progress)
             if np.any(limit):  # the offset keeps to the limit too
                 _within(result, self.positions, limit)
-        if parts is None and noise is not None and ran > 0:
+        if parts is None and noise is not None and ran > 0 and self.hold_parts:
             parts = yield from self._held_parts(result, noise, residual, progress)
         held = 0 if parts is None else int(np.count_nonzero(parts))
         if held:
@@ -550,6 +559,11 @@ def smooth_mesh(
         core.in_place): textures, UVs and open outlines stay where they were. Needs faces. ``"auto"``: on
         with the Automatic Amount (HC's, where faces are given), off when numbers are given (the paper's
         algorithm, bit for bit).
+    work_budget : float
+        The Automatic Amount's most vertex-iterations (``core.mesh_amount.WORK_BUDGET``; ``math.inf``: no cut).
+    hold_parts : bool
+        The Automatic Amount gives parts whose shape the run took away their input back (core.collapse);
+        False: never (for measuring what that rule holds).
     return_report : bool
         Also return a MeshReport (what ran, what was chosen).
     progress : callable, optional
