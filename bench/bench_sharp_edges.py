@@ -50,35 +50,29 @@ crease lines).
 ``--organic`` smooths organic scans (no sharp edges) with the option on and reports it beside HC's
 default and the best HC setting.
 
-    python bench/bench_sharp_edges.py                                   # both sets (~10 min)
-    python bench/bench_sharp_edges.py --sets tuning --parts cube --sigmas 0.005 --kinds normal
-    python bench/bench_sharp_edges.py --organic bunny,cow --sigmas 0.001,0.0025,0.005 --sets none
-    python bench/bench_sharp_edges.py --sets none --cost 250k,1M       # time on noisy tori (~4 min)
-    python bench/bench_sharp_edges.py --bounds --sigmas 0.005           # with perfect normals (~1 min)
+    python bench/run.py sharp_edges                                   # both sets (~10 min)
+    python bench/run.py sharp_edges --sets tuning --parts cube --sigmas 0.005 --kinds normal
+    python bench/run.py sharp_edges --organic bunny,cow --sigmas 0.001,0.0025,0.005 --sets none
+    python bench/run.py sharp_edges --sets none --cost 250k,1M       # time on noisy tori (~4 min)
+    python bench/run.py sharp_edges --bounds --sigmas 0.005           # with perfect normals (~1 min)
 
 The report goes to stdout and bench/results/; the numbers to a JSON file beside it.
 """
 
-import argparse
-import json
 import math
-import pathlib
 import sys
 import time
 import zlib
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
-import bench_default_heldout as heldout  # noqa: E402
-import bench_quality as quality  # noqa: E402
-import bench_quality_inputs as inputs  # noqa: E402
-import sharp_parts  # noqa: E402
-from report import Report  # noqa: E402
-
-import core  # noqa: E402
-from core import sharp_edges  # noqa: E402
+import core
+from bench import bench_default_heldout as heldout
+from bench import bench_quality as quality
+from bench import bench_quality_inputs as inputs
+from bench import sharp_parts
+from bench.common import Parameter, counts
+from core import sharp_edges
 
 SETS = {"tuning": ("cube", "bevelled_box", "holed_cylinder"), "heldout": ("plate", "fandisk")}
 SIGMAS = "0.001,0.0025,0.005,0.01"
@@ -443,11 +437,8 @@ def targets(cells, out, name):
 
 
 def report(record, out):
-    out("# Keep Sharp Edges on sharp-edged parts (bench_sharp_edges.py)\n")
-    out(
-        f"Command: `{record['command']}`; default angle {record['angle']:g}°, "
-        f"{time.strftime('%Y-%m-%d')}, load average {record['load']}."
-    )
+    out("# Keep Sharp Edges on sharp-edged parts\n")
+    out(f"Default angle {record['angle']:g}°, load average {record['load']}.")
     for set_name in ("tuning", "heldout"):
         cells = [c for c in record["cells"] if c["set"] == set_name]
         if not cells:
@@ -518,7 +509,7 @@ def timed_with_gap(function, *args, **kwargs):
 
 
 def cost(sizes, out):
-    import meshes
+    from bench import meshes
 
     out("\n## Cost on big meshes\n")
     out("| vertices | 10 HC iterations (s) | Keep Sharp Edges, Automatic Amount (s) | steps | s per step | gap (s) |")
@@ -533,22 +524,25 @@ def cost(sizes, out):
         out(f"| {len(vertices):,} | {hc:.1f} | {ours:.1f} | {steps} | {ours / max(steps, 1):.1f} | {gap:.2f} |")
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--sets", default="tuning,heldout", help="tuning, heldout, or none")
-    parser.add_argument("--parts", default=None, help="only these parts of the sets")
-    parser.add_argument("--sigmas", default=SIGMAS)
-    parser.add_argument("--kinds", default="normal,iso")
-    parser.add_argument("--organic", default="", help="organic scans to run with the option on, e.g. bunny")
-    parser.add_argument("--cost", default="", help="torus sizes to time, e.g. 250k,1M")
-    parser.add_argument("--bounds", action="store_true", help="with perfect normals, instead of the peers")
-    parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args()
+PARAMETERS = (
+    Parameter("sets", "tuning,heldout", "tuning, heldout, or none"),
+    Parameter("parts", "", "only these parts of the sets"),
+    Parameter("sigmas", SIGMAS),
+    Parameter("kinds", "normal,iso"),
+    Parameter("organic", "", "organic scans to run with the option on, e.g. bunny"),
+    Parameter("cost", "", "torus sizes to time, e.g. 250k,1M", counts),
+    Parameter("bounds", False, "with perfect normals, instead of the peers"),
+    Parameter("no_peers", False, "ours alone"),
+    Parameter("seed", 0),
+)
+QUICK = {"sets": "tuning", "parts": "holed_cylinder", "sigmas": "0.005", "kinds": "iso", "cost": "5k", "no_peers": True}
+
+
+def run(args, out):
     sigmas = inputs.parse_list(args.sigmas, float)
     kinds = inputs.parse_list(args.kinds)
-    only = set(inputs.parse_list(args.parts)) if args.parts else None
+    only = set(inputs.parse_list(args.parts)) or None
     record = {
-        "command": "python bench/bench_sharp_edges.py " + " ".join(sys.argv[1:]),
         "angle": math.degrees(sharp_edges.DEFAULT_SHARPNESS_ANGLE),
         "load": " ".join(f"{x:.1f}" for x in __import__("os").getloadavg()),
         "cells": [],
@@ -565,7 +559,9 @@ def main():
                     if args.bounds:
                         record["bounds"].append(bounds_cell(name, set_name, kind, sigma, args.seed, cache))
                         continue
-                    record["cells"].append(measure_cell(name, set_name, kind, sigma, args.seed, cache))
+                    record["cells"].append(
+                        measure_cell(name, set_name, kind, sigma, args.seed, cache, peers=not args.no_peers)
+                    )
                     c = record["cells"][-1]
                     print(
                         f"  {name} {kind} {sigma:g}: ours {pct(c['ours']['rms'])}, two-step "
@@ -577,16 +573,7 @@ def main():
         for kind in kinds:
             for sigma in sigmas:
                 record["organic"].append(measure_cell(name, "organic", kind, sigma, args.seed, cache, peers=False))
-    with Report("bench_sharp_edges") as out:
-        report(record, out)
-        if args.cost:
-            sizes = [
-                int(float(x.rstrip("kKmM")) * (1e6 if x[-1] in "mM" else 1e3 if x[-1] in "kK" else 1))
-                for x in inputs.parse_list(args.cost)
-            ]
-            cost(sizes, out)
-        out.sibling(".json").write_text(json.dumps(record, indent=1))
-
-
-if __name__ == "__main__":
-    main()
+    report(record, out)
+    if args.cost:
+        cost(args.cost, out)
+    return record

@@ -5,9 +5,9 @@ import warnings
 
 import numpy as np
 import pytest
-from primitives import grid, ico_sphere
 
 import core
+from bench.primitives import grid, ico_sphere
 from core.in_place import keep_in_place
 from core.volume import vertex_normals
 

@@ -305,7 +305,7 @@ def test_patches_estimate_the_trace_and_the_amount_of_the_whole_mesh(monkeypatch
 def test_sigma_is_capped_by_the_robust_estimate_on_coarse_meshes():
     """On Blender's cone (33 vertices) with light noise GCV reads the shape as noise (~4x the truth); the
     amount's sigma is at most ROBUST_SIGMAS times core.mesh_noise's estimate, within 2x of the truth."""
-    from primitives import PRIMITIVES, with_noise
+    from bench.primitives import PRIMITIVES, with_noise
 
     cone, sigma = with_noise(PRIMITIVES["cone_ngon"](), 0.1, "isotropic")
     chooser = core.AmountChooser(cone.positions, cone.edges)

@@ -5,11 +5,11 @@ import warnings
 
 import numpy as np
 import pytest
-from primitives import CAD, PRIMITIVES, TINY, joined, moved, subdivided_cube, with_noise
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 import core
+from bench.primitives import CAD, PRIMITIVES, TINY, joined, moved, subdivided_cube, with_noise
 
 CLEAN = {**PRIMITIVES, **CAD, **TINY}
 

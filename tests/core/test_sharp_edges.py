@@ -4,9 +4,9 @@ import math
 
 import numpy as np
 import pytest
-from primitives import CAD, PRIMITIVES, TINY
 
 import core
+from bench.primitives import CAD, PRIMITIVES, TINY
 from core import sharp_edges
 from core.sharp_edges import FaceRings, SharpSmoothing, face_normals, filter_normals, fit_vertices, sharp_smooth
 from core.slices import to_end
