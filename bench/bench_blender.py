@@ -157,7 +157,6 @@ def restore(obj, points):
     obj.data.update()
 
 
-PYTHON = "bpy"
 PARAMETERS = (
     Parameter("size", 1000, "grid subdivisions per side"),
     Parameter("torus", "1M", "vertices of the closed triangle tori (0 skips them)", count),

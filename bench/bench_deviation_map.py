@@ -53,7 +53,6 @@ def alternating(runs, repeats, setup):
     return {name: statistics.median(values) for name, values in times.items()}
 
 
-PYTHON = "bpy"
 PARAMETERS = (Parameter("vertices", "1M", "torus vertices, e.g. 1M, 250k", count), repeats(5))
 QUICK = {"vertices": "2k", "repeats": 1}
 

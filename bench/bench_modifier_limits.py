@@ -47,7 +47,6 @@ def evaluation_seconds(obj, repeats):
     return statistics.median(times)
 
 
-PYTHON = "bpy"
 PARAMETERS = (
     sizes("10k,100k", "torus vertex counts, comma-separated"),
     Parameter("iterations", 200, "iterations per timed evaluation"),

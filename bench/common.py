@@ -7,9 +7,8 @@ A benchmark is a module of bench/ listed in ``bench/run.py`` with
     run(options, out)  the work: ``options`` the parsed parameters, ``out`` the Report (bench/report.py);
                 returns its rows (``out.rows`` when it wrote its tables with ``out.table``), which the
                 runner writes as JSON beside the report
-and optionally REPORT (the report's name, default the module's), PYTHON ("bpy": it runs in a Python
-with Blender's bpy module, .envs/bpy45 or .envs/bpy52; default "bench": .envs/bench) and
-``report_name(options)`` when some options write another report.
+and optionally ``report_name(options)`` when some options write a report of another name than the
+module's. Which Python runs it: bench/run.py (IN_BLENDER).
 """
 
 import pathlib

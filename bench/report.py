@@ -68,6 +68,11 @@ class Table:
         self.report.rows.append(dict(zip(self.columns, cells)))
 
 
+def read_rows(path):
+    """What the JSON file beside the report at ``path`` holds (the rows its benchmark returned)."""
+    return json.loads(pathlib.Path(path).with_suffix(".json").read_text(encoding="utf-8"))
+
+
 def _plain(value):
     """NumPy scalars and arrays as JSON numbers and lists."""
     return value.tolist() if hasattr(value, "tolist") else str(value)

@@ -4,13 +4,12 @@ report to bench/results/ (``--output DIR`` elsewhere); ``python bench/run.py`` l
 
 Every benchmark takes ``--quick`` (its smoke run: small sizes, one repeat, written to build/bench-quick/
 unless ``--output`` says otherwise) and ``--output``; its own options are declared in its module
-(bench/common.py says how). Benchmarks that drive Blender (PYTHON = "bpy") run in .envs/bpy45 or
+(bench/common.py says how). Benchmarks that drive Blender (IN_BLENDER) run in .envs/bpy45 or
 .envs/bpy52, the others in .envs/bench (bench/requirements.txt); bench/README.md has the commands.
 """
 
 import argparse
 import importlib
-import json
 import pathlib
 import platform
 import sys
@@ -27,6 +26,7 @@ from bench import report as reports  # noqa: E402 (after the path above)
 # Name on the command line -> module of bench/.
 BENCHMARKS = {
     "speed": "bench_speed",
+    "speed_blender": "bench_speed_blender",
     "core": "bench_core",
     "blender": "bench_blender",
     "modifier_limits": "bench_modifier_limits",
@@ -44,6 +44,9 @@ BENCHMARKS = {
     "points": "bench_points",
     "quality_points": "bench_quality_points",
 }
+# The benchmarks that drive Blender: they run in a Python with the bpy module (.envs/bpy45 or .envs/bpy52), the
+# others in .envs/bench (bench/requirements.txt).
+IN_BLENDER = frozenset({"blender", "modifier_limits", "deviation_map", "speed_blender"})
 QUICK_OUTPUT = ROOT / "build" / "bench-quick"
 PYTHONS = {"bench": ROOT / ".envs" / "bench" / "bin" / "python", "bpy": ROOT / ".envs" / "bpy45" / "bin" / "python"}
 
@@ -55,9 +58,9 @@ def load(name):
     return importlib.import_module(f"bench.{BENCHMARKS[name]}")
 
 
-def python_for(module):
-    """The interpreter a benchmark module runs in (PYTHONS)."""
-    return PYTHONS[getattr(module, "PYTHON", "bench")]
+def python_for(name):
+    """The interpreter benchmark ``name`` runs in (PYTHONS)."""
+    return PYTHONS["bpy" if name in IN_BLENDER else "bench"]
 
 
 def parser_for(name, module):
@@ -112,11 +115,6 @@ def run(name, argv):
     return out.path
 
 
-def as_json(path):
-    """What a report's JSON file holds (the rows its benchmark returned)."""
-    return json.loads(pathlib.Path(path).with_suffix(".json").read_text(encoding="utf-8"))
-
-
 def machine():
     return f"{platform.machine()}, {platform.python_implementation()} {platform.python_version()}"
 
@@ -134,7 +132,7 @@ def main(argv):
 def entry(argv):
     """Run ``main``; a benchmark that drove Blender leaves through extension_session's door (bpy 4.5 can
     hang in its exit handlers)."""
-    if argv and argv[0] in BENCHMARKS and getattr(load(argv[0]), "PYTHON", "bench") == "bpy":
+    if argv and argv[0] in IN_BLENDER:
         from scripts.extension_session import run_and_exit
 
         run_and_exit(lambda: sys.exit(main(argv)))
