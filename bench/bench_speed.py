@@ -68,7 +68,7 @@ def blender_rows(size, repeats, environment):
         command = [str(python), str(ROOT / "bench" / "run.py"), "speed_blender", "--sizes", str(size)]
         command += ["--repeats", str(repeats), "--output", folder]
         subprocess.run(command, check=True, capture_output=True, timeout=3600)
-        (path,) = pathlib.Path(folder).glob("bench_speed_blender-*.md")
+        (path,) = pathlib.Path(folder).glob("bench_speed_blender_*-*.md")
         return report.read_rows(path)
 
 

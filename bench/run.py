@@ -109,6 +109,9 @@ def run(name, argv):
     module = load(name)
     options = parse(name, module, argv)
     report_name = module.report_name(options) if hasattr(module, "report_name") else module.__name__.split(".")[-1]
+    if name in IN_BLENDER:  # one latest report per Blender
+        major, minor = sys.modules["bpy"].app.version[:2]
+        report_name += f"_{major}.{minor}"
     with reports.Report(report_name, options.output) as out:
         out(f"`{command_line(name, argv)}`, {time.strftime('%Y-%m-%d %H:%M')}, {machine()}\n")
         out.data = module.run(options, out)
