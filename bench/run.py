@@ -10,6 +10,7 @@ unless ``--output`` says otherwise) and ``--output``; its own options are declar
 
 import argparse
 import importlib
+import os
 import pathlib
 import platform
 import sys
@@ -119,7 +120,11 @@ def run(name, argv):
 
 
 def machine():
-    return f"{platform.machine()}, {platform.python_implementation()} {platform.python_version()}"
+    load = " ".join(f"{x:.1f}" for x in os.getloadavg())
+    return (
+        f"{platform.machine()}, {os.cpu_count()} cores, load average {load} at the start, "
+        f"{platform.python_implementation()} {platform.python_version()}"
+    )
 
 
 def main(argv):
