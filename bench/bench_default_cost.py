@@ -55,8 +55,9 @@ def peak_of(function):
     return peak, result
 
 
-def smoothed(noisy, edges, faces, options, budget=mesh_amount.WORK_BUDGET):
-    """(seconds, positions, report, longest gap) of one core.MeshSmoother run, construction included."""
+def smoothed(noisy, edges, faces, options, budget=None):
+    """(seconds, positions, report, longest gap) of one core.MeshSmoother run, construction included (``budget``:
+    the work budget, None: core's)."""
     start = last = time.perf_counter()
     run = core.MeshSmoother(noisy, edges, faces=faces, work_budget=budget, **options)
     gap = 0.0

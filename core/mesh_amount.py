@@ -229,8 +229,8 @@ def choose_amount(
     beta: float = 0.6,
     fixed: ArrayLike | None = None,
     operator: Umbrella | None = None,
-    work_budget: float = WORK_BUDGET,
-    patch_from: int = PATCH_FROM,
+    work_budget: float | None = None,
+    patch_from: int | None = None,
 ) -> MeshAmount:
     """The HC amount (alpha, iterations) for a noisy mesh at the given beta: see the module docstring.
 
@@ -246,10 +246,11 @@ def choose_amount(
         Vertices that never move.
     operator : Umbrella, optional
         A prebuilt ``umbrella_operator``.
-    work_budget : float, default WORK_BUDGET
-        The most vertex-iterations the chosen run may do (``math.inf``: no cut).
-    patch_from : int, default PATCH_FROM
-        From this many movable vertices up the choice runs on patches, below on the whole mesh.
+    work_budget : float, optional
+        The most vertex-iterations the chosen run may do (``math.inf``: no cut; None: WORK_BUDGET).
+    patch_from : int, optional
+        From this many movable vertices up the choice runs on patches, below on the whole mesh (None:
+        PATCH_FROM).
 
     Returns
     -------
@@ -314,8 +315,8 @@ class AmountChooser:
         beta=0.6,
         fixed=None,
         operator=None,
-        work_budget=WORK_BUDGET,
-        patch_from=PATCH_FROM,
+        work_budget=None,
+        patch_from=None,
     ):
         start = check_positions(positions)
         self.beta = check_unit_interval(beta, "beta")
@@ -325,7 +326,8 @@ class AmountChooser:
         elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
             raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
         self.operator = operator
-        self.work_budget, self.patch_from = work_budget, patch_from
+        self.work_budget = WORK_BUDGET if work_budget is None else work_budget
+        self.patch_from = PATCH_FROM if patch_from is None else patch_from
         self.fine_beta = FINE_BETA  # light noise: choose again on steps of this beta (None: never)
         self.amount = None
         self.data = None  # the data run, where it ran on the whole mesh (what result() reads)
@@ -452,7 +454,7 @@ class _Ground:
     the mesh the runs go on (the whole one, or patches of it) and the sample vertices read there."""
 
     @classmethod
-    def made(cls, start, operator, given, patch_from=PATCH_FROM):
+    def made(cls, start, operator, given, patch_from):
         """A generator (yields None between its passes) that returns the _Ground of a mesh."""
         ground = cls()
         ground.noise = yield from noise_steps(start, operator)
@@ -499,9 +501,11 @@ class _Ground:
         return ground
 
 
-def most_iterations(vertices, work_budget=WORK_BUDGET):
-    """The most iterations the work budget allows on a mesh of ``vertices`` vertices (at least one)."""
-    return int(max(1, min(MAX_ITERATIONS, work_budget // max(vertices, 1))))
+def most_iterations(vertices, work_budget=None):
+    """The most iterations the work budget (None: WORK_BUDGET) allows on a mesh of ``vertices`` vertices (at
+    least one)."""
+    budget = WORK_BUDGET if work_budget is None else work_budget
+    return int(max(1, min(MAX_ITERATIONS, budget // max(vertices, 1))))
 
 
 def _patches(operator, fixed_mask, movable):

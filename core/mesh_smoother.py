@@ -35,7 +35,7 @@ from .adjacency import Umbrella, umbrella_operator
 from .borders import BORDERS, apply_border
 from .convergence import ConvergenceWarning
 from .in_place import keep_in_place as project_in_place
-from .mesh_amount import PATCH_FROM, WORK_BUDGET, AmountChooser, MeshAmount
+from .mesh_amount import PATCH_FROM, AmountChooser, MeshAmount
 from .mesh_noise import noise_steps
 from .metrics import fan_triangles
 from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
@@ -171,7 +171,7 @@ class MeshSmoother:
         keep_sharp_edges: bool = False,
         sharpness_angle: float = DEFAULT_SHARPNESS_ANGLE,
         keep_in_place: bool | str = AUTO,
-        work_budget: float = WORK_BUDGET,
+        work_budget: float | None = None,
         hold_parts: bool = True,
     ) -> None:
         self.positions = start = check_positions(positions)
@@ -559,8 +559,8 @@ def smooth_mesh(
         core.in_place): textures, UVs and open outlines stay where they were. Needs faces. ``"auto"``: on
         with the Automatic Amount (HC's, where faces are given), off when numbers are given (the paper's
         algorithm, bit for bit).
-    work_budget : float
-        The Automatic Amount's most vertex-iterations (``core.mesh_amount.WORK_BUDGET``; ``math.inf``: no cut).
+    work_budget : float, optional
+        The Automatic Amount's most vertex-iterations (None: ``core.mesh_amount.WORK_BUDGET``; ``math.inf``: no cut).
     hold_parts : bool
         The Automatic Amount gives parts whose shape the run took away their input back (core.collapse);
         False: never (for measuring what that rule holds).
