@@ -110,6 +110,25 @@ def _number(text):
     return value
 
 
+SIZE_UNITS = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
+
+
+def _size(text):
+    """'4G', '500M', '4GB', '1.5g', '1000000' (bytes) -> bytes."""
+    number = text.strip().upper().removesuffix("B")
+    unit = number[-1:] if number[-1:] in SIZE_UNITS and number[-1:] else ""
+    try:
+        value = float(number[: len(number) - len(unit)]) * SIZE_UNITS[unit]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text} is not a size (e.g. 4G, 500M)") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"{text} is not a positive size")
+    return int(value)
+
+
+_size.__name__ = "size"
+
+
 def _shown(setting):
     """What one unit of the setting is on the command line: an angle (stored in radians, as Blender's
     angle properties are) is given in degrees."""
@@ -199,6 +218,14 @@ def make_parser(prog=PROG):
         action="store_true",
         help="say when each file starts being read, smoothed and written",
     )
+    large = parser.add_argument_group("scans larger than memory")
+    large.add_argument(
+        "--memory-limit",
+        type=_size,
+        metavar="SIZE",
+        help="the most memory a file's run may take, e.g. 4G or 500M (default: 3/4 of the machine's); a binary "
+        "PLY file whose whole run would take more is smoothed in tiles (docs/large_scans.md)",
+    )
     smoothing = parser.add_argument_group("smoothing (as the operators' properties)")
     for name, setting in MESH_OPTIONS.items():
         add_setting(smoothing, setting, setting_help(setting, POINT_OPTIONS.get(name), name not in POINT_OPTIONS))
@@ -239,6 +266,7 @@ class Plan:
     objects: list = field(default_factory=list)
     notes: list = field(default_factory=list)  # said before the run (an input named twice)
     verbose: bool = False
+    memory_limit: int | None = None  # bytes, --memory-limit (None: cli/tiled.py's default)
 
 
 def parse(argv, prog=PROG):
@@ -314,6 +342,7 @@ def parse(argv, prog=PROG):
         objects=args.objects,
         notes=notes,
         verbose=args.verbose,
+        memory_limit=args.memory_limit,
     )
 
 

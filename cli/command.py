@@ -26,9 +26,8 @@ from ..console_capture import captured
 from ..operators import jobs as jobs_module
 from ..operators import mesh_io, point_cloud
 from ..operators.objects import InputError, unique_data
-from . import arguments, files
+from . import arguments, files, tiled
 from .files import FileError
-from .formats.normals import corner_neighbours
 
 INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl+C
 
@@ -53,6 +52,7 @@ class Outcome:
     seconds: float = 0.0
     changes: list = field(default_factory=list)  # core.Change per smoothed mesh
     legends: list = field(default_factory=list)  # --deviation-attribute: each mesh's deviation map in words
+    notes: list = field(default_factory=list)  # how a file too big for memory ran (cli/tiled.py)
     warnings: list = field(default_factory=list)
     error: str = ""
     blender_lines: list = field(default_factory=list)  # what Blender printed while a failed file ran
@@ -156,7 +156,7 @@ def run(plan, settings, console, outcomes):
         outcomes.append(outcome)
         process(outcome, plan, settings, console)
         console.say(f"[{number}/{total}] {progress_line(outcome)}")
-        for text in outcome.legends if not outcome.error else ():
+        for text in outcome.legends + outcome.notes if not outcome.error else ():
             console.say(f"  {text}")
         for text in outcome.warnings:
             console.say(f"  warning: {text}")
@@ -260,6 +260,10 @@ def in_blender(outcome):
 
 
 def smooth_mesh_file(outcome, plan, settings, console):
+    limit = plan.memory_limit or tiled.default_memory_limit()
+    if tiled.needs_tiles(outcome.source, limit) and tiles_apply(outcome, plan, limit):
+        smooth_tiled_file(outcome, plan, settings, console, limit)
+        return
     console.stage(outcome, "reading", outcome.source)
     mesh = files.read_mesh(outcome.source)
     console.stage(outcome, "smoothing", outcome.source)
@@ -270,6 +274,50 @@ def smooth_mesh_file(outcome, plan, settings, console):
     result, added = smooth_arrays(name, positions, mesh.corners, mesh.sizes, plan, settings, outcome, groups)
     console.stage(outcome, "writing", outcome.target)
     files.write_bytes(outcome.target, files.result_bytes(mesh, result, outcome.target, added))
+
+
+def tiles_apply(outcome, plan, limit):
+    """Whether a file too big for ``limit`` goes in tiles: a binary PLY mesh does; anything else runs whole,
+    with a warning, or fails when the limit was given (--memory-limit)."""
+    problem = None
+    if plan.points:
+        problem = "point clouds are smoothed whole"
+    elif os.path.splitext(outcome.source)[1].lower() != ".ply":
+        problem = "only binary PLY meshes are smoothed in tiles"
+    else:
+        try:
+            tiled.PlyBlocks(outcome.source)
+        except (tiled.FormatError, OSError) as error:
+            problem = f"it cannot be smoothed in tiles: {error}"
+    if problem is None:
+        return True
+    needed = tiled.size_words(tiled.in_core_bytes(tiled.estimated_vertices(outcome.source)))
+    if plan.memory_limit:
+        raise FileError(
+            f"its whole run would take about {needed}, above --memory-limit {tiled.size_words(limit)}, and {problem}"
+        )
+    outcome.warnings.append(f"its whole run may take about {needed}, above {tiled.size_words(limit)}; {problem}")
+    return False
+
+
+def smooth_tiled_file(outcome, plan, settings, console, limit):
+    """A binary PLY file larger than the memory limit, smoothed in tiles straight into its target (cli/tiled.py)."""
+    console.stage(outcome, "smoothing", outcome.source)
+    name = os.path.splitext(os.path.basename(outcome.source))[0]
+    if os.path.splitext(outcome.target)[1].lower() != ".ply":
+        raise FileError("a scan smoothed in tiles is written as it is read (binary PLY): --format cannot convert it")
+    if plan.settings.deviation_map:
+        raise FileError(
+            "--deviation-attribute adds a value to every vertex record, which a scan smoothed in tiles cannot"
+        )
+    for group in (plan.settings.vertex_group, plan.settings.influence_group):
+        group_mask(name, {}, group, False, 0)  # a PLY file has no vertex groups: the whole route's message
+    options = jobs_module.core_options(settings, plan.given)
+    run = tiled.smooth_file(outcome.source, outcome.target, options, limit, say=lambda text: console.say(f"  {text}"))
+    outcome.objects, outcome.vertices, outcome.iterations = 1, run.vertices, run.iterations
+    outcome.kept = run.kept_in_place
+    outcome.changes.append(run.change)
+    outcome.notes.extend(run.notes)
 
 
 def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome, groups=None):
@@ -328,17 +376,9 @@ def mesh_job(name, positions, corners, sizes, fixed, influence):
     n = len(positions)
     if n == 0:
         raise FileError(f"Mesh '{name}' has no vertices: nothing to smooth")
-    starts = np.cumsum(sizes) - sizes
-    following, _ = corner_neighbours(starts, sizes)
-    degenerate = np.repeat(np.arange(len(sizes)), sizes)[corners == corners[following]]
-    keep = sizes >= 3
-    keep[degenerate] = False
-    mask = np.repeat(keep, sizes)
-    edges = np.stack([corners[mask], corners[following][mask]], axis=1)
+    edges, faces = tiled.surface_arrays(corners, sizes)
     if not len(edges):
         raise FileError(f"'{name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
-    kept = sizes[keep]
-    faces = core.metrics.fan_triangles((np.concatenate([[0], np.cumsum(kept)]), corners[mask]))
     fixed = np.zeros(n, dtype=bool) if fixed is None else fixed
     return jobs_module.Job(None, None, positions, edges, faces, fixed, closed=None, influence=influence)
 
