@@ -35,10 +35,10 @@ from .formats.tokens import FormatError
 
 # What a whole (in-core) run of the command line takes per vertex, file included, at most (measured:
 # bench/bench_tiled.py): a file whose vertices need more than the limit goes in tiles.
-IN_CORE_BYTES_PER_VERTEX = 1100
+IN_CORE_BYTES_PER_VERTEX = 800
 # What a tile's run takes per vertex of the tile, its faces and buffers included (measured, as above).
 TILE_BYTES_PER_VERTEX = 600
-BASE_BYTES = 200 << 20  # the interpreter, NumPy, SciPy and the blocks being read
+BASE_BYTES = 320 << 20  # the interpreter, NumPy, SciPy (and Blender's module) and the blocks being read
 MEMORY_SHARE = 0.75  # the default limit: this share of the machine's memory
 BLOCK = 1 << 20  # records per block read
 SAMPLE_POINTS = 1 << 20  # vertices sampled for the boxes
