@@ -170,7 +170,8 @@ def compare(args, folder, out):
     source = os.path.join(folder, "compare.ply")
     n, _ = write_torus(source, args.compare)
     whole = [run(source, os.path.join(folder, "whole"), args.iterations) for _ in range(args.repeats)]
-    tiled = [run(source, os.path.join(folder, "tiled"), args.iterations, args.memory_limit) for _ in range(args.repeats)]
+    limit = args.memory_limit
+    tiled = [run(source, os.path.join(folder, "tiled"), args.iterations, limit) for _ in range(args.repeats)]
     time_whole = statistics.median(r[0] for r in whole)
     time_tiled = statistics.median(r[0] for r in tiled)
     row(out, "whole", n, time_whole, max(r[1] for r in whole), None)

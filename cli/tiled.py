@@ -225,12 +225,12 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
         raise ValueError(f"{problem}; smooth it whole (a larger --memory-limit) or leave the option out")
     ply = PlyBlocks(source)
     n = ply.vertex_count
-    capacity = capacity or tile_capacity(limit, n)
-    if capacity < SMALLEST_TILE:
+    if capacity is None and tile_capacity(limit, n) < min(SMALLEST_TILE, n):
         raise ValueError(
             f"--memory-limit {size_words(limit)} leaves no room for a tile of this scan's {n} vertices "
             f"(at least {size_words(BASE_BYTES + SMALLEST_TILE * TILE_BYTES_PER_VERTEX + 4 * n)})"
         )
+    capacity = capacity or tile_capacity(limit, n)
     started = time.perf_counter()
     found = scan(ply)
     run = TiledRun(vertices=n)
