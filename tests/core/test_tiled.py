@@ -262,3 +262,22 @@ def test_rings_read():
     assert core.tiles.rings_read("hc", 10) == 20
     assert core.tiles.rings_read("plain", 10) == 10
     assert core.tiles.rings_read("hc", 3, keep_in_place=True, normals=True) == 6 + 1 + core.in_place._LAST + 1
+
+
+arguments = load("cli.arguments")
+
+
+@pytest.mark.parametrize(
+    "text, size", [("4G", 4 << 30), ("500M", 500 << 20), ("1.5gb", int(1.5 * (1 << 30))), ("123456", 123456)]
+)
+def test_memory_limit_sizes(tmp_path, monkeypatch, text, size):
+    monkeypatch.chdir(tmp_path)
+    assert arguments.parse(["scan.ply", "-o", "out", "--memory-limit", text]).memory_limit == size
+    assert arguments.parse(["scan.ply", "-o", "out"]).memory_limit is None
+
+
+@pytest.mark.parametrize("text", ["lots", "0", "-4G", "inf", "4X"])
+def test_bad_memory_limits(tmp_path, monkeypatch, text):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(arguments.UsageError, match=f"argument --memory-limit: {text} is not a (positive )?size"):
+        arguments.parse(["scan.ply", "-o", "out", f"--memory-limit={text}"])
