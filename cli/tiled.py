@@ -30,7 +30,7 @@ import numpy as np
 from .. import core
 from . import files
 from .formats import normals as normal_maths
-from .formats.ply_blocks import PlyBlocks, positions_of, write_rows
+from .formats.ply_blocks import PlyBlocks, write_rows
 from .formats.tokens import FormatError
 
 # What a whole (in-core) run of the command line takes per vertex, file included, at most (measured:
@@ -90,7 +90,9 @@ def needs_tiles(path, limit):
 def surface_arrays(corners, sizes):
     """(edges, triangles) of faces given as ``corners`` (vertex indices, face after face) with ``sizes``: the
     sides and fan triangles of the faces Blender would keep (at least three corners, none repeating the one
-    before it). The one rule of the file routes (command.mesh_job uses it too)."""
+    before it), face after face. The one rule of the file routes (command.mesh_job uses it too)."""
+    if len(sizes) and sizes[0] >= 3 and corners.size == sizes[0] * len(sizes) and np.all(sizes == sizes[0]):
+        return _alike_surface(corners.reshape(len(sizes), -1))
     starts = np.cumsum(sizes) - sizes
     following, _ = normal_maths.corner_neighbours(starts, sizes)
     degenerate = np.repeat(np.arange(len(sizes)), sizes)[corners == corners[following]]
@@ -101,6 +103,19 @@ def surface_arrays(corners, sizes):
     kept = sizes[keep]
     triangles = core.metrics.fan_triangles((np.concatenate([[0], np.cumsum(kept)]), corners[mask]))
     return edges, triangles
+
+
+def _alike_surface(grid):
+    """``surface_arrays`` of (f, k) faces all of k >= 3 corners, column by column."""
+    k = grid.shape[1]
+    degenerate = np.zeros(len(grid), dtype=bool)
+    for column in range(k):
+        degenerate |= grid[:, column] == grid[:, (column + 1) % k]
+    kept = grid[~degenerate] if degenerate.any() else grid
+    edges = np.empty((kept.size, 2), dtype=kept.dtype)
+    edges[:, 0] = kept.ravel()
+    edges[:, 1] = np.roll(kept, -1, axis=1).ravel()
+    return edges, core.metrics.fan_triangles(kept)
 
 
 @dataclass
@@ -159,14 +174,17 @@ def scan(ply):
         sample.append(points[first::stride].astype(np.float64))
         picked.append(np.arange(start + first, stop, stride))
     records = ply.memmap_vertices()
+    columns = [records[axis] for axis in "xyz"]  # strided views: a gather reads only the coordinates
     longest = 0.0
     for start, stop in blocks(ply.face_count):
         corners = ply.faces(start, stop)
-        points = positions_of(records[corners.ravel()], np.float64).reshape(corners.shape + (3,))
-        sides = points - np.roll(points, -1, axis=1)
-        if sides.size:
-            longest = max(longest, float(np.sqrt(np.einsum("fck,fck->fc", sides, sides).max())))
-    del records
+        squares = np.zeros(corners.shape)
+        for column in columns:
+            at = column[corners].astype(np.float64)
+            squares += (at - np.roll(at, -1, axis=1)) ** 2
+        if squares.size:
+            longest = max(longest, float(np.sqrt(squares.max())))
+    del records, columns
     return Scan(low, high, longest, np.concatenate(sample), np.concatenate(picked))
 
 
@@ -197,7 +215,10 @@ def read_tile(ply, reaches, owns, lookup):
         corners = []
         for start, stop in blocks(ply.face_count):
             local = lookup[ply.faces(start, stop)]
-            corners.append(local[(local >= 0).all(axis=1)])
+            inside = local[:, 0] >= 0
+            for column in range(1, local.shape[1]):
+                inside &= local[:, column] >= 0
+            corners.append(local[inside])
     finally:
         lookup[vertices] = -1
     return Tile(vertices, np.concatenate(positions), np.concatenate(own), np.concatenate(corners).astype(np.int64))

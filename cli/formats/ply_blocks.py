@@ -147,8 +147,9 @@ class PlyBlocks:
         return positions_of(self.vertices(start, stop), self.precision)
 
     def faces(self, start, stop):
-        """(stop - start, corners) int64 corner indices of faces start:stop; raises FormatError where a face's
-        list length differs from the first's, or a corner names a vertex the file does not have."""
+        """(stop - start, corners) corner indices (int32; int64 from 2**31 vertices) of faces start:stop; raises
+        FormatError where a face's list length differs from the first's, or a corner names a vertex the file does
+        not have."""
         records = np.fromfile(
             self.path,
             dtype=self.face_dtype,
@@ -165,9 +166,12 @@ class PlyBlocks:
                 "different sizes cannot be read in tiles (triangulate the scan, or raise --memory-limit to smooth it "
                 "whole)"
             )
-        corners = records[self.corner_field].astype(np.int64)
-        outside = (corners < 0) | (corners >= self.vertex_count)
-        if outside.any():
+        items = records.dtype[self.corner_field].base
+        wide = self.vertex_count >= 1 << 31 or (items.kind == "u" and items.itemsize >= 4)
+        corners = records[self.corner_field].astype(np.int64 if wide else np.int32)
+        low, high = corners.min(initial=0), corners.max(initial=0)
+        if low < 0 or high >= self.vertex_count:
+            outside = (corners < 0) | (corners >= self.vertex_count)
             row = int(np.flatnonzero(outside.any(axis=1))[0])
             corner = int(corners[row][outside[row]][0])
             raise FormatError(
