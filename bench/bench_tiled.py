@@ -139,9 +139,11 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--compare", type=count, help="vertices of the mesh run whole and tiled")
     parser.add_argument("--big", type=count, help="vertices of the mesh run tiled only")
-    parser.add_argument("--memory-limit", default="4G", help="the tiled runs' --memory-limit")
+    parser.add_argument("--memory-limit", default="4G", help="the --big run's --memory-limit")
+    parser.add_argument("--compare-limit", default="2G", help="the --compare tiled run's --memory-limit")
     parser.add_argument("--iterations", type=int, default=10)
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=3, help="runs of each kind in --compare (medians)")
+    parser.add_argument("--big-repeats", type=int, default=1, help="runs of --big (median)")
     parser.add_argument("--folder", default=None, help="where the files go (default: a temporary folder)")
     args = parser.parse_args()
     folder = tempfile.mkdtemp(prefix="bench_tiled_", dir=args.folder)
@@ -151,14 +153,16 @@ def main():
             out()
             out(f"`{' '.join(sys.argv)}`; noisy torus (noise 0.2 edge lengths), {args.iterations} iterations.")
             out()
-            out("| run | vertices | tiles (largest) | time | time per vertex | peak memory |")
-            out("|---|---|---|---|---|---|")
-            if args.compare:
-                compare(args, folder, out)
+            whole = compare(args, folder, out) if args.compare else None
             if args.big:
-                big(args, folder, out)
+                big(args, folder, out, whole)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
+
+
+def header(out):
+    out("| run | vertices | tiles (largest) | time | time per vertex | peak memory |")
+    out("|---|---|---|---|---|---|")
 
 
 def row(out, label, n, seconds, peak, tiles):
@@ -169,13 +173,14 @@ def row(out, label, n, seconds, peak, tiles):
 def compare(args, folder, out):
     source = os.path.join(folder, "compare.ply")
     n, _ = write_torus(source, args.compare)
+    header(out)
     whole = [run(source, os.path.join(folder, "whole"), args.iterations) for _ in range(args.repeats)]
-    limit = args.memory_limit
+    limit = args.compare_limit
     tiled = [run(source, os.path.join(folder, "tiled"), args.iterations, limit) for _ in range(args.repeats)]
     time_whole = statistics.median(r[0] for r in whole)
     time_tiled = statistics.median(r[0] for r in tiled)
     row(out, "whole", n, time_whole, max(r[1] for r in whole), None)
-    row(out, f"tiled, --memory-limit {args.memory_limit}", n, time_tiled, max(r[1] for r in tiled), tiled[0][2])
+    row(out, f"tiled, --memory-limit {limit}", n, time_tiled, max(r[1] for r in tiled), tiled[0][2])
     a, b = os.path.join(folder, "whole", "compare.ply"), os.path.join(folder, "tiled", "compare.ply")
     one, two = positions(a), positions(b)
     diagonal = float(np.linalg.norm(one.max(axis=0) - one.min(axis=0)))
@@ -187,14 +192,25 @@ def compare(args, folder, out):
         f"{time_tiled / time_whole:.2f}x the whole run's (medians of {args.repeats})."
     )
     out()
+    for path in (source, a, b):
+        os.remove(path)
+    return time_whole / n
 
 
-def big(args, folder, out):
+def big(args, folder, out, whole):
+    """The --big run; ``whole``: the --compare whole run's seconds per vertex, if it ran."""
     source = os.path.join(folder, "big.ply")
     n, _ = write_torus(source, args.big)
-    runs = [run(source, os.path.join(folder, "big"), args.iterations, args.memory_limit) for _ in range(args.repeats)]
-    seconds = statistics.median(r[0] for r in runs)
-    row(out, f"tiled, --memory-limit {args.memory_limit}", n, seconds, max(r[1] for r in runs), runs[0][2])
+    header(out)
+    limit = args.memory_limit
+    runs = [run(source, os.path.join(folder, "big"), args.iterations, limit) for _ in range(args.big_repeats)]
+    seconds, peak = statistics.median(r[0] for r in runs), max(r[1] for r in runs)
+    row(out, f"tiled, --memory-limit {limit}", n, seconds, peak, runs[0][2])
+    out()
+    words = f"{n:,} vertices tiled within --memory-limit {limit}: peak memory {peak / 2**30:.2f} GiB"
+    if whole:
+        words += f", time per vertex {seconds / n / whole:.2f}x the whole run's at {args.compare:,} vertices"
+    out(words + ".")
 
 
 if __name__ == "__main__":
