@@ -6,7 +6,7 @@ The route, for a file whose whole run would not fit in the memory limit (``needs
 1. One pass over the vertices (bounds, an even sample, finite coordinates) and one over the faces (their
    corners checked, the longest edge).
 2. With the Automatic Amount, the amount is chosen once, on a region of about REGION_VERTICES vertices
-   around PATCH_SEEDS places spread over the file (core.tiles.region_amount), and every tile runs the
+   around REGION_PLACES places spread over the file (core.tiles.region_amount), and every tile runs the
    numbers it chose.
 3. The boxes (core.tiles.split), each tile holding what the run reads (core.tiles.rings_read rings of
    halo), at most as many vertices as the limit leaves room for.
@@ -30,7 +30,8 @@ import numpy as np
 from .. import core
 from . import files
 from .formats import normals as normal_maths
-from .formats.ply_blocks import PlyBlocks, write_rows
+from .formats.ply import NORMALS
+from .formats.ply_blocks import PlyBlocks, write_columns
 from .formats.tokens import FormatError
 
 # What a whole (in-core) run of the command line takes per vertex, file included, at most (measured:
@@ -284,17 +285,19 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
     with files.written(target) as temporary:
         shutil.copyfile(source, temporary)
         output = ply.memmap_vertices("r+", temporary)
-        for number, box in enumerate(boxes, 1):
-            tick = time.perf_counter()
-            tile = read_tile(ply, lambda p, box=box: box.reaches(p, run.margin), box.owns, lookup)
-            run.largest_tile = max(run.largest_tile, len(tile.vertices))
-            smooth_tile(tile, options, ply, output, totals)
-            say(
-                f"tile {number} of {len(boxes)}: {len(tile.vertices)} vertices, {int(tile.own.sum())} its own, "
-                f"{time.perf_counter() - tick:.1f} s"
-            )
-        output.flush()
-        del output
+        try:
+            for number, box in enumerate(boxes, 1):
+                tick = time.perf_counter()
+                tile = read_tile(ply, lambda p, box=box: box.reaches(p, run.margin), box.owns, lookup)
+                run.largest_tile = max(run.largest_tile, len(tile.vertices))
+                smooth_tile(tile, options, ply, output, totals)
+                say(
+                    f"tile {number} of {len(boxes)}: {len(tile.vertices)} vertices, {int(tile.own.sum())} its own, "
+                    f"{time.perf_counter() - tick:.1f} s"
+                )
+            output.flush()
+        finally:
+            del output  # the map closed: the temporary can be moved or removed (on Windows too)
     run.change = totals.change(found)
     run.notes.insert(
         0,
@@ -314,14 +317,13 @@ def smooth_tile(tile, options, ply, output, totals):
     moved = np.any(result != tile.positions, axis=1)
     own = np.flatnonzero(tile.own)
     rows = own[moved[own]]
-    write_rows(output, tile.vertices[rows], result[rows])
+    write_columns(output, tile.vertices[rows], result[rows], "xyz")
     if ply.has_normals and len(sizes):
         starts = np.cumsum(sizes) - sizes
         new, used = normal_maths.stored_normals(result, corners, starts, sizes, corners, len(result))
         touched = normal_maths.touched(moved, corners, starts, sizes, corners, len(result))
-        rows_n = own[(used & touched)[own]]
-        for axis, name in enumerate(("nx", "ny", "nz")):
-            output[name][tile.vertices[rows_n]] = new[rows_n, axis].astype(np.float32)
+        rows = own[(used & touched)[own]]
+        write_columns(output, tile.vertices[rows], new[rows].astype(np.float32), NORMALS)
     totals.add(tile.positions[own], result[own])
 
 

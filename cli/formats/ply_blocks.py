@@ -195,11 +195,8 @@ def positions_of(records, precision):
     return out
 
 
-def write_rows(records, rows, positions, normals=None):
-    """Write ``positions`` (and ``normals``) of vertex ``rows`` into vertex ``records`` (a writable memory
-    map), each value in its property's own type; nothing else changes."""
-    for axis, name in enumerate("xyz"):
-        records[name][rows] = positions[:, axis]
-    if normals is not None:
-        for axis, name in enumerate(NORMALS):
-            records[name][rows] = normals[:, axis]
+def write_columns(records, rows, values, names):
+    """Write (m, k) ``values`` of vertex ``rows`` into the properties ``names`` of vertex ``records`` (a writable
+    memory map), each value in its property's own type; nothing else changes."""
+    for column, name in enumerate(names):
+        records[name][rows] = values[:, column]
