@@ -4,6 +4,8 @@ positions (and normals) stays; a failure or an interrupt leaves no output; what 
 refused with a message."""
 
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -300,3 +302,13 @@ def test_a_scattered_order_within_a_millionth(tmp_path):
     diagonal = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
     difference = np.abs(ply.PlyFile(got).positions - whole).max()
     assert 0 < difference <= 1e-6 * diagonal
+
+
+def test_the_tiled_route_loads_no_blender_module():
+    code = (
+        "import sys; sys.path.insert(0, sys.argv[1]); import test_cli_arguments as t; t.load('cli.tiled'); "
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('bpy', 'mathutils', '_bpy')))"
+    )
+    here = os.path.dirname(__file__)
+    done = subprocess.run([sys.executable, "-c", code, here], capture_output=True, text=True, cwd=here, timeout=60)
+    assert done.returncode == 0 and done.stdout.strip() == "[]", done.stderr
