@@ -312,3 +312,22 @@ def test_the_tiled_route_loads_no_blender_module():
     here = os.path.dirname(__file__)
     done = subprocess.run([sys.executable, "-c", code, here], capture_output=True, text=True, cwd=here, timeout=60)
     assert done.returncode == 0 and done.stdout.strip() == "[]", done.stderr
+
+
+def test_split_vertices_welded_alike(tmp_path):
+    """A seam of split vertices (equal copies, as UV seams leave them): every tile welds the copies it holds
+    as the whole run does."""
+    rows, tube = 400, 250
+    points, faces = torus(rows, tube)
+    seam = np.arange(rows) * tube  # column 0 around the tube
+    copies = len(points) + np.arange(rows)
+    closing = (faces % tube == 0) & (np.roll(faces, 1, axis=1) % tube == tube - 1)  # reached from column tube-1
+    faces = np.where(closing, copies[faces // tube], faces)
+    points = np.concatenate([points, points[seam]])
+    assert np.isin(copies, faces).all() and np.isin(seam, faces).all()  # both sides of the seam are used
+    data = binary_ply(points, faces)
+    run, got = smooth_tiled(tmp_path, data, EXPLICIT, capacity=30_000)
+    assert run.tiles >= 8
+    assert got == whole_bytes(data, EXPLICIT)
+    result = ply.PlyFile(got).positions
+    assert np.array_equal(result[seam], result[copies])  # the seam stayed closed
