@@ -41,7 +41,14 @@ _SLACK = 1e-9  # relative: the margin covers the rounding of the lengths it is m
 
 def rings_read(method, iterations, keep_in_place=False, normals=False):
     """The rings around a vertex that its result reads: see the module docstring. ``normals``: the
-    result's vertex normals are written too."""
+    result's vertex normals are written too.
+
+    Examples
+    --------
+    >>> from core import tiles
+    >>> tiles.rings_read("hc", 10), tiles.rings_read("plain", 10), tiles.rings_read("hc", 10, normals=True)
+    (20, 10, 21)
+    """
     rings = (2 if method == "hc" else 1) * int(iterations)
     if keep_in_place:
         rings += 1 + UNFOLD_ROUNDS
@@ -103,7 +110,19 @@ def split(sample, scale, box, margin, most):
     ``sample``: (m, 3) an even sample of the vertices, each standing for ``scale`` of them. A box is cut
     at the median of its own sample points along its longest side while its tile holds too many; raises
     ValueError where the box is narrower than half the margin and its tile still holds too many (the halo
-    alone does)."""
+    alone does).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core import tiles
+    >>> points = np.random.default_rng(0).uniform(size=(10_000, 3))
+    >>> boxes = tiles.split(points, 1.0, tiles.bounding_box([0, 0, 0], [1, 1, 1]), 0.02, 3_000)
+    >>> len(boxes), max(int(box.reaches(points, 0.02).sum()) for box in boxes) <= 3_000
+    (4, True)
+    >>> int(sum(box.owns(points) for box in boxes).max())  # every point has one box
+    1
+    """
     sample = np.asarray(sample, dtype=np.float64)
     done, todo = [], [box]
     while todo:
