@@ -47,7 +47,7 @@ class Outcome:
     vertices: int = 0
     iterations: int = 0  # meshes: the most iterations any mesh ran
     sharp: bool = False  # meshes: Keep Sharp Edges ran (its iterations are steps)
-    held: int = 0  # meshes: parts the Automatic Amount left as they were (core.collapse)
+    held: int = 0  # meshes: parts the Automatic Amount left as they were (core.mesh.collapse)
     kept: bool = False  # meshes: every move was kept across the surface (Keep in Place)
     rounds: list = field(default_factory=list)  # point clouds: (rounds, steps per round) per cloud
     seconds: float = 0.0
@@ -338,7 +338,7 @@ def mesh_job(name, positions, corners, sizes, fixed, influence):
     if not len(edges):
         raise FileError(f"'{name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
     kept = sizes[keep]
-    faces = core.metrics.fan_triangles((np.concatenate([[0], np.cumsum(kept)]), corners[mask]))
+    faces = core.mesh.metrics.fan_triangles((np.concatenate([[0], np.cumsum(kept)]), corners[mask]))
     fixed = np.zeros(n, dtype=bool) if fixed is None else fixed
     return jobs_module.Job(None, None, positions, edges, faces, fixed, closed=None, influence=influence)
 

@@ -31,7 +31,7 @@ is the central step with a per-vertex weight (see build()); the Repeat zone mixe
 some vertex has λ < 1, so without a painted group it evaluates the unweighted step alone.
 
 The Deviation Limit r is core's max_deviation= in world space, as the operators take it (they run core on the
-world-space shape, core.world): every iteration ends with p = o + d min(1, r / |L d|), d = p - o, L the 3x3
+world-space shape, core.mesh.world): every iteration ends with p = o + d min(1, r / |L d|), d = p - o, L the 3x3
 part of the object's world matrix (Object Info on the Self Object), after the influence (0 = no limit). The
 steps themselves are linear in the positions, so they are the same in object and world space. Plain and
 central Laplacian then run in the Repeat zone too (one Blur node cannot stop after each iteration); without a

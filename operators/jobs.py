@@ -3,7 +3,7 @@
 Shared by the Object-mode and Edit-mode operators (and the command line): every job is read and
 validated before any mesh is written, so a failure leaves every mesh as it was.
 
-A scaled object is smoothed as it stands in the world (core.world): its positions are taken through its
+A scaled object is smoothed as it stands in the world (core.mesh.world): its positions are taken through its
 stretch, so the Deviation Limit, the Automatic Amount's noise and limit, Keep Sharp Edges' angles, the report
 and the deviation map measure world-space lengths in scene units; the result is mapped back to object space
 on writing. An object without scale (identity, rotation, mirror) runs in object space, bit for bit as before.
@@ -38,10 +38,10 @@ class Job:
     result: np.ndarray = None
     report: object = None  # the core.MeshReport of the run: what ran, what the Automatic Amount chose
     change: object = None  # core.Change of the result, measured once for every report
-    measured_input: object = None  # Future of the core.metrics.InputMeasure the report compares with
+    measured_input: object = None  # Future of the core.mesh.metrics.InputMeasure the report compares with
     deviation: object = None  # the core.DeviationMap of the result (Deviation Map on), made before any write
     map_names: object = None  # mesh_io.DeviationNames: where the map goes (Deviation Map on), chosen on reading
-    # The object's stretch (core.world.frame): ``positions`` and ``result`` are in world-space lengths, the
+    # The object's stretch (core.mesh.world.frame): ``positions`` and ``result`` are in world-space lengths, the
     # object-space positions read are ``local``. None: object space measures as world space does.
     frame: np.ndarray = None
     local: np.ndarray = None
@@ -73,7 +73,7 @@ def core_options(props, given=frozenset()):
         options[setting.argument] = value
     # The add-on smooths split vertices (UV seams, soups) as one, on the welded mesh, where a seam is no
     # border. Open borders: the paper's rule unless Pin Boundary holds them or Keep Outline smooths them as
-    # curves (core.borders); the curve rule keeps outlines in place but measures more error to ragged scan
+    # curves (core.mesh.borders); the curve rule keeps outlines in place but measures more error to ragged scan
     # outlines (bench/README.md, "Open borders"): not the default.
     border = "fixed" if props.pin_boundary else "curve" if props.keep_outline else "free"
     options.update(weld=True, border=border)
@@ -117,10 +117,10 @@ def make_job(obj, props, extra_fixed=None):
         # this thread (input_measure).
         faces, closed, corners = corner_verts.reshape(-1, 3), None, (corner_verts, corner_edges)
     else:
-        closed = core.topology.closed_from_corners(edges, corner_verts, corner_edges)
+        closed = core.mesh.topology.closed_from_corners(edges, corner_verts, corner_edges)
         # Triangulated once per mesh, for the volume and the normals in the report (only the positions change).
         faces = mesh_io.read_faces(mesh, corner_verts)
-        faces = core.metrics.fan_triangles(faces) if faces is not None else None
+        faces = core.mesh.metrics.fan_triangles(faces) if faces is not None else None
     fixed = np.zeros(n, dtype=bool) if extra_fixed is None else extra_fixed.copy()
     if props.vertex_group:
         group = obj.vertex_groups.get(props.vertex_group)
@@ -142,7 +142,7 @@ def make_job(obj, props, extra_fixed=None):
     return Job(
         obj=obj,
         mesh=mesh,
-        positions=positions if frame is None else core.world.to_frame(positions, frame),
+        positions=positions if frame is None else core.mesh.world.to_frame(positions, frame),
         edges=edges,
         faces=faces,
         fixed=fixed,
@@ -215,7 +215,7 @@ def local_result(job):
     """(the positions read, the result) of a job in object space."""
     if job.frame is None:
         return job.positions, job.result
-    return job.local, core.world.from_frame(job.local, job.positions, job.result, job.frame)
+    return job.local, core.mesh.world.from_frame(job.local, job.positions, job.result, job.frame)
 
 
 def deviation_map(job):
@@ -249,8 +249,8 @@ def input_measure(job):
 def _measure_input(job):
     closed = job.closed
     if closed is None and job.corners is not None:  # else measure_input finds it from the triangles
-        closed = core.topology.closed_from_corners(job.edges, *job.corners)
-    return core.metrics.measure_input(job.positions, job.faces, closed=closed)
+        closed = core.mesh.topology.closed_from_corners(job.edges, *job.corners)
+    return core.mesh.metrics.measure_input(job.positions, job.faces, closed=closed)
 
 
 def measure(job):
@@ -296,7 +296,7 @@ def summary(jobs, props, length=None):
 def amount_words(reports):
     """What ran: '12 iterations' or, chosen, 'automatic amount: noise 0.45x edge length, 12 iterations,
     alpha 0, beta 0.6, volume kept, moves at most 0.0123' (and '1 part left as it was (smoothing would
-    change its shape)' where core.collapse gave a part back); with Keep Sharp Edges, 'sharpness 30°, ' first,
+    change its shape)' where core.mesh.collapse gave a part back); with Keep Sharp Edges, 'sharpness 30°, ' first,
     and steps for iterations."""
     angles = sorted({round(math.degrees(r.sharpness_angle)) for r in reports if r.keep_sharp_edges})
     if not angles:
@@ -332,7 +332,7 @@ def _amount_words(reports, unit):
 
 
 def held_words(count):
-    """'1 part left as it was (smoothing would change its shape)': the parts core.collapse gave their input
+    """'1 part left as it was (smoothing would change its shape)': the parts core.mesh.collapse gave their input
     back (the run collapsed them, or took their shape away with the noise)."""
     if count == 1:
         return "1 part left as it was (smoothing would change its shape)"

@@ -57,10 +57,10 @@ def read_positions(obj, noun=("vertex", "vertices")):
 
 
 def world_frame(obj):
-    """The stretch that takes ``obj``'s coordinates to its world-space shape (core.world.frame), None where its
+    """The stretch that takes ``obj``'s coordinates to its world-space shape (core.mesh.world.frame), None where its
     transform keeps lengths; InputError for a transform that flattens it."""
     try:
-        return core.world.frame(obj.matrix_world)
+        return core.mesh.world.frame(obj.matrix_world)
     except ValueError as error:
         raise InputError(f"Object '{obj.name}': {error}") from None
 

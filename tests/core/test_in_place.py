@@ -1,4 +1,4 @@
-"""Keep in Place (core.in_place): the default moves vertices across the surface, not along it, so
+"""Keep in Place (core.mesh.in_place): the default moves vertices across the surface, not along it, so
 textures, UVs and open outlines stay where they were; set numbers still run the paper's algorithm."""
 
 import warnings
@@ -8,8 +8,8 @@ import pytest
 from primitives import grid, ico_sphere
 
 import core
-from core.in_place import keep_in_place
-from core.volume import vertex_normals
+from core.mesh.in_place import keep_in_place
+from core.mesh.volume import vertex_normals
 
 
 def _noisy_along_normals(part, sigma, seed=0):

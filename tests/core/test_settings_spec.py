@@ -240,7 +240,7 @@ def test_every_core_argument_is_an_argument_of_the_mesh_pipeline():
 
 def test_keep_sharp_edges_defaults_are_cores():
     """The add-on's Sharpness starts where core's does (settings_spec cannot import core)."""
-    from core import sharp_edges
+    from core.mesh import sharp_edges
 
     assert spec.SHARPNESS_ANGLE.default == sharp_edges.DEFAULT_SHARPNESS_ANGLE
     assert spec.KEEP_SHARP_EDGES.default is False

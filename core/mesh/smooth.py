@@ -7,19 +7,19 @@ run the same numbers.
 
 Numbers a caller gives are used exactly. The Automatic Amount (HC only) chooses what is left at
 ``"auto"``: with ``iterations="auto"`` and ``alpha="auto"`` it chooses the iterations from the mesh's
-own noise (core.mesh_amount) with alpha 0, holding parts without noise, gives every closed part
-its volume back within bounds (core.volume), and gives a part whose shape it changed its input back
-(core.collapse); with ``beta="auto"`` it may take gentler steps on light noise. Either number given
+own noise (core.mesh.amount) with alpha 0, holding parts without noise, gives every closed part
+its volume back within bounds (core.mesh.volume), and gives a part whose shape it changed its input back
+(core.mesh.collapse); with ``beta="auto"`` it may take gentler steps on light noise. Either number given
 switches it off: the other then takes its default (``DEFAULT_ALPHA``, ``DEFAULT_ITERATIONS``) and the run
 is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
 
-``keep_in_place`` (core.in_place) keeps only the part of each vertex's move across the surface, along its
+``keep_in_place`` (core.mesh.in_place) keeps only the part of each vertex's move across the surface, along its
 normal: textures, UVs and open outlines stay where they were. ``"auto"`` (the default) turns it on with
 the Automatic Amount and off when numbers are given, so that given numbers run the paper's algorithm.
 
 Two options change the mesh the run sees, both off by default: ``weld`` runs coincident vertices as
-one (core.welding), ``border`` chooses what open borders do (core.borders). ``keep_sharp_edges`` (off by
-default) smooths with core.sharp_edges instead of HC's umbrella: the creases of hard-surface parts stay.
+one (core.mesh.welding), ``border`` chooses what open borders do (core.mesh.borders). ``keep_sharp_edges`` (off by
+default) smooths with core.mesh.sharp_edges instead of HC's umbrella: the creases of hard-surface parts stay.
 """
 
 import time
@@ -30,18 +30,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import collapse, parallel, sharp_edges, topology, volume, welding
-from .adjacency import Umbrella, umbrella_operator
-from .borders import BORDERS, apply_border
-from .convergence import ConvergenceWarning
-from .in_place import keep_in_place as project_in_place
-from .mesh_amount import PATCH_FROM, AmountChooser, MeshAmount
-from .mesh_noise import noise_steps
-from .metrics import fan_triangles
-from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
-from .slices import as_fraction, to_end
-from .smoothing import METHODS, MODES, Cancelled, Smoothing
-from .validation import (
+from .. import parallel
+from ..adjacency import Umbrella, umbrella_operator
+from ..convergence import ConvergenceWarning
+from ..slices import as_fraction, to_end
+from ..smoothing import METHODS, MODES, Cancelled, Smoothing
+from ..validation import (
     check_choice,
     check_fixed,
     check_influence,
@@ -51,6 +45,13 @@ from .validation import (
     check_tolerance,
     check_unit_interval,
 )
+from . import collapse, sharp_edges, topology, volume, welding
+from .amount import PATCH_FROM, AmountChooser, MeshAmount
+from .borders import BORDERS, apply_border
+from .in_place import keep_in_place as project_in_place
+from .metrics import fan_triangles
+from .noise import noise_steps
+from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
 
 AUTO = "auto"
 DEFAULT_ALPHA = 0.1
@@ -61,7 +62,7 @@ DEFAULT_ITERATIONS = 10
 DEVIATION_IN_NOISE = 4.0
 # Of a run with the Automatic Amount, the part of its progress the choice takes: its runs (the data and
 # the probes) go about twice as far as the smoothing that follows; on big meshes they go on patches
-# (core.mesh_amount), which cost a few iterations of the whole mesh.
+# (core.mesh.amount), which cost a few iterations of the whole mesh.
 CHOOSING_SHARE = 2 / 3
 PATCH_CHOOSING_SHARE = 1 / 5
 RESTORE_SHARE = 1 / 10  # ... and the volume restore, at the end
@@ -86,15 +87,15 @@ class MeshReport:
     seconds : float
         Wall time of the whole run.
     keep_sharp_edges : bool
-        The run smoothed with core.sharp_edges (then ``iterations`` counts its steps, alpha and beta are
+        The run smoothed with core.mesh.sharp_edges (then ``iterations`` counts its steps, alpha and beta are
         its push-back's weights, and ``sharpness_angle`` the angle it kept).
     sharpness_angle : float or None
         Radians; None when ``keep_sharp_edges`` is off.
     held_parts : int
         Parts whose shape the Automatic Amount would have changed (collapsed, or smoothed away with the
-        noise), given their input positions back (core.collapse).
+        noise), given their input positions back (core.mesh.collapse).
     kept_in_place : bool
-        Each vertex's move was kept to its part across the surface (core.in_place).
+        Each vertex's move was kept to its part across the surface (core.mesh.in_place).
 
     Examples
     --------
@@ -235,7 +236,7 @@ class MeshSmoother:
         return bool(keep_in_place)
 
     def _prepare(self):
-        """Weld coincident vertices (core.welding: the result is scattered back), find what the faces
+        """Weld coincident vertices (core.mesh.welding: the result is scattered back), find what the faces
         make (parts, closed ones, border edges: for the border rule and the volume restore) and apply the
         border rule, yielding 0.0 between these passes."""
         operator = self.operator
@@ -340,7 +341,7 @@ class MeshSmoother:
 
     def _noise_limit(self, noise, sigma):
         """The Automatic Amount's deviation limit: DEVIATION_IN_NOISE times the noise, and on the parts
-        core.mesh_noise limits (quiet ones, light noise) their own radius."""
+        core.mesh.noise limits (quiet ones, light noise) their own radius."""
         limit = DEVIATION_IN_NOISE * sigma
         if noise.limited.any():
             limit = np.where(noise.limited, noise.quiet_radius(self.positions, DEVIATION_IN_NOISE), limit)
@@ -349,8 +350,8 @@ class MeshSmoother:
     def _finish(self, result, ran, amount, fixed, limit, measuring, progress, noise=None, residual=None):
         """Keep each move across the surface (Keep in Place), give closed parts their volume back (when
         ``measuring`` holds the input's measure: the Automatic Amount) within the deviation limit, give the
-        parts the run collapsed their input back (with the ``noise`` core.mesh_noise found: the Automatic
-        Amount; core.collapse), and the parts whose shape it took away too, read from the residual as
+        parts the run collapsed their input back (with the ``noise`` core.mesh.noise found: the Automatic
+        Amount; core.mesh.collapse), and the parts whose shape it took away too, read from the residual as
         ``residual`` says ("correlation": HC's rules, "move": Keep Sharp Edges'), and set ``result`` in the
         caller's numbering; returns (the largest offset, the parts given back), yielding ``progress``
         between the restore's slices and the rules. With Keep in Place the parts are judged on the run's own
@@ -375,7 +376,7 @@ class MeshSmoother:
         return offset, held
 
     def _held_parts(self, result, noise, residual, progress):
-        """(parts,) bool: the parts core.collapse gives their input back: collapsed, moved by more than
+        """(parts,) bool: the parts core.mesh.collapse gives their input back: collapsed, moved by more than
         their noise, or (``residual`` "correlation": HC's) their shape taken away with the noise, as the
         residual's neighbour correlation reads it; yields ``progress`` between the rules."""
         parts = collapse.collapsed(self.positions, result, noise.part_of_vertex, noise.sigma)
@@ -394,12 +395,12 @@ class MeshSmoother:
         return parts
 
     def _sharp_steps(self, chunk, start):
-        """``steps`` with Keep Sharp Edges (core.sharp_edges): with the Automatic Amount the steps, and an
-        angle no narrower than the noise's, come from the noise core.mesh_noise finds (parts without noise
+        """``steps`` with Keep Sharp Edges (core.mesh.sharp_edges): with the Automatic Amount the steps, and an
+        angle no narrower than the noise's, come from the noise core.mesh.noise finds (parts without noise
         held or kept within a small radius, as HC's default does), and closed parts get their volume back.
         Where it finds noise the filter is guided, steps set or not (a clean coarse model keeps Sun et al.'s)."""
         iterations, amount, fixed, angle, noise = self.iterations, None, self.fixed, self.sharpness_angle, None
-        guided = False  # the guidance where core.mesh_noise finds noise (core.sharp_edges), steps set or not
+        guided = False  # the guidance where core.mesh.noise finds noise (core.mesh.sharp_edges), steps set or not
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
         restoring, share = self.automatic and self.faces is not None, 0.0
         if restoring:
@@ -457,7 +458,7 @@ class MeshSmoother:
 
     def _keep_volume(self, result, fixed, limit, measured, progress):
         """Each closed part's volume given back by a bounded uniform offset of its moving vertices along
-        their normals (core.volume), in slices (yielding ``progress``); returns (positions, largest offset).
+        their normals (core.mesh.volume), in slices (yielding ``progress``); returns (positions, largest offset).
         Fixed vertices and those of influence 0 stay bit for bit."""
         movable = ~fixed if self.influence is None else ~fixed & (self.influence > 0.0)
         restored, offsets = yield from as_fraction(
@@ -530,24 +531,24 @@ def smooth_mesh(
         Amount ``DEVIATION_IN_NOISE`` times the noise it estimated, else no limit.
     weld : bool
         Smooth coincident vertices (equal, or within 1e-6 of the median edge length apart: UV seams,
-        triangle soups, STL) as one vertex (core.welding): they move alike, a soup like its welded mesh.
+        triangle soups, STL) as one vertex (core.mesh.welding): they move alike, a soup like its welded mesh.
         The result still has every vertex. A welded vertex is fixed if any of its copies is, and takes
         the least influence of its copies; the faces (and whether they are closed) are taken as welded.
     border : {"free", "curve", "fixed"}
         Open-border vertices (on an edge of one face) average all their neighbours (the paper's
-        algorithm), follow their border as a curve, or stay (core.borders). "curve" and "fixed" need faces.
+        algorithm), follow their border as a curve, or stay (core.mesh.borders). "curve" and "fixed" need faces.
     keep_sharp_edges : bool
-        Smooth with core.sharp_edges (face normals filtered without averaging across creases, vertices
+        Smooth with core.mesh.sharp_edges (face normals filtered without averaging across creases, vertices
         fitted to them, HC's push-back) instead of HC's umbrella: for hard-surface scans. Needs faces.
-        ``iterations`` then counts its steps (default ``core.sharp_edges.DEFAULT_ITERATIONS``), alpha and
-        beta weight its push-back (defaults 0 and ``core.sharp_edges.DEFAULT_BETA``); ``method`` and
-        ``mode`` are not used. The Automatic Amount chooses the steps from the noise core.mesh_noise finds.
+        ``iterations`` then counts its steps (default ``core.mesh.sharp_edges.DEFAULT_ITERATIONS``), alpha and
+        beta weight its push-back (defaults 0 and ``core.mesh.sharp_edges.DEFAULT_BETA``); ``method`` and
+        ``mode`` are not used. The Automatic Amount chooses the steps from the noise core.mesh.noise finds.
     sharpness_angle : float
         Radians in (0, pi): faces meeting at more than this angle keep their crease (as Blender's Auto
-        Smooth angle). Default ``core.sharp_edges.DEFAULT_SHARPNESS_ANGLE``.
+        Smooth angle). Default ``core.mesh.sharp_edges.DEFAULT_SHARPNESS_ANGLE``.
     keep_in_place : bool or "auto"
         Keep only the part of each vertex's move across the surface (along the result's vertex normal,
-        core.in_place): textures, UVs and open outlines stay where they were. Needs faces. ``"auto"``: on
+        core.mesh.in_place): textures, UVs and open outlines stay where they were. Needs faces. ``"auto"``: on
         with the Automatic Amount (HC's, where faces are given), off when numbers are given (the paper's
         algorithm, bit for bit).
     return_report : bool

@@ -5,13 +5,13 @@ same matrix S_k, a polynomial in the umbrella operator T (paper section 5). Too 
 noise, too many flatten the shape; the best k depends on the noise, the edge lengths and the shape's
 detail. It is chosen here from the mesh alone, by generalized cross-validation (GCV) along one HC run.
 
-First, which parts have noise at all (core.mesh_noise): GCV cannot tell a clean mesh's curvature from
+First, which parts have noise at all (core.mesh.noise): GCV cannot tell a clean mesh's curvature from
 noise and would smooth a Blender primitive's shape away. Clean parts (an estimate of at most
-core.mesh_noise.CLEAN edge lengths: analytic shapes) and parts of at most four vertices (nothing tells
+core.mesh.noise.CLEAN edge lengths: analytic shapes) and parts of at most four vertices (nothing tells
 their noise from their shape) are held fixed; a mesh with nothing else gets 0 iterations. Quiet parts
-(an estimate below the threshold that core.mesh_noise cannot tell from a coarse shape's detail) and
+(an estimate below the threshold that core.mesh.noise cannot tell from a coarse shape's detail) and
 light-noise parts (below the threshold, but white) are smoothed with the others, and core.MeshSmoother
-keeps their vertices within a radius of their own (core.mesh_noise.Noise.quiet_radius);
+keeps their vertices within a radius of their own (core.mesh.noise.Noise.quiet_radius);
 ``noise_found`` says whether any part has noise (above the threshold, or light). On the parts that move:
 
 * **Residual**: R(k) = mean over sample vertices of ((y_i - x_i(k)) . n_i)^2, the part of what the
@@ -28,7 +28,7 @@ keeps their vertices within a radius of their own (core.mesh_noise.Noise.quiet_r
   noisy meshes with sharp edges): the amount chosen is the largest k whose GCV is within
   ``TOLERANCE`` of the minimum, i.e. the most smoothing the estimate cannot tell from the best.
 * The square root of the minimum GCV is the noise estimate (standard deviation along the normals),
-  at most ROBUST_SIGMAS times core.mesh_noise's robust one.
+  at most ROBUST_SIGMAS times core.mesh.noise's robust one.
 * **Light noise on coarse meshes**: where that picks at most ``FINE_MAX`` iterations, whole steps at
   the given beta are too coarse to say how much smoothing is wanted: k steps smooth a low frequency
   as much as k (1 - beta) steps of the gentlest kind, and below beta 0.75 a step also overshoots the
@@ -39,7 +39,7 @@ keeps their vertices within a radius of their own (core.mesh_noise.Noise.quiet_r
   amount says so in its beta.
 
 Where the noise is large against a thin part (a tube a few edges around), the amount with the least
-error also shrinks that part by a few per cent; core.volume.restore_volume gives the volume back.
+error also shrinks that part by a few per cent; core.mesh.volume.restore_volume gives the volume back.
 
 Big meshes:
 
@@ -71,12 +71,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
-from .convergence import ConvergenceWarning, DivergenceError
-from .mesh_noise import neighbours, noise_steps
-from .slices import as_fraction
-from .smoothing import Smoothing
-from .validation import check_fixed, check_positions, check_unit_interval
+from ..adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
+from ..convergence import ConvergenceWarning, DivergenceError
+from ..slices import as_fraction
+from ..smoothing import Smoothing
+from ..validation import check_fixed, check_positions, check_unit_interval
+from .noise import neighbours, noise_steps
 
 TOLERANCE = 0.005  # GCV within this fraction of its minimum counts as the minimum (see above)
 MAX_ITERATIONS = 200  # the most the automatic amount chooses: bounds the cost on heavy noise and fine meshes
@@ -97,7 +97,7 @@ PATCH_PROBE_ENTRIES = 180_000  # more probe entries on the patches' fewer vertic
 _SEED = 20_161_999  # the probes' seed: fixed, so the choice is reproducible
 FINE_MAX = 3  # choices of at most this many iterations are made again on gentler steps (see above) ...
 FINE_BETA = 0.75  # ... of this beta
-# The noise estimate is GCV's, at most this many times core.mesh_noise's: on coarse meshes GCV reads the
+# The noise estimate is GCV's, at most this many times core.mesh.noise's: on coarse meshes GCV reads the
 # shape as noise (up to ~5x the truth at light noise), the robust estimate never does (it reads heavy
 # noise along the normals low, 0.65x at a noise of 3 edge lengths).
 ROBUST_SIGMAS = 2.0
@@ -142,12 +142,12 @@ class MeshAmount:
     beta: float
     iterations: int
     # Estimated noise, standard deviation along the normals (the positions' units): GCV's where noise was
-    # found (at most ROBUST_SIGMAS times the robust one), else core.mesh_noise's robust estimate (~0 on a
+    # found (at most ROBUST_SIGMAS times the robust one), else core.mesh.noise's robust estimate (~0 on a
     # clean mesh).
     sigma: float
     edge_length: float  # median edge length of the input
     explored: int  # iterations the estimate ran
-    noise_found: bool  # False: no part has noise core.mesh_noise can tell from shape (quiet parts at most)
+    noise_found: bool  # False: no part has noise core.mesh.noise can tell from shape (quiet parts at most)
     capped: bool = False  # the work budget cut the iterations: GCV wanted more
 
     @property
@@ -489,7 +489,7 @@ def _patches(operator, fixed_mask, movable):
     owner, neighbour = neighbours(chosen, operator)
     keep = number[neighbour] >= 0
     inner = np.sort(number[np.concatenate(levels[: PATCH_RINGS - PATCH_MARGIN + 1])])
-    # The operator's own pairs (a directed pattern stays directed: core.borders' curves).
+    # The operator's own pairs (a directed pattern stays directed: core.mesh.borders' curves).
     patches = umbrella_from_pairs(
         owner[keep], number[neighbour[keep]], chosen.size, symmetric=operator.symmetric or None
     )

@@ -16,9 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import parallel
+from .. import parallel
+from ..validation import bbox_diagonal, check_positions, row_lengths
 from .topology import closed_from_triangles
-from .validation import bbox_diagonal, check_positions, row_lengths
 from .volume import vertex_normals
 
 
@@ -118,7 +118,7 @@ def fan_triangles(faces):
 
     Examples
     --------
-    >>> from core import metrics
+    >>> from core.mesh import metrics
     >>> metrics.fan_triangles([[0, 1, 2, 3]]).tolist()
     [[0, 1, 2], [0, 2, 3]]
     >>> metrics.fan_triangles(([0, 3, 7], [0, 1, 2, 0, 2, 3, 4])).tolist()
@@ -183,7 +183,7 @@ def enclosed_volume(positions, triangles):
     Examples
     --------
     >>> import numpy as np
-    >>> from core import metrics
+    >>> from core.mesh import metrics
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     >>> round(float(metrics.enclosed_volume(positions, triangles)), 4)
@@ -199,7 +199,7 @@ def enclosed_volumes(triangles, *position_sets):
     Examples
     --------
     >>> import numpy as np
-    >>> from core import metrics
+    >>> from core.mesh import metrics
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     >>> [round(float(v), 4) for v in metrics.enclosed_volumes(triangles, positions, 2 * positions)]
@@ -324,7 +324,7 @@ def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> 
     Examples
     --------
     >>> import numpy as np, core
-    >>> from core import metrics
+    >>> from core.mesh import metrics
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
     >>> measured = metrics.measure_input(positions, faces)

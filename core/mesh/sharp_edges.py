@@ -14,7 +14,7 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    within each side is averaged away. The guidance (Zhang, Deng, Zhang, Bouaziz and Liu 2015, "Guided
    Mesh Normal Filtering"; ``guidance_normals``), computed once per step, is the mean normal of the most
    consistent patch each face lies in: steady where a single face is not, it tells a crease from noise
-   that tilts faces by nearly as much as the crease turns. It runs where core.mesh_noise finds noise
+   that tilts faces by nearly as much as the crease turns. It runs where core.mesh.noise finds noise
    (``guided``; core.MeshSmoother asks, steps set or not): it needs patches on one side of each crease,
    which scans have and a coarse model (every face at a corner) does not. Elsewhere Sun et al.'s filter
    compares the faces' own normals, g = n, recomputed every pass. On bench_sharp_edges.py's tuning parts
@@ -76,10 +76,9 @@ except (ImportError, TypeError, ValueError):  # SciPy without these kernels, or 
     _csr_matvec = _csr_matvecs = _csc_matvecs = None
 from numpy.typing import ArrayLike
 
-from .adjacency import Umbrella, umbrella_operator
-from .metrics import fan_triangles
-from .slices import to_end
-from .validation import (
+from ..adjacency import Umbrella, umbrella_operator
+from ..slices import to_end
+from ..validation import (
     bbox_diagonal,
     check_fixed,
     check_influence,
@@ -89,6 +88,7 @@ from .validation import (
     check_tolerance,
     check_unit_interval,
 )
+from .metrics import fan_triangles
 
 # Faces meeting at more than this angle are not averaged, as Blender's Auto Smooth angle: 30° keeps the 35°
 # and 45° creases of a bevelled box, 50° rounds them (bench_sharp_edges.py's bevelled box at 0.25 % noise,
@@ -102,14 +102,14 @@ REFIT_ITERATIONS = 5
 DEFAULT_ALPHA = 0.0  # the push-back's weights (paper section 4): beta 0 takes back each step's
 DEFAULT_BETA = 0.0  # neighbourhood mean (the drift), keeps all of the vertex-by-vertex part (the noise)
 DEFAULT_ITERATIONS = 5  # steps when the caller gives no amount and no Automatic Amount runs
-# The Automatic Amount (for a noise of ``ratio`` median edge lengths, core.mesh_noise's estimate):
+# The Automatic Amount (for a noise of ``ratio`` median edge lengths, core.mesh.noise's estimate):
 # * steps: FIRST_STEPS + STEPS_PER_RATIO x ratio, at most MAX_STEPS, and at most WORK_BUDGET / triangles
 #   (each step costs NORMAL_ITERATIONS passes over ~6 face pairs per triangle): the error on the tuning
 #   parts falls with the steps up to 10 where the noise is heavy, and is flat from 4 to 6 where it is light;
 # * angle: at least NOISE_ANGLE_GAIN x atan(ratio): noise tilts neighbouring faces by about that much,
 #   and a filter that sees noisy faces as creases leaves the noise (at 1 % noise along the normals on the
 #   tuning parts, 50°-60° leave 20-50 % less error than 30°). A crease gentler than the noise is noise.
-# * QUIET_RATIO for meshes where no part has noise above core.mesh_noise's threshold (they move within
+# * QUIET_RATIO for meshes where no part has noise above core.mesh.noise's threshold (they move within
 #   its small radius).
 FIRST_STEPS = 4
 STEPS_PER_RATIO = 20.0
@@ -615,14 +615,14 @@ class SharpSmoothing:
         False: Sun et al.'s two steps alone, without HC's push-back.
     guided : bool
         True: the filter's weights compare guidance normals, and the faces take their nearest planes (what
-        core.MeshSmoother runs where core.mesh_noise finds noise). False: Sun et al.'s filter alone.
+        core.MeshSmoother runs where core.mesh.noise finds noise). False: Sun et al.'s filter alone.
         The guidance is for meshes fine enough that most faces lie in a patch on one side of every crease
         (scans): on a coarse model (a cube of 12 triangles) every face is at a corner and it blends the sides.
 
     Examples
     --------
     >>> import numpy as np, core
-    >>> from core.sharp_edges import SharpSmoothing
+    >>> from core.mesh.sharp_edges import SharpSmoothing
     >>> positions = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
     >>> faces = [[0, 1, 3, 2], [2, 3, 7, 6], [6, 7, 5, 4], [4, 5, 1, 0], [2, 6, 4, 0], [7, 3, 1, 5]]
     >>> run = SharpSmoothing(positions, faces, iterations=2)
@@ -828,7 +828,7 @@ def sharp_smooth(positions: ArrayLike, faces, **options) -> np.ndarray:
     Examples
     --------
     >>> import numpy as np
-    >>> from core.sharp_edges import sharp_smooth
+    >>> from core.mesh.sharp_edges import sharp_smooth
     >>> u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 12))
     >>> grid = np.arange(144).reshape(12, 12)
     >>> quads = np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:], grid[1:, :-1]], -1).reshape(-1, 4)

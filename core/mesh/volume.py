@@ -25,8 +25,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import parallel, topology
-from .slices import to_end
+from .. import parallel
+from ..slices import to_end
+from . import topology
 
 _NEWTON_STEPS = 6  # at most; the volume is a cubic in the offset, Newton from 0 needs two or three
 _RELATIVE_ACCURACY = 1e-12
@@ -51,7 +52,7 @@ def vertex_normals(positions, triangles):
     Examples
     --------
     >>> import numpy as np
-    >>> from core import volume
+    >>> from core.mesh import volume
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     >>> volume.vertex_normals(positions, triangles).round(3).tolist()
@@ -106,7 +107,7 @@ class Before:
 
 
 def measure_before(before, triangles, surface):
-    """The Before of (n, 3) positions with the (t, 3) ``triangles`` and their core.topology.surface: one
+    """The Before of (n, 3) positions with the (t, 3) ``triangles`` and their core.mesh.topology.surface: one
     thread's work, which the mesh pipeline does in the background while it chooses the amount."""
     return to_end(_before_steps(np.asarray(before), np.asarray(triangles), surface))
 
@@ -237,7 +238,7 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     Examples
     --------
     >>> import numpy as np
-    >>> from core import metrics, volume
+    >>> from core.mesh import metrics, volume
     >>> positions = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
     >>> triangles = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
     >>> shrunk = 0.95 * positions  # an octahedron
@@ -253,7 +254,7 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
 def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.float64, surface=None, measured=None):
     """``restore_volume`` in slices, for callers that let the user cancel: a generator that yields (None)
     between its passes and returns (positions in ``dtype``, offsets); the same numbers (float64 math,
-    cast to ``dtype`` at the end). ``surface``: the triangles' core.topology.surface, and ``measured``:
+    cast to ``dtype`` at the end). ``surface``: the triangles' core.mesh.topology.surface, and ``measured``:
     ``measure_before(before, triangles, surface)``, if the caller has them. Beside its result it holds
     the float64 normals, a planar copy of the positions after (in their dtype) and a few bytes a vertex;
     the rest works in blocks of triangles."""

@@ -18,7 +18,7 @@ neighbours; its corners take back part of the smoother's slide, as much as unfol
 
 import numpy as np
 
-from . import parallel
+from .. import parallel
 from .volume import vertex_normals
 
 # A kept triangle is flattened where its shadow on the smoothed surface is under FOLDED times its input's
@@ -37,7 +37,7 @@ _BLOCK = 1 << 16  # triangles per block of the first check: bounds the temporari
 
 def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """``result`` with each vertex's move from ``start`` reduced to its part along ``result``'s vertex
-    normal (area-weighted, core.volume.vertex_normals). Vertices in no triangle (no normal) keep their
+    normal (area-weighted, core.mesh.volume.vertex_normals). Vertices in no triangle (no normal) keep their
     result, and the corners of a triangle that keeping would fold or flatten take back part of the slide
     (see ``unfold``); a vertex that did not move stays bit for bit. Returns a new array in ``result``'s
     dtype.
@@ -45,7 +45,7 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray) 
     Examples
     --------
     >>> import numpy as np
-    >>> from core.in_place import keep_in_place
+    >>> from core.mesh.in_place import keep_in_place
     >>> start = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.1]])
     >>> result = start + [[0, 0, 0], [0, 0, 0], [0, 0, 0], [-0.2, -0.2, -0.1]]  # slid and lowered
     >>> keep_in_place(start, result, np.array([[0, 1, 3], [0, 3, 2]])).round(3).tolist()[3]

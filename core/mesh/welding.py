@@ -37,9 +37,9 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from . import parallel
-from .adjacency import Umbrella, umbrella_from_pairs
-from .slices import to_end
+from .. import parallel
+from ..adjacency import Umbrella, umbrella_from_pairs
+from ..slices import to_end
 
 TOLERANCE = 1e-6  # vertices closer than this times the median edge length are one (equal ones always)
 CELL_EDGES = 1 / 8  # cell side in median edge lengths: distinct vertices rarely share a cell

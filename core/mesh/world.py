@@ -20,7 +20,7 @@ frame s I (exact for a power of two).
 Examples
 --------
 >>> import numpy as np
->>> from core import world
+>>> from core.mesh import world
 >>> world.frame(np.diag([2.0, 2.0, 2.0, 1.0])).tolist()
 [[2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]]
 >>> world.frame(np.eye(4)) is None
