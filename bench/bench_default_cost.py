@@ -135,7 +135,7 @@ def bunny(times):
 
 def normals_of(vertices, faces):
     """Area-weighted unit vertex normals."""
-    return core.mesh.volume.vertex_normals(vertices, faces)
+    return core.geometry.vertex_normals(vertices, faces)
 
 
 def main():

@@ -30,7 +30,7 @@ import bench_quality_inputs as inputs  # noqa: E402
 from report import Report  # noqa: E402
 
 import core  # noqa: E402
-from core.mesh.volume import vertex_normals  # noqa: E402
+from core.geometry import vertex_normals  # noqa: E402
 
 CELLS = "face/normal/0.005,cow/normal/0.0025,bunny10k/normal/0.0025,cube/normal/0.0025,cube/iso/0.0025"
 

@@ -287,7 +287,7 @@ def parse(argv, prog=PROG):
     if "alpha" in point_options or "iterations_per_round" in point_options:
         point_options["auto_amount"] = False  # as the operator: a manual amount uses alpha and steps as set
     if args.points:
-        from ..core.pointcloud.sdg import reach_gap_problem  # the rule and its words, once (NumPy only)
+        from ..core import reach_gap_problem  # the rule and its words, once
 
         reach = point_options.get("spacing_factor", settings_spec.SPACING_FACTOR.default)
         gap = point_options.get("gap_factor", settings_spec.GAP_FACTOR.default)

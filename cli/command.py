@@ -338,7 +338,7 @@ def mesh_job(name, positions, corners, sizes, fixed, influence):
     if not len(edges):
         raise FileError(f"'{name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
     kept = sizes[keep]
-    faces = core.mesh.metrics.fan_triangles((np.concatenate([[0], np.cumsum(kept)]), corners[mask]))
+    faces = core.fan_triangles((np.concatenate([[0], np.cumsum(kept)]), corners[mask]))
     fixed = np.zeros(n, dtype=bool) if fixed is None else fixed
     return jobs_module.Job(None, None, positions, edges, faces, fixed, closed=None, influence=influence)
 

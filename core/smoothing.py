@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike
 from . import locality, parallel
 from .adjacency import Umbrella, umbrella_operator
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, divergence_message
+from .geometry import project_within
 from .triangular import triangular_solver
 from .validation import (
     bbox_diagonal,
@@ -40,6 +41,10 @@ from .validation import (
 
 METHODS = ("hc", "plain", "central", "original")
 MODES = ("simultaneous", "sequential")
+# The defaults: inside HC's convergence region (Theorem 5.2: alpha > 0, beta > 0.5), so a run at them
+# settles on a shape of the input's size; the paper's recommended pairing, and the add-on's defaults.
+DEFAULT_ALPHA = 0.1
+DEFAULT_BETA = 0.6
 
 
 class Cancelled(Exception):
@@ -119,10 +124,10 @@ edges : (m, 2) array_like of int, or None
 method : {"hc", "plain", "central", "original"}, default "hc"
     HC (paper section 4, Algorithm 1) or a Laplacian variant: plain (3.1), with the central
     point (3.2), with the original point (3.3). See `METHODS`.
-alpha : float in [0, 1], default 0.0
+alpha : float in [0, 1], default 0.1 (DEFAULT_ALPHA)
     Weight of the original point o_i (``"hc"``, ``"original"``) or of the current point q_i
     (``"central"``); ``"plain"`` does not use it.
-beta : float in [0, 1], default 0.5
+beta : float in [0, 1], default 0.6 (DEFAULT_BETA)
     HC's weight of a vertex's own difference b_i against its neighbours' mean difference
     (``"hc"`` only).
 iterations : int >= 0
@@ -205,8 +210,8 @@ def smooth(
     edges: ArrayLike | None,
     *,
     method: str = "hc",
-    alpha: float = 0.0,
-    beta: float = 0.5,
+    alpha: float = DEFAULT_ALPHA,
+    beta: float = DEFAULT_BETA,
     iterations: int,
     progress: Callable[[int, int], bool | None] | None = None,
     **options: Unpack[SmoothingOptions],
@@ -337,8 +342,8 @@ class Smoothing:
         edges: ArrayLike | None,
         *,
         method: str = "hc",
-        alpha: float = 0.0,
-        beta: float = 0.5,
+        alpha: float = DEFAULT_ALPHA,
+        beta: float = DEFAULT_BETA,
         iterations: int,
         mode: str = "simultaneous",
         fixed: ArrayLike | None = None,
@@ -525,16 +530,9 @@ class _Limit:
         self.squared = radius * radius
 
     def apply(self, p, rows=slice(None)):
-        p_rows, start = p[:, rows], self.start[:, rows]
-        away = np.subtract(p_rows, start)
-        squares = np.einsum("ij,ij->j", away, away)
-        per_vertex = isinstance(self.radius, np.ndarray)
-        over = np.flatnonzero(squares > (self.squared[rows] if per_vertex else self.squared))
-        if over.size:
-            radius = self.radius[rows][over] if per_vertex else self.radius
-            scale = (radius / np.sqrt(squares[over])).astype(p.dtype)
-            for k in range(p_rows.shape[0]):
-                p_rows[k, over] = start[k, over] + away[k, over] * scale
+        squared = self.squared[rows] if isinstance(self.radius, np.ndarray) else self.squared
+        radius = self.radius[rows] if isinstance(self.radius, np.ndarray) else self.radius
+        project_within(p[:, rows], self.start[:, rows], radius, squared)
 
 
 def _box(points):

@@ -194,7 +194,7 @@ def main():
         rows.append((name, obj, iterations_of(said[0]), seconds))
     print()
 
-    triangles = core.mesh.metrics.fan_triangles(faces)
+    triangles = core.geometry.fan_triangles(faces)
     clean_volume = core.mesh.metrics.enclosed_volume(clean, triangles)
     table = []
     for name, obj, iterations, seconds in rows:

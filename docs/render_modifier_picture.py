@@ -46,7 +46,7 @@ def main():
     noisy = scene_setup.closed_suzanne(level=3)
     clean = scene_setup.positions(noisy.data).astype(np.float64)
     faces = scene_setup.faces(noisy.data)
-    triangles = core.mesh.metrics.fan_triangles(faces)
+    triangles = core.geometry.fan_triangles(faces)
     diagonal = float(np.linalg.norm(clean.max(axis=0) - clean.min(axis=0)))
     scene_setup.add_normal_noise(noisy, NOISE * diagonal, np.random.default_rng(SEED))
     noisy.name = noisy.data.name = "Noisy"

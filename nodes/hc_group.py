@@ -54,7 +54,7 @@ Warnings panel (the Warning node, Blender 4.3 and later; on 4.2 the pass-through
 import bpy
 
 from .. import settings_spec
-from ..core.smoothing import BLOW_UP_FACTOR
+from ..core import BLOW_UP_FACTOR
 
 GROUP_NAME = "HC Smooth"
 # Bump whenever the nodes or the interface change: an older group in a file is then rebuilt in place.

@@ -8,7 +8,7 @@ Plain drawing on a layout, without bpy: the operators' redo panels and ui/panel.
 """
 
 from .. import settings_spec
-from ..core.convergence import convergence_lines
+from ..core import convergence_lines
 from ..settings_spec import values_of
 
 CORE_METHOD = {choice.identifier: choice.core for choice in settings_spec.METHOD.items}

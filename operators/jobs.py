@@ -16,7 +16,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .. import core, settings_spec
-from ..core import parallel
 from . import mesh_io, objects
 
 # The method's enum identifier -> the short name reports and shape keys use.
@@ -38,7 +37,7 @@ class Job:
     result: np.ndarray = None
     report: object = None  # the core.MeshReport of the run: what ran, what the Automatic Amount chose
     change: object = None  # core.Change of the result, measured once for every report
-    measured_input: object = None  # Future of the core.mesh.metrics.InputMeasure the report compares with
+    measured_input: object = None  # Future of the core.InputMeasure the report compares with
     deviation: object = None  # the core.DeviationMap of the result (Deviation Map on), made before any write
     map_names: object = None  # mesh_io.DeviationNames: where the map goes (Deviation Map on), chosen on reading
     # The object's stretch (core.mesh.world.frame): ``positions`` and ``result`` are in world-space lengths, the
@@ -117,10 +116,10 @@ def make_job(obj, props, extra_fixed=None):
         # this thread (input_measure).
         faces, closed, corners = corner_verts.reshape(-1, 3), None, (corner_verts, corner_edges)
     else:
-        closed = core.mesh.topology.closed_from_corners(edges, corner_verts, corner_edges)
+        closed = core.closed_from_corners(edges, corner_verts, corner_edges)
         # Triangulated once per mesh, for the volume and the normals in the report (only the positions change).
         faces = mesh_io.read_faces(mesh, corner_verts)
-        faces = core.mesh.metrics.fan_triangles(faces) if faces is not None else None
+        faces = core.fan_triangles(faces) if faces is not None else None
     fixed = np.zeros(n, dtype=bool) if extra_fixed is None else extra_fixed.copy()
     if props.vertex_group:
         group = obj.vertex_groups.get(props.vertex_group)
@@ -142,7 +141,7 @@ def make_job(obj, props, extra_fixed=None):
     return Job(
         obj=obj,
         mesh=mesh,
-        positions=positions if frame is None else core.mesh.world.to_frame(positions, frame),
+        positions=positions if frame is None else core.to_frame(positions, frame),
         edges=edges,
         faces=faces,
         fixed=fixed,
@@ -215,7 +214,7 @@ def local_result(job):
     """(the positions read, the result) of a job in object space."""
     if job.frame is None:
         return job.positions, job.result
-    return job.local, core.mesh.world.from_frame(job.local, job.positions, job.result, job.frame)
+    return job.local, core.from_frame(job.local, job.positions, job.result, job.frame)
 
 
 def deviation_map(job):
@@ -242,15 +241,15 @@ def input_measure(job):
     """The Future of what the report needs of the job's input (closedness, size, volume), started once
     on a background thread: the single-threaded start of a run leaves a core free for it."""
     if job.measured_input is None:
-        job.measured_input = parallel.in_background(lambda: _measure_input(job))
+        job.measured_input = core.in_background(lambda: _measure_input(job))
     return job.measured_input
 
 
 def _measure_input(job):
     closed = job.closed
     if closed is None and job.corners is not None:  # else measure_input finds it from the triangles
-        closed = core.mesh.topology.closed_from_corners(job.edges, *job.corners)
-    return core.mesh.metrics.measure_input(job.positions, job.faces, closed=closed)
+        closed = core.closed_from_corners(job.edges, *job.corners)
+    return core.measure_input(job.positions, job.faces, closed=closed)
 
 
 def measure(job):

@@ -53,7 +53,7 @@ def read_corners(mesh):
 
 
 def read_faces(mesh, corner_verts=None):
-    """Faces as core.mesh.metrics.fan_triangles takes them, None without faces: the (f, 3) corner vertices of
+    """Faces as core.fan_triangles takes them, None without faces: the (f, 3) corner vertices of
     an all-triangle mesh, else (offsets, corner_verts).
 
     Face offsets come only through the polygons' RNA (~0.1 s per million faces); a mesh with three

@@ -101,7 +101,7 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
             return {"CANCELLED"}
         vertices = sum(len(job.positions) for job in self._jobs)
         automatic = settings_spec.automatic(settings_spec.values_of(self._settings, settings_spec.MESH), self._given())
-        iterations = core.mesh.amount.MAX_ITERATIONS if automatic else self.iterations
+        iterations = core.MAX_ITERATIONS if automatic else self.iterations
         if vertices * iterations < MODAL_WORK:
             return self._run_now(context, self._jobs)
         return self.start_modal(context, self._run(self._jobs, chunk=max(1, MODAL_WORK // max(1, vertices))))

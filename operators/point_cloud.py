@@ -13,10 +13,7 @@ import bpy
 import numpy as np
 
 from .. import core, settings_spec
-from ..core.pointcloud import PointCloudSmoother
-from ..core.pointcloud.geometry import collinear
-from ..core.pointcloud.noise import MAX_STEPS, matched_alpha
-from ..core.pointcloud.sdg import reach_gap_problem
+from ..core import MAX_POINT_CLOUD_STEPS, PointCloudSmoother, collinear, matched_alpha, reach_gap_problem
 from ..settings_spec import PointSettings
 from . import mesh_io, objects
 from .draw import draw_convergence, draw_settings
@@ -195,9 +192,9 @@ def write(clouds, settings, context):
 
 def lowest_alpha(settings):
     """The smallest alpha a run with these settings can use, before it has estimated the noise."""
-    # With the automatic amount, alpha is matched_alpha(steps) >= matched_alpha(MAX_STEPS) > 0: only beta can leave
-    # the region.
-    return matched_alpha(MAX_STEPS) if settings.auto_amount else settings.alpha
+    # With the automatic amount, alpha is matched_alpha(steps) >= matched_alpha(MAX_POINT_CLOUD_STEPS) > 0:
+    # only beta can leave the region.
+    return matched_alpha(MAX_POINT_CLOUD_STEPS) if settings.auto_amount else settings.alpha
 
 
 def convergence_note(settings):

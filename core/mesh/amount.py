@@ -73,6 +73,7 @@ from numpy.typing import ArrayLike
 
 from ..adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
 from ..convergence import ConvergenceWarning, DivergenceError
+from ..geometry import median_edge_length
 from ..slices import as_fraction
 from ..smoothing import Smoothing
 from ..validation import check_fixed, check_positions, check_unit_interval
@@ -83,10 +84,6 @@ MAX_ITERATIONS = 200  # the most the automatic amount chooses: bounds the cost o
 SAMPLE_VERTICES = 4096  # vertices the residual and normals are measured on
 PROBE_ENTRIES = 60_000  # +-1 probe entries (vertices x probes) for the trace: at least 3 probes, at most 24
 _MIN_NEIGHBOURS = 3  # a 1-ring needs three points to define a plane
-# The median edge length of a mesh with more than EDGE_SAMPLE_FROM row entries: of an even sample of EDGE_SAMPLE.
-EDGE_SAMPLE_FROM = 1 << 21
-EDGE_SAMPLE = 1 << 16
-_EDGE_ROWS = 1 << 16  # rows per block where every edge is measured
 # The runs go on patches from this many movable vertices up: PATCH_SEEDS balls of PATCH_RINGS rings, the
 # trace and the residual read on vertices at least PATCH_MARGIN rings inside (where S_k sees no cut).
 PATCH_FROM = 250_000
@@ -431,7 +428,7 @@ class _Ground:
         ground.fixed = fixed_mask = given | operator.isolated | ground.noise.held()
         movable = np.flatnonzero(~fixed_mask)
         ground.movable = movable.size
-        ground.edge_length = _median_edge_length(start, operator)
+        ground.edge_length = median_edge_length(start, operator)
         ground.whole = movable.size < PATCH_FROM
         if movable.size == 0:
             return ground
@@ -531,28 +528,3 @@ def _chosen(steps, score):
     """The largest step whose score is within TOLERANCE of the minimum."""
     within = np.flatnonzero(score <= (1.0 + TOLERANCE) * score.min())
     return steps[int(within.max())]
-
-
-def _median_edge_length(points, operator):
-    """The median length of the edges (i, j), i < j, of the operator's rows; on big meshes of an even
-    sample of EDGE_SAMPLE of the rows' entries. The lengths are measured in blocks of rows."""
-    entries = operator.indices.size
-    if entries > EDGE_SAMPLE_FROM:
-        picked = np.linspace(0, entries - 1, EDGE_SAMPLE).astype(np.int64)
-        rows = np.searchsorted(operator.indptr, picked, side="right") - 1
-        lengths = _lengths(points, rows, operator.indices[picked])
-    else:
-        lengths = []
-        for low in range(0, operator.n_vertices, _EDGE_ROWS):
-            high = min(low + _EDGE_ROWS, operator.n_vertices)
-            rows = np.repeat(np.arange(low, high), operator.degree[low:high])
-            lengths.append(_lengths(points, rows, operator.indices[operator.indptr[low] : operator.indptr[high]]))
-        lengths = np.concatenate(lengths) if lengths else np.zeros(0)
-    return float(np.median(lengths)) if lengths.size else 0.0
-
-
-def _lengths(points, rows, columns):
-    """The lengths of the pairs (row, column) with row < column."""
-    upper = columns > rows
-    difference = np.asarray(points[rows[upper]], np.float64) - np.asarray(points[columns[upper]], np.float64)
-    return np.sqrt(np.einsum("ij,ij->i", difference, difference))

@@ -37,8 +37,8 @@ import math
 import numpy as np
 
 from .. import parallel
+from ..geometry import vertex_normals
 from .amount import PATCH_FROM
-from .volume import vertex_normals
 
 # Of the radius noise removal can leave: a collapsing cone ends near 0 (HC) or at 0.4-0.66 (Keep Sharp Edges),
 # a smoothing that keeps the shape near 1. An 8-vertex cube with noise of half its edge can end below it (its

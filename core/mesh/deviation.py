@@ -123,7 +123,7 @@ def normal_deviation(before: ArrayLike, after: ArrayLike, faces=None, *, normals
     before, after : (n, 3) array_like of float32 or float64
         The input and the result, vertex for vertex.
     faces : optional
-        As for ``core.mesh.metrics.fan_triangles``: the faces whose area-weighted normals (of ``before``) are
+        As for ``core.geometry.fan_triangles``: the faces whose area-weighted normals (of ``before``) are
         the vertex normals. None (and no ``normals``): every vertex gets 0.
     normals : (n, 3) array_like, optional
         The input's unit vertex normals, if the caller has them (``core.mesh.metrics.measure_input`` makes

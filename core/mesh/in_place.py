@@ -19,7 +19,8 @@ neighbours; its corners take back part of the smoother's slide, as much as unfol
 import numpy as np
 
 from .. import parallel
-from .volume import vertex_normals
+from ..geometry import vertex_normals
+from ..parallel import BLOCK
 
 # A kept triangle is flattened where its shadow on the smoothed surface is under FOLDED times its input's
 # shadow, or under FLAT times its input's area (folded where the shadow is not positive).
@@ -32,12 +33,12 @@ _ROUNDS = 2
 _HALVED = 0.1
 _FOLDED_LAYOUT = 0.25
 _LAST = 8
-_BLOCK = 1 << 16  # triangles per block of the first check: bounds the temporaries
+_BLOCK = BLOCK  # triangles per block of the first check: bounds the temporaries
 
 
 def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """``result`` with each vertex's move from ``start`` reduced to its part along ``result``'s vertex
-    normal (area-weighted, core.mesh.volume.vertex_normals). Vertices in no triangle (no normal) keep their
+    normal (area-weighted, core.geometry.vertex_normals). Vertices in no triangle (no normal) keep their
     result, and the corners of a triangle that keeping would fold or flatten take back part of the slide
     (see ``unfold``); a vertex that did not move stays bit for bit. Returns a new array in ``result``'s
     dtype.

@@ -16,7 +16,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse import csgraph
 
-_BLOCK = 1 << 20  # pattern entries per block of the condensation pass
+from ..parallel import PATTERN_BLOCK
+
+_BLOCK = PATTERN_BLOCK  # pattern entries per block of the condensation pass
 
 
 def parts(indptr, indices, n, cyclic=True):

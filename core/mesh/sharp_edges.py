@@ -77,6 +77,8 @@ except (ImportError, TypeError, ValueError):  # SciPy without these kernels, or 
 from numpy.typing import ArrayLike
 
 from ..adjacency import Umbrella, umbrella_operator
+from ..geometry import face_normals, fan_triangles, project_rows_within
+from ..parallel import BLOCK
 from ..slices import to_end
 from ..validation import (
     bbox_diagonal,
@@ -88,7 +90,6 @@ from ..validation import (
     check_tolerance,
     check_unit_interval,
 )
-from .metrics import fan_triangles
 
 # Faces meeting at more than this angle are not averaged, as Blender's Auto Smooth angle: 30° keeps the 35°
 # and 45° creases of a bevelled box, 50° rounds them (bench_sharp_edges.py's bevelled box at 0.25 % noise,
@@ -129,7 +130,7 @@ STEP_SLICES = GUIDED_SLICES + NORMAL_ITERATIONS + FIT_SLICES + REFIT_SLICES + FO
 # The guidance's vertex rings (about 6 faces) count their consistency this many times against the face
 # rings' (about 13): on the tuning parts at 0.5 % noise 1.5-3 leave the same dihedral error, 1 more.
 VERTEX_RING_WEIGHT = 2.0
-_BLOCK = 1 << 16  # face pairs per block of the filtering's dot products: its temporaries stay in cache
+_BLOCK = BLOCK  # face pairs per block of the filtering's dot products: its temporaries stay in cache
 
 
 def steps_for_noise(ratio, triangles):
@@ -238,19 +239,6 @@ class FaceRings:
         self.faces_at = np.diff(self.incidence.indptr)
         self.triangles = triangles
         yield
-
-
-def face_normals(points, triangles):
-    """(t, 3) unit normals (right-hand rule over the corners); (0, 0, 0) for a degenerate triangle."""
-    coordinates = np.ascontiguousarray(points.T)  # coordinate rows: 1-D gathers and element-wise work
-    first, second, third = (np.ascontiguousarray(triangles[:, k]) for k in range(3))
-    u = [row.take(second) - row.take(first) for row in coordinates]
-    v = [row.take(third) - row.take(first) for row in coordinates]
-    normals = np.empty((triangles.shape[0], 3), dtype=u[0].dtype)
-    for k in range(3):  # u x v, as np.cross computes it
-        i, j = (k + 1) % 3, (k + 2) % 3
-        normals[:, k] = u[i] * v[j] - u[j] * v[i]
-    return _unit(normals)
 
 
 def _unit(vectors, good=None):
@@ -740,7 +728,7 @@ class SharpSmoothing:
         unfolding = _unfold(moved, start, before, self.triangles, normals, _unit(self.rings.ring @ normals))
         yield from _counted(unfolding, slices)
         if np.any(self.max_deviation):
-            _within(moved, self.original, self.max_deviation)
+            project_rows_within(moved, self.original, self.max_deviation)
         self.done += 1
         if self.tolerance:
             largest = float(np.sqrt(np.max(np.einsum("ij,ij->i", moved - start, moved - start), initial=0.0)))
@@ -810,16 +798,6 @@ def _unfold(points, start, before, triangles, normals, around, rounds=FOLD_ROUND
 def _turned(now, normals, around):
     """The triangles whose normals ``now`` lie more than 90° from their filtered ``normals`` or ring means."""
     return (np.einsum("ij,ij->i", now, normals) < 0.0) | (np.einsum("ij,ij->i", now, around) < 0.0)
-
-
-def _within(points, start, radius):
-    """``points`` projected, in place, onto the balls of ``radius`` (one distance, or one per row) around ``start``."""
-    away = points - start
-    lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
-    bound = np.broadcast_to(radius, lengths.shape)
-    over = np.flatnonzero(lengths > bound)
-    if over.size:
-        points[over] = start[over] + away[over] * (bound[over] / lengths[over])[:, None]
 
 
 def sharp_smooth(positions: ArrayLike, faces, **options) -> np.ndarray:

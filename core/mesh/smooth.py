@@ -33,8 +33,9 @@ from numpy.typing import ArrayLike
 from .. import parallel
 from ..adjacency import Umbrella, umbrella_operator
 from ..convergence import ConvergenceWarning
+from ..geometry import fan_triangles, median_edge_length, project_rows_within
 from ..slices import as_fraction, to_end
-from ..smoothing import METHODS, MODES, Cancelled, Smoothing
+from ..smoothing import DEFAULT_ALPHA, DEFAULT_BETA, METHODS, MODES, Cancelled, Smoothing
 from ..validation import (
     check_choice,
     check_fixed,
@@ -49,13 +50,10 @@ from . import collapse, sharp_edges, topology, volume, welding
 from .amount import PATCH_FROM, AmountChooser, MeshAmount
 from .borders import BORDERS, apply_border
 from .in_place import keep_in_place as project_in_place
-from .metrics import fan_triangles
 from .noise import noise_steps
 from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
 
 AUTO = "auto"
-DEFAULT_ALPHA = 0.1
-DEFAULT_BETA = 0.6
 DEFAULT_ITERATIONS = 10
 # The Automatic Amount's deviation limit, in estimated noise (standard deviations along the normals): the
 # farthest a vertex may move when the caller set no limit.
@@ -66,7 +64,6 @@ DEVIATION_IN_NOISE = 4.0
 CHOOSING_SHARE = 2 / 3
 PATCH_CHOOSING_SHARE = 1 / 5
 RESTORE_SHARE = 1 / 10  # ... and the volume restore, at the end
-_ROWS = 1 << 17  # vertices per block of the final projection onto the deviation limit
 
 
 @dataclass(frozen=True)
@@ -365,7 +362,7 @@ class MeshSmoother:
             limited = volume.NOISE_OFFSETS * amount.sigma
             result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), progress)
             if np.any(limit):  # the offset keeps to the limit too
-                _within(result, self.positions, limit)
+                project_rows_within(result, self.positions, limit)
         if parts is None and noise is not None and ran > 0:
             parts = yield from self._held_parts(result, noise, residual, progress)
         held = 0 if parts is None else int(np.count_nonzero(parts))
@@ -408,7 +405,7 @@ class MeshSmoother:
         if self.automatic:
             share = sharp_edges.CHOOSING_SHARE
             noise = yield from as_fraction(noise_steps(self.positions, self.surface_operator), 0.0)
-            edge = welding.median_edge_length(self.positions, self.surface_operator)
+            edge = median_edge_length(self.positions, self.surface_operator)
             sigma = noise.level()
             ratio = sigma / edge if edge > 0 else 0.0
             if not noise.found:  # light noise at most: smoothed within a small radius (below)
@@ -477,20 +474,6 @@ class MeshSmoother:
             if progress is not None and fraction < 1.0 and progress(fraction) is False:
                 raise Cancelled(f"cancelled at {fraction:.0%}")
         return self.result
-
-
-def _within(points, start, radius):
-    """``points`` projected, in place, onto the balls of ``radius`` (a distance, or one per row) around
-    ``start`` (rows beyond it only)."""
-    for low in range(0, len(points), _ROWS):
-        rows = slice(low, low + _ROWS)
-        away = points[rows] - start[rows]
-        lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
-        bound = radius[rows] if isinstance(radius, np.ndarray) else radius
-        over = np.flatnonzero(lengths > bound)
-        if over.size:
-            reach = bound[over] if isinstance(bound, np.ndarray) else bound
-            points[rows][over] = start[rows][over] + away[over] * (reach / lengths[over])[:, None].astype(points.dtype)
 
 
 def smooth_mesh(

@@ -12,10 +12,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..adjacency import grouped_pairs
+from ..parallel import BLOCK
 from ..slices import to_end
 from .parts import parts as connected_parts
 
-_ROW_BLOCK = 1 << 16  # vertices per block where each of their half-edges is compared (several int64 each)
+_ROW_BLOCK = BLOCK  # vertices per block where each of their half-edges is compared (several int64 each)
 
 
 def closed_from_corners(edges, corner_verts, corner_edges):

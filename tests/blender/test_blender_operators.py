@@ -54,7 +54,7 @@ def test_object_mode_equals_core_on_the_same_arrays(scene):
 def add_on_default(before, obj, **given):
     """What the add-on runs with nothing set but ``given``: core.smooth_mesh with the Automatic Amount,
     split vertices welded."""
-    triangles = core.mesh.metrics.fan_triangles(np.array(faces_of(obj.data)))
+    triangles = core.geometry.fan_triangles(np.array(faces_of(obj.data)))
     return core.smooth_mesh(
         before, edges_of(obj.data), faces=triangles, weld=True, border="free", return_report=True, **given
     )
@@ -189,7 +189,7 @@ def test_keep_outline_runs_cores_curve_rule_and_keeps_the_outline(scene, capfd):
     obj = noisy_grid()
     before = positions_of(obj.data)
     assert bpy.ops.object.hc_smooth(keep_outline=True, iterations=20) == {"FINISHED"}
-    triangles = core.mesh.metrics.fan_triangles(np.array(faces_of(obj.data)))
+    triangles = core.geometry.fan_triangles(np.array(faces_of(obj.data)))
     expected = core.smooth_mesh(
         before, edges_of(obj.data), faces=triangles, weld=True, border="curve", alpha=ALPHA, beta=BETA, iterations=20
     )

@@ -8,9 +8,9 @@ from paper_reference import smooth_loop
 from test_welding import first_appearance, soup_of
 
 import core
+from core.geometry import fan_triangles
 from core.mesh import amount as mesh_amount
 from core.mesh.borders import apply_border, border_edges
-from core.mesh.metrics import fan_triangles
 
 
 def quad_grid(nx, ny):

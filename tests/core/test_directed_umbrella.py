@@ -11,8 +11,8 @@ from paper_reference import smooth_loop
 
 import core
 from core import locality
+from core.geometry import fan_triangles
 from core.mesh.borders import apply_border
-from core.mesh.metrics import fan_triangles
 
 
 def dense_pattern(operator):

@@ -8,8 +8,8 @@ import pytest
 from primitives import grid, ico_sphere
 
 import core
+from core.geometry import vertex_normals
 from core.mesh.in_place import keep_in_place
-from core.mesh.volume import vertex_normals
 
 
 def _noisy_along_normals(part, sigma, seed=0):

@@ -5,7 +5,7 @@ import pytest
 import small_meshes as sm
 
 import core
-from core.mesh.metrics import fan_triangles
+from core.geometry import fan_triangles
 from core.mesh.topology import closed_from_triangles as is_closed
 
 

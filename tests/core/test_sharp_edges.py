@@ -7,8 +7,9 @@ import pytest
 from primitives import CAD, PRIMITIVES, TINY
 
 import core
+from core.geometry import face_normals
 from core.mesh import sharp_edges
-from core.mesh.sharp_edges import FaceRings, SharpSmoothing, face_normals, filter_normals, fit_vertices, sharp_smooth
+from core.mesh.sharp_edges import FaceRings, SharpSmoothing, filter_normals, fit_vertices, sharp_smooth
 from core.slices import to_end
 
 

@@ -5,7 +5,8 @@ import pytest
 from test_mesh_amount import icosphere
 
 import core
-from core.mesh.volume import restore_volume, vertex_normals
+from core.geometry import vertex_normals
+from core.mesh.volume import restore_volume
 
 
 def volume(points, triangles):

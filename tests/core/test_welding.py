@@ -120,7 +120,7 @@ def test_copies_within_the_tolerance_move_alike_and_keep_their_offset(sphere):
     noisy, faces = sphere
     seam_positions, seam_faces, on_seam = seam_split(sm.uv_sphere(10, 16)[0], faces)
     n = len(noisy)
-    edge = welding.median_edge_length(noisy, core.umbrella_operator(edges(faces), n))
+    edge = core.geometry.median_edge_length(noisy, core.umbrella_operator(edges(faces), n))
     offset = np.random.default_rng(3).normal(size=(on_seam.size, 3))
     offset *= 0.3 * welding.TOLERANCE * edge / np.linalg.norm(offset, axis=1, keepdims=True)
     positions = np.concatenate([noisy, noisy[on_seam] + offset])
