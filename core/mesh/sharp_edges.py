@@ -103,22 +103,6 @@ REFIT_ITERATIONS = 5
 DEFAULT_ALPHA = 0.0  # the push-back's weights (paper section 4): beta 0 takes back each step's
 DEFAULT_BETA = 0.0  # neighbourhood mean (the drift), keeps all of the vertex-by-vertex part (the noise)
 DEFAULT_ITERATIONS = 5  # steps when the caller gives no amount and no Automatic Amount runs
-# The Automatic Amount (for a noise of ``ratio`` median edge lengths, core.mesh.noise's estimate):
-# * steps: FIRST_STEPS + STEPS_PER_RATIO x ratio, at most MAX_STEPS, and at most WORK_BUDGET / triangles
-#   (each step costs NORMAL_ITERATIONS passes over ~6 face pairs per triangle): the error on the tuning
-#   parts falls with the steps up to 10 where the noise is heavy, and is flat from 4 to 6 where it is light;
-# * angle: at least NOISE_ANGLE_GAIN x atan(ratio): noise tilts neighbouring faces by about that much,
-#   and a filter that sees noisy faces as creases leaves the noise (at 1 % noise along the normals on the
-#   tuning parts, 50°-60° leave 20-50 % less error than 30°). A crease gentler than the noise is noise.
-# * QUIET_RATIO for meshes where no part has noise above core.mesh.noise's threshold (they move within
-#   its small radius).
-FIRST_STEPS = 4
-STEPS_PER_RATIO = 20.0
-MAX_STEPS = 10
-WORK_BUDGET = 12_000_000  # triangle-steps
-NOISE_ANGLE_GAIN = 2.5
-QUIET_RATIO = 0.05
-CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its progress the noise estimate takes
 TANGENTIAL = 0.5  # share of the tangential umbrella move per step on vertices off the creases (step 3)
 FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
 PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the passes of a step
@@ -131,18 +115,6 @@ STEP_SLICES = GUIDED_SLICES + NORMAL_ITERATIONS + FIT_SLICES + REFIT_SLICES + FO
 # rings' (about 13): on the tuning parts at 0.5 % noise 1.5-3 leave the same dihedral error, 1 more.
 VERTEX_RING_WEIGHT = 2.0
 _BLOCK = BLOCK  # face pairs per block of the filtering's dot products: its temporaries stay in cache
-
-
-def steps_for_noise(ratio, triangles):
-    """The Automatic Amount's steps for noise of ``ratio`` median edge lengths on ``triangles`` triangles."""
-    wanted = min(MAX_STEPS, round(FIRST_STEPS + STEPS_PER_RATIO * ratio))
-    return int(max(1, min(wanted, WORK_BUDGET // max(1, triangles))))
-
-
-def angle_for_noise(angle, ratio):
-    """The Automatic Amount's sharpness angle: ``angle``, or wider where noise of ``ratio`` median edge
-    lengths tilts neighbouring faces by more (at most 80°)."""
-    return max(angle, min(math.radians(80.0), NOISE_ANGLE_GAIN * math.atan(ratio)))
 
 
 def check_sharpness_angle(value):

@@ -46,7 +46,7 @@ from ..validation import (
     check_tolerance,
     check_unit_interval,
 )
-from . import collapse, sharp_edges, topology, volume, welding
+from . import collapse, sharp_amount, sharp_edges, topology, volume, welding
 from .amount import PATCH_FROM, AmountChooser, MeshAmount
 from .borders import BORDERS, apply_border
 from .in_place import keep_in_place as project_in_place
@@ -403,16 +403,16 @@ class MeshSmoother:
         if restoring:
             measuring = parallel.in_background(lambda: volume.measure_before(self.positions, self.faces, self.surface))
         if self.automatic:
-            share = sharp_edges.CHOOSING_SHARE
+            share = sharp_amount.CHOOSING_SHARE
             noise = yield from as_fraction(noise_steps(self.positions, self.surface_operator), 0.0)
             edge = median_edge_length(self.positions, self.surface_operator)
             sigma = noise.level()
             ratio = sigma / edge if edge > 0 else 0.0
             if not noise.found:  # light noise at most: smoothed within a small radius (below)
-                ratio = min(ratio, sharp_edges.QUIET_RATIO)
+                ratio = min(ratio, sharp_amount.QUIET_RATIO)
             guided = noise.found
-            iterations = sharp_edges.steps_for_noise(ratio, self.faces.shape[0])
-            angle = sharp_edges.angle_for_noise(angle, ratio)
+            iterations = sharp_amount.steps_for_noise(ratio, self.faces.shape[0])
+            angle = sharp_amount.angle_for_noise(angle, ratio)
             fixed = fixed | noise.held()
             if fixed.all():  # nothing to smooth (clean parts only)
                 iterations = 0
@@ -421,7 +421,7 @@ class MeshSmoother:
                 limit = self._noise_limit(noise, sigma)
             yield share
         elif self.iterations > 0:  # set steps: the noise test only chooses the filter
-            share = sharp_edges.CHOOSING_SHARE
+            share = sharp_amount.CHOOSING_SHARE
             guided = (yield from as_fraction(noise_steps(self.positions, self.surface_operator), 0.0)).found
             yield share
         end = 1.0 - RESTORE_SHARE if restoring else 1.0
