@@ -32,6 +32,7 @@ class Job:
     fixed: np.ndarray  # bool (n,)
     closed: bool | None = False  # the faces enclose a volume; None: not checked yet (see input_measure)
     corners: tuple = None  # (corner_verts, corner_edges) while ``closed`` is None, if Blender gave them
+    seams: bool = True  # copies of a vertex may stand on a seam: some edge has one face, or there are no faces
     influence: np.ndarray = None  # float32 (n,) weights of the influence group, if any
     key_block: object = None  # the active shape key that holds ``positions``, if any
     result: np.ndarray = None
@@ -111,6 +112,8 @@ def make_job(obj, props, extra_fixed=None):
     edges = mesh_io.read_edges(mesh)
     corner_verts, corner_edges = mesh_io.read_corners(mesh)
     corners = None
+    # Every face edge shared by two faces or more: no seam was split, the welding's search (a sort) is skipped.
+    seams = not (corner_edges.size and core.topology.every_edge_shared(corner_edges, len(mesh.edges)))
     if corner_verts.size and corner_verts.size == 3 * len(mesh.polygons):
         # All triangles (scans): the faces come free; whether they close is checked with the report, off
         # this thread (input_measure).
@@ -147,6 +150,7 @@ def make_job(obj, props, extra_fixed=None):
         fixed=fixed,
         closed=closed,
         corners=corners,
+        seams=seams,
         key_block=key_block,
         influence=influence,
         map_names=mesh_io.deviation_names(obj) if props.deviation_map else None,
@@ -171,9 +175,11 @@ def run(jobs, props, chunk=None, given=frozenset()):
 
 def make_smoother(job, options):
     """The core.MeshSmoother of a job with ``core_options``' options (checks them: ValueError). A mesh
-    without faces (loose edges) has no border to follow or hold."""
+    without faces (loose edges) has no border to follow or hold; one without seams nothing to weld."""
     if job.faces is None:
         options = {**options, "border": "free"}
+    if not job.seams:
+        options = {**options, "weld": False}
     return core.MeshSmoother(
         job.positions,
         job.edges,

@@ -58,6 +58,22 @@ def closed_from_corners(edges, corner_verts, corner_edges):
     return bool(np.count_nonzero(seen) == keys.size and np.array_equal(seen[0::2], seen[1::2]))
 
 
+def every_edge_shared(corner_edges, n_edges):
+    """Whether no edge of a face lies on that face alone (Blender's layout: per face corner, the edge to
+    the next corner). Such a mesh has no seam that a file or an exporter split into copies of its
+    vertices, so there is nothing to weld.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core import topology
+    >>> corner_edges = np.array([1, 3, 0, 0, 4, 2, 2, 5, 1, 3, 5, 4])  # a tetrahedron, 4 triangles
+    >>> topology.every_edge_shared(corner_edges, 6), topology.every_edge_shared(corner_edges[:9], 6)
+    (True, False)
+    """
+    return not np.any(np.bincount(corner_edges, minlength=n_edges) == 1)
+
+
 def closed_from_triangles(triangles):
     """Every directed edge of the (t, 3) triangles is matched by exactly one in the opposite direction.
 
