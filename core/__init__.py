@@ -18,7 +18,8 @@ Meshes (core/mesh)
     Automatic Amount and the most iterations it chooses. measure_input, InputMeasure, measure_change,
     Change: what a run changed (the report). deviation_map, DeviationMap, normal_deviation,
     deviation_extent, deviation_colors: the deviation map. closed_from_corners: whether Blender-style
-    faces close a surface. world_frame, to_frame, from_frame: an object's stretch (its world-space shape).
+    faces close a surface; every_edge_shared: whether they leave no seam to weld. world_frame,
+    to_frame, from_frame: an object's stretch (its world-space shape).
 Point clouds (core/pointcloud, section 7)
     smooth_point_cloud, PointCloudSmoother: the RFS-mesh pipeline. collinear: points no surface can
     join. reach_gap_problem: why a reach and gap cannot go together. matched_alpha,
@@ -43,7 +44,7 @@ from .mesh.amount import MAX_ITERATIONS, AmountChooser, MeshAmount, choose_amoun
 from .mesh.deviation import DeviationMap, deviation_colors, deviation_extent, deviation_map, normal_deviation
 from .mesh.metrics import Change, InputMeasure, measure_change, measure_input
 from .mesh.smooth import AUTO, DEFAULT_ALPHA, DEFAULT_BETA, DEFAULT_ITERATIONS, MeshReport, MeshSmoother, smooth_mesh
-from .mesh.topology import closed_from_corners
+from .mesh.topology import closed_from_corners, every_edge_shared
 from .mesh.world import frame as world_frame
 from .mesh.world import from_frame, to_frame
 from .parallel import in_background
@@ -100,6 +101,7 @@ __all__ = [
     "MeshSmoother",
     "choose_amount",
     "closed_from_corners",
+    "every_edge_shared",
     "deviation_colors",
     "deviation_extent",
     "deviation_map",

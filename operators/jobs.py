@@ -113,7 +113,7 @@ def make_job(obj, props, extra_fixed=None):
     corner_verts, corner_edges = mesh_io.read_corners(mesh)
     corners = None
     # Every face edge shared by two faces or more: no seam was split, the welding's search (a sort) is skipped.
-    seams = not (corner_edges.size and core.topology.every_edge_shared(corner_edges, len(mesh.edges)))
+    seams = not (corner_edges.size and core.every_edge_shared(corner_edges, len(mesh.edges)))
     if corner_verts.size and corner_verts.size == 3 * len(mesh.polygons):
         # All triangles (scans): the faces come free; whether they close is checked with the report, off
         # this thread (input_measure).

@@ -66,9 +66,9 @@ def every_edge_shared(corner_edges, n_edges):
     Examples
     --------
     >>> import numpy as np
-    >>> from core import topology
+    >>> import core
     >>> corner_edges = np.array([1, 3, 0, 0, 4, 2, 2, 5, 1, 3, 5, 4])  # a tetrahedron, 4 triangles
-    >>> topology.every_edge_shared(corner_edges, 6), topology.every_edge_shared(corner_edges[:9], 6)
+    >>> core.every_edge_shared(corner_edges, 6), core.every_edge_shared(corner_edges[:9], 6)
     (True, False)
     """
     return not np.any(np.bincount(corner_edges, minlength=n_edges) == 1)
