@@ -11,10 +11,20 @@ the smoother took it to, over its input. It runs once, after the iterations: pro
 iteration's move instead leaves the mesh as irregular as the noise made it, and the umbrella's normal
 component on an irregular mesh brings bumps back (bench/bench_keep_in_place.py, docs/keep_in_place.md).
 
+An open border's vertex has its surface on one side only: its slide is the pull into the surface that
+shrinks outlines and holes. Kept in place it does not slide; where keeping folds the layout (noise along
+the surface larger than the edges) and its corners take their slide back, an outline vertex (on exactly
+two border edges) takes back only the move across its border curve that smoothing the border as a curve
+makes (the same smoother on the border edges alone, core.borders' ``"curve"`` rows): the outline loses
+its jaggies there and keeps its place and size. Where nothing folds, an outline keeps its jaggies across
+the curve: a scan's outline is ragged in its own right, and smoothing it as a curve would take that away.
+
 Where the input's own layout on the surface is folded (noise along the surface larger than the edges),
 or large moves along turning normals would fold it, a triangle kept in place would overlap its
 neighbours; its corners take back part of the smoother's slide, as much as unfolds it.
 """
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -35,12 +45,13 @@ _LAST = 8
 _BLOCK = 1 << 16  # triangles per block of the first check: bounds the temporaries
 
 
-def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray, outline=None) -> np.ndarray:
     """``result`` with each vertex's move from ``start`` reduced to its part along ``result``'s vertex
     normal (area-weighted, core.volume.vertex_normals). Vertices in no triangle (no normal) keep their
     result, and the corners of a triangle that keeping would fold or flatten take back part of the slide
-    (see ``unfold``); a vertex that did not move stays bit for bit. Returns a new array in ``result``'s
-    dtype.
+    (see ``unfold``); a vertex that did not move stays bit for bit. ``outline``: an ``Outline`` (the border
+    curves smoothed as curves, see ``outline_curves``) whose vertices also take the move across their
+    curve. Returns a new array in ``result``'s dtype.
 
     Examples
     --------
@@ -58,11 +69,61 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray) 
     kept = start + along[:, None] * normals
     bare = ~normals.any(axis=1)  # in no triangle: no surface to keep to
     kept[bare] = result[bare]
+    if outline is not None and outline.vertices.size:
+        result = outline.across(start, result, normals)  # what an outline vertex takes back: no pull-in
     unfold(kept, start, result, triangles)
     out = kept.astype(result.dtype)
     still = ~move.any(axis=1)
     out[still] = result[still]
     return out
+
+
+@dataclass(frozen=True)
+class Outline:
+    """Open borders smoothed as curves: ``vertices``, those on exactly two border edges (sorted), with
+    their two neighbours along the border (``before``, ``after``); ``border``, every border vertex
+    (sorted), and ``curve``, their (k, 3) positions after the 1-D smoothing."""
+
+    vertices: np.ndarray
+    before: np.ndarray
+    after: np.ndarray
+    border: np.ndarray
+    curve: np.ndarray
+
+    def curve_at(self, vertices):
+        return self.curve[np.searchsorted(self.border, vertices)]
+
+    def across(self, start, result, normals):
+        """``result`` (as float64) with each outline vertex at its start plus its move in ``result`` along
+        its normal plus its curve move across the curve within the surface (along n x t, t the curve's
+        direction there): the slide an outline vertex takes back where keeping folds the layout."""
+        v = self.vertices
+        n = normals[v]
+        side = np.cross(n, self.curve_at(self.after) - self.curve_at(self.before))
+        length = np.sqrt(np.einsum("ij,ij->i", side, side))
+        side /= np.where(length > 0, length, 1.0)[:, None]
+        origin = start[v].astype(np.float64)
+        target = result.astype(np.float64)
+        target[v] = origin + _along(result[v] - origin, n) + _along(self.curve_at(v) - origin, side)
+        return target
+
+
+def outline_curves(border_edges, n_vertices):
+    """(vertices, before, after): the vertices on exactly two of the (m, 2) ``border_edges``, sorted, with
+    their two neighbours along the border (a vertex where more or fewer border edges meet ends a curve)."""
+    on_curve = np.bincount(np.ravel(border_edges), minlength=n_vertices) == 2
+    heads = np.concatenate((border_edges[:, 0], border_edges[:, 1]))
+    tails = np.concatenate((border_edges[:, 1], border_edges[:, 0]))
+    order = np.argsort(heads, kind="stable")
+    heads, tails = heads[order], tails[order]
+    vertices = np.flatnonzero(on_curve)
+    first = np.searchsorted(heads, vertices)
+    return vertices, tails[first], tails[first + 1]
+
+
+def _along(move, direction):
+    """Each row of ``move``'s component along the unit rows of ``direction``."""
+    return np.einsum("ij,ij->i", move, direction)[:, None] * direction
 
 
 def unfold(kept, start, result, triangles):
