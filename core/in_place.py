@@ -27,6 +27,8 @@ neighbours; its corners take back part of the smoother's slide, as much as unfol
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from . import parallel
 from .volume import vertex_normals
@@ -81,12 +83,16 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray, 
 @dataclass(frozen=True)
 class Outline:
     """Open borders smoothed as curves: ``vertices``, those on exactly two border edges (sorted), with
-    their two neighbours along the border (``before``, ``after``); ``border``, every border vertex
-    (sorted), and ``curve``, their (k, 3) positions after the 1-D smoothing."""
+    their two neighbours along the border (``before``, ``after``), the direction into the surface at each
+    (``inward``: towards the mean of its neighbours) and the curve each lies on (``loop``: a label per
+    vertex); ``border``, every border vertex (sorted), and ``curve``, their (k, 3) positions after the 1-D
+    smoothing."""
 
     vertices: np.ndarray
     before: np.ndarray
     after: np.ndarray
+    inward: np.ndarray
+    loop: np.ndarray
     border: np.ndarray
     curve: np.ndarray
 
@@ -96,21 +102,28 @@ class Outline:
     def across(self, start, result, normals):
         """``result`` (as float64) with each outline vertex at its start plus its move in ``result`` along
         its normal plus its curve move across the curve within the surface (along n x t, t the curve's
-        direction there): the slide an outline vertex takes back where keeping folds the layout."""
+        direction there), less that move's median over its curve: the slide an outline vertex takes back
+        where keeping folds the layout. Smoothing a curve shrinks it (a hole most); noise moves it across
+        by nothing in the middle, so a curve keeps its place and its size (the median: the few corners
+        a smoothing rounds off do not move the rest)."""
         v = self.vertices
         n = normals[v]
         side = np.cross(n, self.curve_at(self.after) - self.curve_at(self.before))
+        side *= np.where(np.einsum("ij,ij->i", side, self.inward) < 0, -1.0, 1.0)[:, None]  # into the surface
         length = np.sqrt(np.einsum("ij,ij->i", side, side))
         side /= np.where(length > 0, length, 1.0)[:, None]
         origin = start[v].astype(np.float64)
+        inwards = np.einsum("ij,ij->i", self.curve_at(v) - origin, side)
+        inwards -= _group_medians(inwards, self.loop)[self.loop]
         target = result.astype(np.float64)
-        target[v] = origin + _along(result[v] - origin, n) + _along(self.curve_at(v) - origin, side)
+        target[v] = origin + _along(result[v] - origin, n) + inwards[:, None] * side
         return target
 
 
 def outline_curves(border_edges, n_vertices):
     """(vertices, before, after): the vertices on exactly two of the (m, 2) ``border_edges``, sorted, with
-    their two neighbours along the border (a vertex where more or fewer border edges meet ends a curve)."""
+    their two neighbours along the border (a vertex where more or fewer border edges meet ends a curve).
+    ``curve_labels`` and ``inward_directions`` give an Outline the rest."""
     on_curve = np.bincount(np.ravel(border_edges), minlength=n_vertices) == 2
     heads = np.concatenate((border_edges[:, 0], border_edges[:, 1]))
     tails = np.concatenate((border_edges[:, 1], border_edges[:, 0]))
@@ -119,6 +132,37 @@ def outline_curves(border_edges, n_vertices):
     vertices = np.flatnonzero(on_curve)
     first = np.searchsorted(heads, vertices)
     return vertices, tails[first], tails[first + 1]
+
+
+def curve_labels(border_edges, vertices):
+    """(k,) the curve each of the outline ``vertices`` lies on: the components of the border edges between
+    them (a vertex where more or fewer than two border edges meet cuts a curve)."""
+    on = np.isin(border_edges, vertices).all(axis=1)
+    local = np.searchsorted(vertices, border_edges[on])
+    graph = sp.coo_matrix((np.ones(len(local)), (local[:, 0], local[:, 1])), shape=(vertices.size,) * 2)
+    return connected_components(graph, directed=False)[1]
+
+
+def inward_directions(positions, operator, vertices):
+    """(k, 3): from each of ``vertices`` to the mean of its neighbours (core.adjacency.Umbrella) in
+    ``positions``: into the surface, at a border vertex."""
+    start, stop = operator.indptr[vertices], operator.indptr[vertices + 1]
+    counts = stop - start
+    entries = np.repeat(start - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+    rows = np.repeat(np.arange(vertices.size), counts)
+    points = np.asarray(positions, dtype=np.float64)
+    mean = np.stack(
+        [np.bincount(rows, weights=points[operator.indices[entries], k], minlength=vertices.size) for k in range(3)],
+        axis=1,
+    )
+    return mean / np.maximum(counts, 1)[:, None] - points[vertices]
+
+
+def _group_medians(values, labels):
+    """The median of ``values`` per label 0..max (the upper middle of an even count)."""
+    order = np.lexsort((values, labels))
+    counts = np.bincount(labels)
+    return values[order][np.cumsum(counts) - counts + counts // 2]
 
 
 def _along(move, direction):

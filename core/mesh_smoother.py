@@ -34,7 +34,7 @@ from . import collapse, parallel, sharp_edges, topology, volume, welding
 from .adjacency import Umbrella, umbrella_operator
 from .borders import BORDERS, apply_border, border_edges
 from .convergence import ConvergenceWarning
-from .in_place import Outline, outline_curves
+from .in_place import Outline, curve_labels, inward_directions, outline_curves
 from .in_place import keep_in_place as project_in_place
 from .mesh_amount import PATCH_FROM, AmountChooser, MeshAmount
 from .mesh_noise import noise_steps
@@ -362,7 +362,7 @@ class MeshSmoother:
         if self.in_place and ran > 0:
             if noise is not None:
                 parts = yield from self._held_parts(result, noise, residual, progress)
-            outline = self._outline(run, fixed, limit) if self.border == "free" else None
+            outline = self._outline(result, run, fixed, limit) if self.border == "free" else None
             result = project_in_place(self.positions, result, self.faces, outline)
             if outline is not None and np.any(limit):  # across the surface and the curve at once: both limited
                 _within(result, self.positions, limit)
@@ -380,10 +380,11 @@ class MeshSmoother:
         self.result = result if self.welding is None else self.welding.scatter(result)
         return offset, held
 
-    def _outline(self, run, fixed, limit):
+    def _outline(self, result, run, fixed, limit):
         """The open borders smoothed as curves (core.in_place.Outline) with the run's (alpha, beta,
         iterations), fixed vertices, influence and limit: the same smoother on the border edges alone, a
-        vertex where more or fewer than two meet held. None without such vertices."""
+        vertex where more or fewer than two meet held; the side the surface lies on read on the run's
+        ``result`` (smoothed: noise cannot turn it). None without such vertices."""
         n = self.operator.n_vertices
         edges = self.surface.border if self.surface is not None else border_edges(self.faces, n)
         vertices, before, after = outline_curves(edges, n)
@@ -407,7 +408,9 @@ class MeshSmoother:
                 max_deviation=limit[border] if isinstance(limit, np.ndarray) else limit,
             )
             to_end(curves.steps())
-        return Outline(vertices, before, after, border, curves.result().positions)
+        inward = inward_directions(result, self.surface_operator, vertices)
+        loop = curve_labels(edges, vertices)
+        return Outline(vertices, before, after, inward, loop, border, curves.result().positions)
 
     def _held_parts(self, result, noise, residual, progress):
         """(parts,) bool: the parts core.collapse gives their input back: collapsed, moved by more than
