@@ -48,7 +48,8 @@ from ..validation import (
 )
 from . import collapse, sharp_amount, sharp_edges, topology, volume, welding
 from .amount import PATCH_FROM, AmountChooser, MeshAmount
-from .borders import BORDERS, apply_border
+from .borders import BORDERS, apply_border, border_edges
+from .in_place import Outline, curve_labels, inward_directions, outline_curves
 from .in_place import keep_in_place as project_in_place
 from .noise import noise_steps
 from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
@@ -328,7 +329,8 @@ class MeshSmoother:
             del smoothing
             result, ran = smoothed.positions, smoothed.iterations
         measured = measuring if restoring else None
-        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise, "correlation")
+        run = (alpha, beta, ran)
+        offset, held = yield from self._finish(result, run, amount, fixed, limit, measured, end, noise, "correlation")
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         seconds = time.perf_counter() - start
         self.report = MeshReport(
@@ -344,7 +346,7 @@ class MeshSmoother:
             limit = np.where(noise.limited, noise.quiet_radius(self.positions, DEVIATION_IN_NOISE), limit)
         return limit
 
-    def _finish(self, result, ran, amount, fixed, limit, measuring, progress, noise=None, residual=None):
+    def _finish(self, result, run, amount, fixed, limit, measuring, progress, noise=None, residual=None):
         """Keep each move across the surface (Keep in Place), give closed parts their volume back (when
         ``measuring`` holds the input's measure: the Automatic Amount) within the deviation limit, give the
         parts the run collapsed their input back (with the ``noise`` core.mesh.noise found: the Automatic
@@ -352,12 +354,16 @@ class MeshSmoother:
         ``residual`` says ("correlation": HC's rules, "move": Keep Sharp Edges'), and set ``result`` in the
         caller's numbering; returns (the largest offset, the parts given back), yielding ``progress``
         between the restore's slices and the rules. With Keep in Place the parts are judged on the run's own
-        moves, before they are kept across the surface (and before the volume restore)."""
-        offset, parts = 0.0, None
+        moves, before they are kept across the surface (and before the volume restore); ``run``: the
+        (alpha, beta, iterations) that ran, which smooth the open borders as curves for Keep in Place."""
+        offset, parts, ran = 0.0, None, run[2]
         if self.in_place and ran > 0:
             if noise is not None:
                 parts = yield from self._held_parts(result, noise, residual, progress)
-            result = project_in_place(self.positions, result, self.faces)
+            outline = self._outline(result, run, fixed, limit) if self.border == "free" else None
+            result = project_in_place(self.positions, result, self.faces, outline)
+            if outline is not None and np.any(limit):  # across the surface and the curve at once: both limited
+                project_rows_within(result, self.positions, limit)
         if measuring is not None and ran > 0:
             limited = volume.NOISE_OFFSETS * amount.sigma
             result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), progress)
@@ -371,6 +377,38 @@ class MeshSmoother:
             result[back] = self.positions[back]
         self.result = result if self.welding is None else self.welding.scatter(result)
         return offset, held
+
+    def _outline(self, result, run, fixed, limit):
+        """The open borders smoothed as curves (core.mesh.in_place.Outline) with the run's (alpha, beta,
+        iterations), fixed vertices, influence and limit: the same smoother on the border edges alone, a
+        vertex where more or fewer than two meet held; the side the surface lies on read on the run's
+        ``result`` (smoothed: noise cannot turn it). None without such vertices."""
+        n = self.operator.n_vertices
+        edges = self.surface.border if self.surface is not None else border_edges(self.faces, n)
+        vertices, before, after = outline_curves(edges, n)
+        if vertices.size == 0:
+            return None
+        border = np.unique(edges)
+        held = fixed[border] | ~np.isin(border, vertices, assume_unique=True)
+        alpha, beta, iterations = run
+        with warnings.catch_warnings():  # the run itself was judged against the convergence region
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            curves = Smoothing(
+                self.positions[border],
+                np.searchsorted(border, edges),
+                method=self.method,
+                alpha=alpha,
+                beta=beta,
+                iterations=iterations,
+                mode=self.mode,
+                fixed=held,
+                influence=None if self.influence is None else self.influence[border],
+                max_deviation=limit[border] if isinstance(limit, np.ndarray) else limit,
+            )
+            to_end(curves.steps())
+        inward = inward_directions(result, self.surface_operator, vertices)
+        loop = curve_labels(edges, vertices)
+        return Outline(vertices, before, after, inward, loop, border, curves.result().positions)
 
     def _held_parts(self, result, noise, residual, progress):
         """(parts,) bool: the parts core.mesh.collapse gives their input back: collapsed, moved by more than
@@ -445,7 +483,8 @@ class MeshSmoother:
         result, ran = run.result(), run.done
         del run
         measured = measuring if restoring else None
-        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise, "move")
+        run = (self.alpha, self.beta, ran)
+        offset, held = yield from self._finish(result, run, amount, fixed, limit, measured, end, noise, "move")
         largest = float(np.max(limit)) if np.size(limit) else 0.0
         seconds = time.perf_counter() - start
         self.report = MeshReport(
