@@ -94,6 +94,10 @@ class MeshReport:
         noise), given their input positions back (core.mesh.collapse).
     kept_in_place : bool
         Each vertex's move was kept to its part across the surface (core.mesh.in_place).
+    choosing_seconds, finishing_seconds : float
+        Of ``seconds``: what went before the iterations (welding, the noise test, the Automatic Amount's
+        choice; on meshes below core.mesh.amount.PATCH_FROM the choice runs the chosen iterations itself)
+        and what came after them (Keep in Place, the volume restore, the parts given back).
 
     Examples
     --------
@@ -117,6 +121,8 @@ class MeshReport:
     sharpness_angle: float | None = None
     held_parts: int = 0
     kept_in_place: bool = False
+    choosing_seconds: float = 0.0
+    finishing_seconds: float = 0.0
 
 
 def _auto_or(value, name):
@@ -318,6 +324,7 @@ class MeshSmoother:
                 done = chooser.result()  # the choice ran exactly these iterations on its way: not again
             del chooser  # its runs' buffers go before the smoothing's come
         end = 1.0 - RESTORE_SHARE if restoring else 1.0  # where the smoothing's share of the progress ends
+        chosen = time.perf_counter()
         if done is not None:
             result, ran = done, iterations
         else:
@@ -329,12 +336,25 @@ class MeshSmoother:
             del smoothing
             result, ran = smoothed.positions, smoothed.iterations
         measured = measuring if restoring else None
-        run = (alpha, beta, ran)
+        run, smoothed_at = (alpha, beta, ran), time.perf_counter()
         offset, held = yield from self._finish(result, run, amount, fixed, limit, measured, end, noise, "correlation")
         largest = float(np.max(limit)) if np.size(limit) else 0.0
-        seconds = time.perf_counter() - start
+        now = time.perf_counter()
         self.report = MeshReport(
-            self.method, alpha, beta, ran, amount, offset, largest, seconds, False, None, held, self.in_place
+            self.method,
+            alpha,
+            beta,
+            ran,
+            amount,
+            offset,
+            largest,
+            now - start,
+            False,
+            None,
+            held,
+            self.in_place,
+            chosen - start,
+            now - smoothed_at,
         )
         yield 1.0
 
@@ -463,6 +483,7 @@ class MeshSmoother:
             guided = (yield from as_fraction(noise_steps(self.positions, self.surface_operator), 0.0)).found
             yield share
         end = 1.0 - RESTORE_SHARE if restoring else 1.0
+        chosen = time.perf_counter()
         run = SharpSmoothing(
             self.positions,
             self.faces,
@@ -483,12 +504,13 @@ class MeshSmoother:
         result, ran = run.result(), run.done
         del run
         measured = measuring if restoring else None
-        run = (self.alpha, self.beta, ran)
+        run, smoothed_at = (self.alpha, self.beta, ran), time.perf_counter()
         offset, held = yield from self._finish(result, run, amount, fixed, limit, measured, end, noise, "move")
         largest = float(np.max(limit)) if np.size(limit) else 0.0
-        seconds = time.perf_counter() - start
+        now = time.perf_counter()
         self.report = MeshReport(
-            self.method, self.alpha, self.beta, ran, amount, offset, largest, seconds, True, angle, held, self.in_place
+            *(self.method, self.alpha, self.beta, ran, amount, offset, largest, now - start, True, angle, held),
+            *(self.in_place, chosen - start, now - smoothed_at),
         )
         yield 1.0
 

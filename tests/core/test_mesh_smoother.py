@@ -174,3 +174,15 @@ def test_bad_settings_are_refused_before_any_work(noisy_sphere, options, message
     noisy, edges, _ = noisy_sphere
     with pytest.raises(ValueError, match=message):
         core.MeshSmoother(noisy, edges, **options)
+
+
+def test_report_splits_the_run_into_choosing_iterations_and_finishing(noisy_sphere):
+    """The Automatic Amount's run: its choice and its finishing rules take part of its time, the set numbers'
+    run chooses nothing (only the welding check and the border rule go before its iterations)."""
+    noisy, edges, faces = noisy_sphere
+    _, automatic = core.smooth_mesh(noisy, edges, faces=faces, return_report=True)
+    assert 0 < automatic.choosing_seconds and 0 < automatic.finishing_seconds
+    assert automatic.choosing_seconds + automatic.finishing_seconds <= automatic.seconds
+    _, given = core.smooth_mesh(noisy, edges, faces=faces, iterations=5, return_report=True)
+    assert given.choosing_seconds + given.finishing_seconds <= given.seconds
+    assert given.choosing_seconds < automatic.choosing_seconds
