@@ -279,13 +279,16 @@ def parse(argv, prog=PROG):
             if getattr(args, name) is not None
         }
     )
-    if args.alpha is not None or args.iterations is not None:
-        settings.auto_amount = False  # as the operator with Automatic Amount off: explicit numbers run as given
+    given = frozenset(setting.name for name, setting in MESH_OPTIONS.items() if getattr(args, name) is not None)
+    values = settings_spec.values_of(settings, settings_spec.MESH)
+    if settings_spec.automatic(values) and not settings_spec.automatic(values, given):
+        settings.auto_amount = False  # as the operator: Alpha or Iterations given run every number as set
     point_options = {
         POINT_FIELDS[name]: getattr(args, name) for name in POINT_FIELDS if getattr(args, name) is not None
     }
-    if "alpha" in point_options or "iterations_per_round" in point_options:
-        point_options["auto_amount"] = False  # as the operator: a manual amount uses alpha and steps as set
+    points = settings_spec.values_of(settings_spec.PointSettings(**point_options), settings_spec.POINTS)
+    if settings_spec.automatic(points) and not settings_spec.automatic(points, point_options):
+        point_options["auto_amount"] = False  # as the operator: Alpha or Steps per Round given run them as set
     if args.points:
         from ..core.pointcloud.sdg import reach_gap_problem  # the rule and its words, once (NumPy only)
 
@@ -307,7 +310,7 @@ def parse(argv, prog=PROG):
         check_deviation_targets(files)
     return Plan(
         settings=settings,
-        given=frozenset(setting.name for name, setting in MESH_OPTIONS.items() if getattr(args, name) is not None),
+        given=given,
         files=files,
         points=args.points,
         point_options=point_options,

@@ -23,7 +23,7 @@ from blender_scene import (
     select_only,
     transformed,
 )
-from test_ui import RecordingLayout
+from test_ui import RecordingLayout, redo_panel
 
 import core
 
@@ -53,18 +53,6 @@ def manual(**settings):
     if "auto_amount" in bpy.ops.object.hc_smooth.get_rna_type().properties:
         settings["auto_amount"] = False
     return settings
-
-
-def redo_panel(operator):
-    """Draw a registered operator's redo panel into a RecordingLayout (an operator's layout is read-only: a
-    stand-in of its class name carries its properties)."""
-    properties = operator.properties
-    names = [prop.identifier for prop in properties.bl_rna.properties if prop.identifier != "rna_type"]
-    operator_class = getattr(bpy.types, operator.bl_idname)
-    stand_in = type("StandIn", (), {"bl_idname": operator_class.bl_idname})()
-    stand_in.__dict__.update({name: getattr(properties, name) for name in names}, layout=RecordingLayout())
-    operator_class.draw(stand_in, bpy.context)
-    return stand_in.layout
 
 
 def module(name):
