@@ -229,12 +229,15 @@ def deviation_map(job):
 
 
 def map_legend(job, length=None):
-    """The deviation map's legend (core.DeviationMap.legend), and where the map went when a name of the user's
-    kept it from hc_deviation and hc_deviation_color."""
+    """The deviation map's legend (core.DeviationMap.legend), where the map went when a name of the user's
+    kept it from hc_deviation and hc_deviation_color, and where to pick its colours when the mesh's own stay
+    the active ones."""
     text = deviation_map(job).legend(length)
     names = job.map_names
     if names is not None and not names.usual:
         text += f", stored in '{names.value}' and '{names.color}'"
+    if names is not None and not names.shown:
+        text += f"; the mesh's own colours stay active: '{names.color}' is under Color Attributes"
     return text
 
 

@@ -48,8 +48,8 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
     def finish(self, context, jobs):
         """Write every result (the subclasses wrap this with what their mode needs)."""
         jobs_module.write_all(jobs, self._settings)
-        if self._settings.deviation_map:
-            show_attribute_colors(context)
+        if self._settings.deviation_map and any(job.map_names.shown for job in jobs):
+            show_attribute_colors(context)  # a map made the active colours: show them
 
     def _report_done(self, jobs):
         self.report({"INFO"}, jobs_module.summary(jobs, self._settings, scene_length(bpy.context.scene)))
