@@ -608,8 +608,9 @@ POINTS = (
 # panels' soft one, chosen from the seconds per 1000 HC iterations that bench/bench_modifier_limits.py measures
 # (docs/modifier.md, "Limits").
 MODIFIER_MAX_ITERATIONS = 1000
-# The command line runs unattended (batches, farms): its Iterations has the modifier's hard maximum too, so
-# that a mistyped count cannot keep it going without end (a long operator run can be cancelled with Esc).
+# The command line runs unattended (batches, farms): its Iterations has the modifier's hard maximum too, and so
+# have a point cloud's HC steps (Rounds times Steps per Round, at least one step a round), so that a mistyped
+# count cannot keep it going without end (a long operator run can be cancelled with Esc).
 COMMAND_MAX_ITERATIONS = MODIFIER_MAX_ITERATIONS
 MODIFIER_ITERATIONS = replace(
     ITERATIONS,

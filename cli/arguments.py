@@ -241,6 +241,30 @@ class Plan:
     verbose: bool = False
 
 
+UNATTENDED = "it runs unattended, and a mistyped count must not keep it going without end"
+
+
+def _check_step_counts(args):
+    """Refuse more HC steps than settings_spec.COMMAND_MAX_ITERATIONS: --iterations, or for point clouds
+    --rounds times --steps-per-round (chosen from the noise when not given: at least one a round)."""
+    most = settings_spec.COMMAND_MAX_ITERATIONS
+    why = f"the most the command line runs (as the HC Smooth modifier): {UNATTENDED}"
+    if args.iterations is not None and args.iterations > most:
+        raise UsageError(f"--iterations {args.iterations} is above {most}, {why}")
+    if not args.points:
+        return  # --rounds and --steps-per-round without --points are refused with their own message
+    rounds = settings_spec.ROUNDS.default if args.rounds is None else args.rounds
+    steps = 1 if args.steps_per_round is None else args.steps_per_round
+    if rounds * steps <= most:
+        return
+    if args.steps_per_round is None:
+        counts = f"--rounds {rounds} (at least one step each)"
+    else:
+        with_rounds = f"the default {rounds} rounds" if args.rounds is None else f"--rounds {rounds}"
+        counts = f"--steps-per-round {steps} with {with_rounds}"
+    raise UsageError(f"{counts} makes {rounds * steps} HC steps, above {most}, {why}")
+
+
 def parse(argv, prog=PROG):
     """argv (the arguments after `-c hc_smooth`) -> Plan; raises UsageError, or SystemExit(0) for --help.
 
@@ -253,12 +277,7 @@ def parse(argv, prog=PROG):
         if getattr(args, option) not in (None, False) and not getattr(args, needed):
             metavar = MESH_OPTIONS[needed].metavar
             raise UsageError(f"{_option(option)} needs {_option(needed)}{f' {metavar}' if metavar else ''}")
-    most = settings_spec.COMMAND_MAX_ITERATIONS
-    if args.iterations is not None and args.iterations > most:
-        raise UsageError(
-            f"--iterations {args.iterations} is above {most}, the most the command line runs (as the HC Smooth "
-            "modifier): it runs unattended, and a mistyped count must not keep it going without end"
-        )
+    _check_step_counts(args)
     if args.points:
         refused = [_option(name) for name, keeps in MESH_ONLY.items() if getattr(args, name) not in (None, keeps)]
         if refused:
