@@ -58,8 +58,12 @@ from ..core import BLOW_UP_FACTOR
 
 GROUP_NAME = "HC Smooth"
 # Bump whenever the nodes or the interface change: an older group in a file is then rebuilt in place.
-VERSION = 5
+VERSION = 6
 DEVIATION_ATTRIBUTE = "hc_deviation"  # the Deviation Map's output, as the mesh operators store it
+NAME_TAKEN = (
+    f"Deviation Map not stored: the mesh already has an attribute '{DEVIATION_ATTRIBUTE}' (yours, a UV map or "
+    "vertex group of that name, or an earlier map); rename or remove it"
+)
 VERSION_KEY = "hc_smooth_version"
 
 # Blur weight standing in for "only the neighbours" (plain Laplacian): the centre's own share is
@@ -458,14 +462,20 @@ def _start_of_map(t, geometry, on, transform):
 
 def _deviation_map(t, geometry, on, start_position, start_normal, transform):
     """``geometry`` with, where ``on``, the point attribute hc_deviation: the world-space move (position - start
-    through ``transform``) along the world-space start normal."""
+    through ``transform``) along the world-space start normal. Where the mesh already has an attribute of that
+    name (the user's of any type or domain, a UV map or a vertex group, or an earlier map) nothing is stored
+    and the Warnings panel says why: what the user made is never overwritten."""
+    named = t.node("GeometryNodeInputNamedAttribute", data_type="FLOAT")
+    named.inputs["Name"].default_value = DEVIATION_ATTRIBUTE
+    taken = t.math("GREATER_THAN", t.statistic(geometry, named.outputs["Exists"], "Max"), 0.5)
+    kept = t.warning(t.boolean("AND", on, taken), NAME_TAKEN, "WARNING")
     moved = t.world(t.subtract(t.position(), start_position), transform)
     deviation = t.node_output("ShaderNodeVectorMath", "Value", operation="DOT_PRODUCT", inputs=[moved, start_normal])
     store = t.node("GeometryNodeStoreNamedAttribute", data_type="FLOAT", domain="POINT")
     t.feed(store.inputs["Geometry"], geometry)
     store.inputs["Name"].default_value = DEVIATION_ATTRIBUTE
     t.feed(store.inputs["Value"], deviation)
-    return t.switch("GEOMETRY", on, geometry, store.outputs["Geometry"])
+    return t.switch("GEOMETRY", t.boolean("AND", on, t.boolean("NOT", kept)), geometry, store.outputs["Geometry"])
 
 
 def _checked_inputs(t, value, is_hc):

@@ -56,7 +56,7 @@ def core_options(props, given=frozenset()):
     Numbers are taken in single precision, as Blender's float properties hold them, so every route runs
     the same numbers."""
     values = settings_spec.values_of(props, settings_spec.MESH)
-    automatic = settings_spec.automatic(values, given)
+    chosen = settings_spec.chosen(values, given)
     options = {}
     for setting in settings_spec.MESH:
         if setting.argument is None:
@@ -64,7 +64,7 @@ def core_options(props, given=frozenset()):
         value = values[setting.name]
         if setting is settings_spec.KEEP_IN_PLACE:  # on where it applies (core then decides as "auto"), else off
             value = core.AUTO if value and settings_spec.keeps_in_place(values, given) else False
-        elif automatic and setting.chosen and setting.name not in given:
+        elif setting.name in chosen:
             value = core.AUTO
         elif setting.kind == "enum":
             value = next(choice.core for choice in setting.items if choice.identifier == value)
@@ -234,12 +234,15 @@ def deviation_map(job):
 
 
 def map_legend(job, length=None):
-    """The deviation map's legend (core.DeviationMap.legend), and where the map went when a name of the user's
-    kept it from hc_deviation and hc_deviation_color."""
+    """The deviation map's legend (core.DeviationMap.legend), where the map went when a name of the user's
+    kept it from hc_deviation and hc_deviation_color, and where to pick its colours when the mesh's own stay
+    the active ones."""
     text = deviation_map(job).legend(length)
     names = job.map_names
     if names is not None and not names.usual:
         text += f", stored in '{names.value}' and '{names.color}'"
+    if names is not None and not names.shown:
+        text += f"; the mesh's own colours stay active: '{names.color}' is under Color Attributes"
     return text
 
 
