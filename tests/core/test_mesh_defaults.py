@@ -240,10 +240,10 @@ def test_open_and_closed_parts_each_as_it_is(sphere_cube_cone):
     n = len(sphere.positions)
     result, report = default_run(mesh)
     assert report.volume_offset > 0.0
+    numbers = dict(alpha=0.0, beta=report.beta, iterations=report.iterations, max_deviation=report.max_deviation)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)
-        smoothed = core.hc_smooth(mesh.positions, mesh.edges, alpha=0.0, beta=report.beta, iterations=report.iterations)
-    smoothed = core.mesh.in_place.keep_in_place(mesh.positions, smoothed, mesh.triangles())
+        smoothed = core.smooth_mesh(mesh.positions, mesh.edges, faces=mesh.triangles(), keep_in_place=True, **numbers)
     assert np.array_equal(result[n:], smoothed[n:])
     triangles = PRIMITIVES["uv_sphere"]().triangles()
     before, after = core.mesh.metrics.enclosed_volumes(triangles, mesh.positions[:n], result[:n])
