@@ -16,8 +16,8 @@ midpoints ``--subdivisions`` times (3: 1.8M vertices; the surface is the scan's)
 
 ``--error``: the RMS distance of every result to the clean surface in % of the diagonal (the torus's
 own; the bunny's along the clean vertex normals), with the Automatic Amount as it runs and with its
-work budget (core.mesh_amount.WORK_BUDGET) lifted, which is what the budget costs. ``--choice``: the
-iterations GCV chooses on patches (big meshes) and on the whole mesh (core.mesh_amount.PATCH_FROM
+work budget (core.mesh.amount.WORK_BUDGET) lifted, which is what the budget costs. ``--choice``: the
+iterations GCV chooses on patches (big meshes) and on the whole mesh (core.mesh.amount.PATCH_FROM
 lifted), both without the work budget, and the time each choice takes.
 
     python bench/bench_default_cost.py                 # 5M vertices, 3 runs each
@@ -41,7 +41,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 import core  # noqa: E402
 from bench import meshes  # noqa: E402
 from bench.report import Report  # noqa: E402
-from core import mesh_amount  # noqa: E402
+from core.mesh import amount as mesh_amount  # noqa: E402
 
 CHUNK_WORK = 5_000_000  # vertex-iterations a slice, as operators/mesh_smooth.py's MODAL_WORK
 FIXED = dict(alpha=0.1, beta=0.6, iterations=10)
@@ -135,7 +135,7 @@ def bunny(times):
 
 def normals_of(vertices, faces):
     """Area-weighted unit vertex normals."""
-    return core.volume.vertex_normals(vertices, faces)
+    return core.geometry.vertex_normals(vertices, faces)
 
 
 def main():

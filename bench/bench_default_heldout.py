@@ -367,7 +367,7 @@ def amount_text(params):
     if "noise" in params:
         text += f", σ̂ {100 * params['noise']:.3f}"
     if params.get("held_parts"):
-        text += f", {params['held_parts']} parts held"  # the default would have collapsed them (core.collapse)
+        text += f", {params['held_parts']} parts held"  # the default would have collapsed them (core.mesh.collapse)
     return text
 
 
@@ -641,7 +641,7 @@ def main():
     parser.add_argument("--no-scanner", action="store_true", help="skip the real scans with no noise added")
     parser.add_argument("--reference", default="scan", choices=tuple(REFERENCES), help="the real scans' truth")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--border", default=quality.BORDER, help="the default's open-border rule (core.borders)")
+    parser.add_argument("--border", default=quality.BORDER, help="the default's open-border rule (core.mesh.borders)")
     parser.add_argument("--from", dest="sources", nargs="+", default=[], help="report these JSON files' numbers")
     args = parser.parse_args()
     quality.BORDER = args.border

@@ -8,12 +8,12 @@ add-on's default (``core.smooth_mesh`` with nothing set, split vertices welded) 
 and on. Measured: the RMS distance of the vertices to the clean primitive's surface over the input's
 (below 1: nearer the shape than the noisy input; above 1: farther; a vertex sliding along the surface
 costs nothing), the RMS radius over the clean part's, the correlation between neighbours of what the
-run took away along the normals (core.collapse.residual_correlation: above 0, shape went with the noise),
+run took away along the normals (core.mesh.collapse.residual_correlation: above 0, shape went with the noise),
 and the parts the Automatic Amount left as they were because the run would have changed their shape
-(core.collapse).
+(core.mesh.collapse).
 
     python bench/bench_primitives.py               # ~20 s
-    python bench/bench_primitives.py --no-guard    # core.collapse off: what the runs do to the parts it holds
+    python bench/bench_primitives.py --no-guard    # core.mesh.collapse off: what the runs do to the parts it holds
 
 The report goes to stdout and bench/results/.
 """
@@ -53,7 +53,7 @@ def run(part, surface, noisy, sharp):
     error = rms(surface, result) / rms(surface, noisy)
     operator = core.umbrella_operator(part.edges, len(noisy))
     one_part = np.zeros(len(noisy), dtype=np.int64)  # each shape is one part
-    correlation = core.collapse.residual_correlation(noisy, result, part.triangles(), operator, one_part, 1)[0]
+    correlation = core.mesh.collapse.residual_correlation(noisy, result, part.triangles(), operator, one_part, 1)[0]
     return error, radius(result) / radius(part.positions), report.held_parts, correlation
 
 
@@ -68,10 +68,14 @@ def table(out, rows, pick, title):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--no-guard", action="store_true", help="core.collapse off (parts never held)")
+    parser.add_argument("--no-guard", action="store_true", help="core.mesh.collapse off (parts never held)")
     args = parser.parse_args()
     if args.no_guard:
-        core.collapse.KEEP, core.collapse.SMOOTH_RESIDUAL, core.collapse.MOVED_IN_NOISE = 0.0, np.inf, np.inf
+        core.mesh.collapse.KEEP, core.mesh.collapse.SMOOTH_RESIDUAL, core.mesh.collapse.MOVED_IN_NOISE = (
+            0.0,
+            np.inf,
+            np.inf,
+        )
     rows, worse, shrunk = [], {False: [], True: []}, {False: [], True: []}
     for name, make in {**primitives.PRIMITIVES, **primitives.CAD}.items():
         part = make()
@@ -96,8 +100,8 @@ def main():
         out("# The default on noisy primitives (bench_primitives.py)\n")
         out(f"Command: `python bench/bench_primitives.py {' '.join(sys.argv[1:])}`, {time.strftime('%Y-%m-%d')}; ")
         guard = "off" if args.no_guard else "on"
-        out(f"core.collapse {guard}. Isotropic noise in median edge lengths, seeds {SEEDS[0]} / {SEEDS[1]};")
-        out("in brackets the parts left as they were (core.collapse).")
+        out(f"core.mesh.collapse {guard}. Isotropic noise in median edge lengths, seeds {SEEDS[0]} / {SEEDS[1]};")
+        out("in brackets the parts left as they were (core.mesh.collapse).")
         table(out, rows, lambda r: f"{r[0]:.2f}", "RMS distance to the clean surface over the input's:")
         table(out, rows, lambda r: f"{r[1]:.2f}", "RMS radius (about the centroid) over the clean part's:")
         table(out, rows, lambda r: f"{r[3]:+.2f}", "Neighbour correlation of what the run took away along the normals:")

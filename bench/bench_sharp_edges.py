@@ -1,4 +1,4 @@
-"""Keep Sharp Edges (core.sharp_edges) on sharp-edged parts, against HC and feature-preserving peers.
+"""Keep Sharp Edges (core.mesh.sharp_edges) on sharp-edged parts, against HC and feature-preserving peers.
 
 Parts: the cube and the thin plate of bench_quality_inputs.py and the CAD-like parts of sharp_parts.py
 (a bevelled box, a cylinder with a through hole, a fandisk-like block). ``tuning`` (cube, bevelled box,
@@ -11,7 +11,7 @@ seed per cell (bench_quality.make_case's seeding).
 Methods, same run, same input:
 
 * ours: ``core.smooth_mesh(noisy, edges, faces=faces, weld=True, keep_sharp_edges=True)`` (the Automatic
-  Amount, as the add-on would run it), and at the fixed default (``core.sharp_edges.DEFAULT_ITERATIONS``
+  Amount, as the add-on would run it), and at the fixed default (``core.mesh.sharp_edges.DEFAULT_ITERATIONS``
   steps, no Automatic Amount);
 * HC Smooth's default (``core.smooth_mesh`` with nothing set) and the best HC setting of
   bench_default_heldout.py's grid (α × β × iterations, read on all vertices);
@@ -78,7 +78,7 @@ import sharp_parts  # noqa: E402
 from report import Report  # noqa: E402
 
 import core  # noqa: E402
-from core import sharp_edges  # noqa: E402
+from core.mesh import sharp_edges  # noqa: E402
 
 SETS = {"tuning": ("cube", "bevelled_box", "holed_cylinder"), "heldout": ("plate", "fandisk")}
 SIGMAS = "0.001,0.0025,0.005,0.01"
@@ -159,7 +159,7 @@ def ours(case, automatic=True):
         case.noisy, case.edges, faces=case.faces, weld=True, keep_sharp_edges=True, return_report=True, **options
     )
     chosen = {"steps": report.iterations, "angle": round(math.degrees(report.sharpness_angle), 1)}
-    return result, {**chosen, "held_parts": report.held_parts}  # parts left as they were (core.collapse)
+    return result, {**chosen, "held_parts": report.held_parts}  # parts left as they were (core.mesh.collapse)
 
 
 def two_step(case, params):
@@ -255,7 +255,7 @@ def measure_cell(name, set_name, kind, sigma, seed, cache, peers=True):
 
 
 class _CleanNormals:
-    """core.sharp_edges with the clean face normals in place of the filtered ones at the steps of
+    """core.mesh.sharp_edges with the clean face normals in place of the filtered ones at the steps of
     ``steps`` (all if None): a ``with`` block patches its filter and its nearest planes."""
 
     def __init__(self, normals, steps=None):
@@ -285,7 +285,7 @@ class _CleanNormals:
 
 
 class _BestRingNormal:
-    """core.sharp_edges with the first step's nearest planes chosen by the truth: each face takes, of its
+    """core.mesh.sharp_edges with the first step's nearest planes chosen by the truth: each face takes, of its
     ring's filtered normals, the one nearest its clean normal. A ``with`` block patches the choice."""
 
     def __init__(self, normals):
@@ -312,7 +312,7 @@ class _BestRingNormal:
 
 
 class _CleanPlanes:
-    """core.sharp_edges where every face, at every step, takes of its ring's clean planes (each face's clean
+    """core.mesh.sharp_edges where every face, at every step, takes of its ring's clean planes (each face's clean
     normal through its clean centroid) the one nearest its current corners: the choice of side with the
     sides' planes known exactly, made as ``nearest_plane_normals`` makes it. A ``with`` block patches the
     filter (its normals are not used) and the choice."""

@@ -269,6 +269,30 @@ class Plan:
     memory_limit: int | None = None  # bytes, --memory-limit (None: cli/tiled.py's default)
 
 
+UNATTENDED = "it runs unattended, and a mistyped count must not keep it going without end"
+
+
+def _check_step_counts(args):
+    """Refuse more HC steps than settings_spec.COMMAND_MAX_ITERATIONS: --iterations, or for point clouds
+    --rounds times --steps-per-round (chosen from the noise when not given: at least one a round)."""
+    most = settings_spec.COMMAND_MAX_ITERATIONS
+    why = f"the most the command line runs (as the HC Smooth modifier): {UNATTENDED}"
+    if args.iterations is not None and args.iterations > most:
+        raise UsageError(f"--iterations {args.iterations} is above {most}, {why}")
+    if not args.points:
+        return  # --rounds and --steps-per-round without --points are refused with their own message
+    rounds = settings_spec.ROUNDS.default if args.rounds is None else args.rounds
+    steps = 1 if args.steps_per_round is None else args.steps_per_round
+    if rounds * steps <= most:
+        return
+    if args.steps_per_round is None:
+        counts = f"--rounds {rounds} (at least one step each)"
+    else:
+        with_rounds = f"the default {rounds} rounds" if args.rounds is None else f"--rounds {rounds}"
+        counts = f"--steps-per-round {steps} with {with_rounds}"
+    raise UsageError(f"{counts} makes {rounds * steps} HC steps, above {most}, {why}")
+
+
 def parse(argv, prog=PROG):
     """argv (the arguments after `-c hc_smooth`) -> Plan; raises UsageError, or SystemExit(0) for --help.
 
@@ -281,12 +305,7 @@ def parse(argv, prog=PROG):
         if getattr(args, option) not in (None, False) and not getattr(args, needed):
             metavar = MESH_OPTIONS[needed].metavar
             raise UsageError(f"{_option(option)} needs {_option(needed)}{f' {metavar}' if metavar else ''}")
-    most = settings_spec.COMMAND_MAX_ITERATIONS
-    if args.iterations is not None and args.iterations > most:
-        raise UsageError(
-            f"--iterations {args.iterations} is above {most}, the most the command line runs (as the HC Smooth "
-            "modifier): it runs unattended, and a mistyped count must not keep it going without end"
-        )
+    _check_step_counts(args)
     if args.points:
         refused = [_option(name) for name, keeps in MESH_ONLY.items() if getattr(args, name) not in (None, keeps)]
         if refused:
@@ -307,15 +326,18 @@ def parse(argv, prog=PROG):
             if getattr(args, name) is not None
         }
     )
-    if args.alpha is not None or args.iterations is not None:
-        settings.auto_amount = False  # as the operator with Automatic Amount off: explicit numbers run as given
+    given = frozenset(setting.name for name, setting in MESH_OPTIONS.items() if getattr(args, name) is not None)
+    values = settings_spec.values_of(settings, settings_spec.MESH)
+    if settings_spec.automatic(values) and not settings_spec.automatic(values, given):
+        settings.auto_amount = False  # as the operator: Alpha or Iterations given run every number as set
     point_options = {
         POINT_FIELDS[name]: getattr(args, name) for name in POINT_FIELDS if getattr(args, name) is not None
     }
-    if "alpha" in point_options or "iterations_per_round" in point_options:
-        point_options["auto_amount"] = False  # as the operator: a manual amount uses alpha and steps as set
+    points = settings_spec.values_of(settings_spec.PointSettings(**point_options), settings_spec.POINTS)
+    if settings_spec.automatic(points) and not settings_spec.automatic(points, point_options):
+        point_options["auto_amount"] = False  # as the operator: Alpha or Steps per Round given run them as set
     if args.points:
-        from ..core.pointcloud.sdg import reach_gap_problem  # the rule and its words, once (NumPy only)
+        from ..core import reach_gap_problem  # the rule and its words, once
 
         reach = point_options.get("spacing_factor", settings_spec.SPACING_FACTOR.default)
         gap = point_options.get("gap_factor", settings_spec.GAP_FACTOR.default)
@@ -335,7 +357,7 @@ def parse(argv, prog=PROG):
         check_deviation_targets(files)
     return Plan(
         settings=settings,
-        given=frozenset(setting.name for name, setting in MESH_OPTIONS.items() if getattr(args, name) is not None),
+        given=given,
         files=files,
         points=args.points,
         point_options=point_options,

@@ -46,7 +46,7 @@ class Outcome:
     vertices: int = 0
     iterations: int = 0  # meshes: the most iterations any mesh ran
     sharp: bool = False  # meshes: Keep Sharp Edges ran (its iterations are steps)
-    held: int = 0  # meshes: parts the Automatic Amount left as they were (core.collapse)
+    held: int = 0  # meshes: parts the Automatic Amount left as they were (core.mesh.collapse)
     kept: bool = False  # meshes: every move was kept across the surface (Keep in Place)
     rounds: list = field(default_factory=list)  # point clouds: (rounds, steps per round) per cloud
     seconds: float = 0.0

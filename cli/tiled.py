@@ -1,4 +1,4 @@
-"""Scans larger than memory: a binary PLY file smoothed in spatial tiles (core.tiles), read and written
+"""Scans larger than memory: a binary PLY file smoothed in spatial tiles (core.tile_boxes), read and written
 in blocks (cli/formats/ply_blocks.py). No Blender here: NumPy, SciPy and core.
 
 The route, for a file whose whole run would not fit in the memory limit (``needs_tiles``):
@@ -6,9 +6,9 @@ The route, for a file whose whole run would not fit in the memory limit (``needs
 1. One pass over the vertices (bounds, an even sample, finite coordinates) and one over the faces (their
    corners checked, the longest edge).
 2. With the Automatic Amount, the amount is chosen once, on a region of about REGION_VERTICES vertices
-   around REGION_PLACES places spread over the file (core.tiles.region_amount), and every tile runs the
+   around REGION_PLACES places spread over the file (core.region_amount), and every tile runs the
    numbers it chose.
-3. The boxes (core.tiles.split), each tile holding what the run reads (core.tiles.rings_read rings of
+3. The boxes (core.tile_boxes), each tile holding what the run reads (core.tile_rings rings of
    halo), at most as many vertices as the limit leaves room for.
 4. The input is copied to a hidden temporary file beside the target; each tile is read (a pass over the
    vertices, one over the faces), smoothed with its vertices in the file's order, and its own vertices'
@@ -102,7 +102,7 @@ def surface_arrays(corners, sizes):
     mask = np.repeat(keep, sizes)
     edges = np.stack([corners[mask], corners[following][mask]], axis=1)
     kept = sizes[keep]
-    triangles = core.metrics.fan_triangles((np.concatenate([[0], np.cumsum(kept)]), corners[mask]))
+    triangles = core.fan_triangles((np.concatenate([[0], np.cumsum(kept)]), corners[mask]))
     return edges, triangles
 
 
@@ -116,7 +116,7 @@ def _alike_surface(grid):
     edges = np.empty((kept.size, 2), dtype=kept.dtype)
     edges[:, 0] = kept.ravel()
     edges[:, 1] = np.roll(kept, -1, axis=1).ravel()
-    return edges, core.metrics.fan_triangles(kept)
+    return edges, core.fan_triangles(kept)
 
 
 @dataclass
@@ -242,7 +242,7 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
     ``capacity``: the vertices a tile may hold (default: what ``limit`` leaves room for). Returns a TiledRun;
     raises FormatError or ValueError with a message for what cannot run tiled (nothing is written then)."""
     say = say or (lambda text: None)
-    problem = core.tiles.refused(options)
+    problem = core.tiled_problem(options)
     if problem:
         raise ValueError(f"{problem}; smooth it whole (a larger --memory-limit) or leave the option out")
     ply = PlyBlocks(source)
@@ -257,24 +257,23 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
     found = scan(ply)
     run = TiledRun(vertices=n)
     lookup = np.full(n, -1, dtype=index_dtype(n))
-    if core.tiles.automatic(options):
+    if core.tiles_choose(options):
         chosen = choose_on_region(ply, found, options, lookup)
         options, run.amount = chosen.options, chosen.amount
         run.notes.append(
             f"the Automatic Amount chose {chosen.amount.iterations} iterations on a region of {chosen.region} vertices "
             f"and ran them on every tile (deviation limit {chosen.limit:.3g}); a tiled run gives no closed part its "
-            "volume back, holds or gives back no part, and Keep in Place's fold guard judges each tile on its own "
-            "(docs/large_scans.md)"
+            "volume back, holds or gives back no part, and Keep in Place's fold guard and its rule for open outlines "
+            "judge each tile on its own (docs/large_scans.md)"
         )
     method, iterations = options.get("method", "hc"), options["iterations"]
     kept = bool(options.get("keep_in_place")) and options.get("keep_in_place") != core.AUTO
-    run.rings = core.tiles.rings_read(method, iterations, kept, ply.has_normals)
-    run.margin = core.tiles.margin(run.rings, found.longest_edge)
+    run.rings = core.tile_rings(method, iterations, kept, ply.has_normals)
+    run.margin = core.tile_margin(run.rings, found.longest_edge)
     run.iterations, run.kept_in_place = iterations, kept
     scale = n / len(found.sample)
-    whole = core.tiles.bounding_box(found.low, found.high)
     try:
-        boxes = core.tiles.split(found.sample, scale, whole, run.margin, 0.9 * capacity)
+        boxes = core.tile_boxes(found.sample, scale, found.low, found.high, run.margin, 0.9 * capacity)
     except ValueError as error:
         raise ValueError(
             f"{error}: {run.rings} rings of halo ({iterations} iterations, the longest edge {found.longest_edge:.3g}) "
@@ -368,7 +367,7 @@ class Totals:
 
 
 def choose_on_region(ply, found, options, lookup):
-    """core.tiles.region_amount on boxes around REGION_PLACES vertices spread evenly over the file, each box
+    """core.region_amount on boxes around REGION_PLACES vertices spread evenly over the file, each box
     holding about REGION_VERTICES / REGION_PLACES vertices (by the sample)."""
     sample = found.sample
     places = sample[np.linspace(0, len(sample) - 1, REGION_PLACES).round().astype(np.int64)]
@@ -384,7 +383,7 @@ def choose_on_region(ply, found, options, lookup):
     region = read_tile(ply, reaches, reaches, lookup)
     sizes = np.full(len(region.corners), region.corners.shape[1] if region.corners.size else 3, dtype=np.int64)
     edges, triangles = surface_arrays(region.corners.ravel(), sizes)
-    return core.tiles.region_amount(region.positions, edges, triangles, options, ply.vertex_count)
+    return core.region_amount(region.positions, edges, triangles, options, ply.vertex_count)
 
 
 def _box_around(sample, place, count, diagonal):

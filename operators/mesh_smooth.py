@@ -14,7 +14,7 @@ from .draw import draw_mesh_convergence, draw_settings
 from .modal_progress import ModalProgress
 from .modifier import draw_add_as_modifier
 from .objects import InputError, unique_data
-from .properties import annotations
+from .properties import annotations, set_by_caller
 
 # Above this many vertex-iterations, an interactive run becomes modal (progress, Esc cancels).
 MODAL_WORK = 5_000_000
@@ -29,11 +29,12 @@ class SmoothProperties:
     def draw(self, context):
         layout = self.layout
         layout.use_property_split = True
-        draw_settings(layout, self, settings_spec.MESH, context.active_object)
-        draw_mesh_convergence(layout, self)
+        given = set_by_caller(self, settings_spec.CHOSEN)  # Alpha or Iterations set: every number as set
+        draw_settings(layout, self, settings_spec.MESH, context.active_object, given=given)
+        draw_mesh_convergence(layout, self, given=given)
         # Object mode only: Edit mode's selection (the vertices to smooth) has no equivalent in a modifier.
         if self.bl_idname == OBJECT_OT_hc_smooth.bl_idname:
-            draw_add_as_modifier(layout, self)
+            draw_add_as_modifier(layout, self, given)
 
 
 class _SmoothOperator(SmoothProperties, ModalProgress):
@@ -47,8 +48,8 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
     def finish(self, context, jobs):
         """Write every result (the subclasses wrap this with what their mode needs)."""
         jobs_module.write_all(jobs, self._settings)
-        if self._settings.deviation_map:
-            show_attribute_colors(context)
+        if self._settings.deviation_map and any(job.map_names.shown for job in jobs):
+            show_attribute_colors(context)  # a map made the active colours: show them
 
     def _report_done(self, jobs):
         self.report({"INFO"}, jobs_module.summary(jobs, self._settings, scene_length(bpy.context.scene)))
@@ -58,7 +59,7 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
 
     def _given(self):
         """The numbers the caller set (used as given)."""
-        return frozenset(name for name in settings_spec.CHOSEN if self.properties.is_property_set(name))
+        return set_by_caller(self, settings_spec.CHOSEN)
 
     def _run(self, jobs, chunk=None):
         """The run's generator, on the settings' snapshot and with the numbers the caller set."""
@@ -101,7 +102,7 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
             return {"CANCELLED"}
         vertices = sum(len(job.positions) for job in self._jobs)
         automatic = settings_spec.automatic(settings_spec.values_of(self._settings, settings_spec.MESH), self._given())
-        iterations = core.mesh_amount.MAX_ITERATIONS if automatic else self.iterations
+        iterations = core.MAX_ITERATIONS if automatic else self.iterations
         if vertices * iterations < MODAL_WORK:
             return self._run_now(context, self._jobs)
         return self.start_modal(context, self._run(self._jobs, chunk=max(1, MODAL_WORK // max(1, vertices))))

@@ -13,16 +13,13 @@ import bpy
 import numpy as np
 
 from .. import core, settings_spec
-from ..core.pointcloud import PointCloudSmoother
-from ..core.pointcloud.geometry import collinear
-from ..core.pointcloud.noise import MAX_STEPS, matched_alpha
-from ..core.pointcloud.sdg import reach_gap_problem
+from ..core import MAX_POINT_CLOUD_STEPS, PointCloudSmoother, collinear, matched_alpha, reach_gap_problem
 from ..settings_spec import PointSettings
 from . import mesh_io, objects
 from .draw import draw_convergence, draw_settings
 from .modal_progress import ModalProgress
 from .objects import InputError, unique_data
-from .properties import annotations
+from .properties import annotations, set_by_caller
 
 POINT_TYPES = ("MESH", "POINTCLOUD")
 # Reach and Gap as the panel names them, for the rule that ties them.
@@ -193,11 +190,13 @@ def write(clouds, settings, context):
             cloud.add_rfs_object(context)
 
 
-def lowest_alpha(settings):
-    """The smallest alpha a run with these settings can use, before it has estimated the noise."""
-    # With the automatic amount, alpha is matched_alpha(steps) >= matched_alpha(MAX_STEPS) > 0: only beta can leave
-    # the region.
-    return matched_alpha(MAX_STEPS) if settings.auto_amount else settings.alpha
+def lowest_alpha(settings, given=()):
+    """The smallest alpha a run with these settings (``given``: the names the caller set) can use, before it
+    has estimated the noise."""
+    # With the automatic amount, alpha is matched_alpha(steps) >= matched_alpha(MAX_POINT_CLOUD_STEPS) > 0:
+    # only beta can leave the region.
+    automatic = settings_spec.automatic(settings_spec.values_of(settings, settings_spec.POINTS), given)
+    return matched_alpha(MAX_POINT_CLOUD_STEPS) if automatic else settings.alpha
 
 
 def convergence_note(settings):
@@ -278,8 +277,9 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
     def draw(self, context):
         layout = self.layout
         layout.use_property_split = True
-        draw_settings(layout, self, settings_spec.POINTS, context.active_object)
-        draw_convergence(layout, "HC", lowest_alpha(self), self.beta)
+        given = set_by_caller(self, settings_spec.SWITCHES_OFF_THE_AMOUNT)
+        draw_settings(layout, self, settings_spec.POINTS, context.active_object, given=given)
+        draw_convergence(layout, "HC", lowest_alpha(self, given), self.beta)
 
     def _clouds(self, context, settings):
         objects = [obj for obj in context.selected_objects if obj.type in POINT_TYPES]
@@ -300,8 +300,8 @@ class OBJECT_OT_hc_smooth_points(ModalProgress, bpy.types.Operator):
         """The settings this run reads (a modal run must not see later edits). Alpha or Steps per Round
         set by the caller are used as set: the Automatic Amount chooses only what was left unset."""
         settings = PointSettings.of(self)
-        if any(self.properties.is_property_set(name) for name in ("alpha", "iterations_per_round")):
-            settings.auto_amount = False
+        given = set_by_caller(self, settings_spec.SWITCHES_OFF_THE_AMOUNT)
+        settings.auto_amount = settings_spec.automatic(settings_spec.values_of(settings, settings_spec.POINTS), given)
         return settings
 
     def execute(self, context):

@@ -154,7 +154,7 @@ def test_automatic_amount_reports_progress_while_it_chooses(scene):
     props = settings(auto_amount=True)
     job = jobs.make_job(noisy_sphere(), props)
     progress = list(jobs.run([job], props, chunk=5))
-    choosing = [f for f in progress if f < core_module().mesh_smoother.CHOOSING_SHARE]
+    choosing = [f for f in progress if f < core_module().mesh.smooth.CHOOSING_SHARE]
     assert len(choosing) >= 2 and progress == sorted(progress) and progress[-1] == 1.0
     whole = jobs.make_job(noisy_sphere("B"), props)
     list(jobs.run([whole], props))

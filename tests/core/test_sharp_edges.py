@@ -1,4 +1,4 @@
-"""Keep Sharp Edges (core.sharp_edges and its option in core.smooth_mesh / core.MeshSmoother)."""
+"""Keep Sharp Edges (core.mesh.sharp_edges and its option in core.smooth_mesh / core.MeshSmoother)."""
 
 import math
 
@@ -7,8 +7,9 @@ import pytest
 from primitives import CAD, PRIMITIVES, TINY
 
 import core
-from core import sharp_edges
-from core.sharp_edges import FaceRings, SharpSmoothing, face_normals, filter_normals, fit_vertices, sharp_smooth
+from core.geometry import face_normals
+from core.mesh import sharp_edges
+from core.mesh.sharp_edges import FaceRings, SharpSmoothing, filter_normals, fit_vertices, sharp_smooth
 from core.slices import to_end
 
 
@@ -154,7 +155,7 @@ def test_half_influence_moves_less():
 
 
 def _loop_filter(normals, faces, threshold, iterations):
-    """Sun et al.'s normal filtering written from the paper, face by face, with core.sharp_edges' rule for
+    """Sun et al.'s normal filtering written from the paper, face by face, with core.mesh.sharp_edges' rule for
     a face that no other face of its ring is within the angle of: the plain mean of its ring (if that is
     at least a tenth of a unit long)."""
     around = {}

@@ -1,4 +1,4 @@
-"""Scans larger than memory (cli/tiled.py, core/tiles.py, cli/formats/ply_blocks.py), without Blender: a
+"""Scans larger than memory (cli/tiled.py, core/mesh/tiles.py, cli/formats/ply_blocks.py), without Blender: a
 binary PLY smoothed in tiles is, byte for byte, the file the whole route writes; every byte but the
 positions (and normals) stays; a failure or an interrupt leaves no output; what cannot run tiled is
 refused with a message."""
@@ -15,7 +15,8 @@ core = load("core")
 tiled = load("cli.tiled")
 formats = load("cli.formats")
 ply = load("cli.formats.ply")
-mesh_amount = load("core.mesh_amount")
+mesh_amount = load("core.mesh.amount")
+in_place = load("core.mesh.in_place")
 FormatError = formats.FormatError
 
 # The options core_options gives for `--iterations K` (floats as Blender's properties hold them).
@@ -162,7 +163,7 @@ def test_the_amount_chosen_once_runs_on_every_tile(tmp_path, monkeypatch):
     automatic.update(max_deviation=core.AUTO, keep_in_place=core.AUTO)
     run, got = smooth_tiled(tmp_path, data, automatic, capacity=45_000)
     assert run.tiles >= 4 and run.amount.iterations == 4 and run.amount.capped and run.kept_in_place
-    assert "volume" in run.notes[-1] and "fold guard" in run.notes[-1]
+    assert "volume" in run.notes[-1] and "fold guard" in run.notes[-1] and "outlines" in run.notes[-1]
     # Every tile ran the numbers chosen: the whole mesh run with them, within a millionth of its size.
     chosen = {**EXPLICIT, "alpha": 0.0, "beta": run.amount.beta, "iterations": 4, "keep_in_place": True}
     chosen["max_deviation"] = 4.0 * run.amount.sigma
@@ -253,17 +254,16 @@ def test_boxes_own_every_point_once():
     rng = np.random.default_rng(0)
     points = rng.normal(size=(20_000, 3))
     points[:100] = np.round(points[:100], 1)  # points on the cuts
-    whole = core.tiles.bounding_box(points.min(axis=0), points.max(axis=0))
-    boxes = core.tiles.split(points, 1.0, whole, 0.05, 3_000)
+    boxes = core.tile_boxes(points, 1.0, points.min(axis=0), points.max(axis=0), 0.05, 3_000)
     owners = np.sum([box.owns(points) for box in boxes], axis=0)
     assert len(boxes) >= 8 and (owners == 1).all()
     assert max(box.reaches(points, 0.05).sum() for box in boxes) <= 3_000
 
 
 def test_rings_read():
-    assert core.tiles.rings_read("hc", 10) == 20
-    assert core.tiles.rings_read("plain", 10) == 10
-    assert core.tiles.rings_read("hc", 3, keep_in_place=True, normals=True) == 6 + 1 + core.in_place._LAST + 1
+    assert core.tile_rings("hc", 10) == 20
+    assert core.tile_rings("plain", 10) == 10
+    assert core.tile_rings("hc", 3, keep_in_place=True, normals=True) == 6 + 1 + in_place._LAST + 1
 
 
 arguments = load("cli.arguments")

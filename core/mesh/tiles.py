@@ -2,7 +2,7 @@
 
 **Locality.** A simultaneous HC iteration reads two rings (p_i needs b_j of its neighbours, b_j needs
 q of theirs); a Laplacian iteration reads one. So after k iterations a vertex's result depends only on
-the input within ``rings_read`` rings: 2k for HC, k for the Laplacian variants, one more for each pass
+the input within ``tile_rings`` rings: 2k for HC, k for the Laplacian variants, one more for each pass
 that reads the result's normals (Keep in Place's projection, the normals a file stores) and
 ``in_place._LAST`` more for Keep in Place's fold guard, whose rounds each reach one ring further.
 
@@ -15,38 +15,38 @@ whole mesh. Smoothed with its vertices in their order in the whole mesh, each ro
 summed in the same order: the own vertices' results are the whole run's, bit for bit (except where the
 whole run would renumber a scattered mesh for cache locality, core.locality: then to rounding).
 
-The boxes cut space where the vertices are (``split``): a k-d split of an even sample of the vertices,
+The boxes cut space where the vertices are (``tile_boxes``): a k-d split of an even sample of the vertices,
 each box cut at the median along its longest side until its tile (box and halo) holds at most the
 vertices a tile may hold.
 
 What needs a whole part at once cannot run tiled: the Automatic Amount's choice (made once, on a region,
 and run on every tile with the numbers it chose), the volume restore of closed parts, the parts it
-holds or gives back (core.collapse), Keep Sharp Edges, Gauss-Seidel order and an early stop on the
-largest move (``refused``).
+holds or gives back (core.mesh.collapse), Keep Sharp Edges, Gauss-Seidel order and an early stop on the
+largest move (``tiled_problem``).
 """
 
 from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..slices import to_end
+from .amount import AmountChooser, most_iterations
 from .in_place import _LAST as UNFOLD_ROUNDS
-from .mesh_amount import AmountChooser, most_iterations
-from .mesh_smoother import AUTO, DEVIATION_IN_NOISE, MeshSmoother
-from .slices import to_end
+from .smooth import AUTO, DEVIATION_IN_NOISE, MeshSmoother
 from .welding import TOLERANCE as WELD_TOLERANCE
 
-MOST_TILES = 4096  # more boxes than this: the halo is most of every tile (``split`` refuses)
+MOST_TILES = 4096  # more boxes than this: the halo is most of every tile (``tile_boxes`` refuses)
 _SLACK = 1e-9  # relative: the margin covers the rounding of the lengths it is made of
 
 
-def rings_read(method, iterations, keep_in_place=False, normals=False):
-    """The rings around a vertex that its result reads: see the module docstring. ``normals``: the
-    result's vertex normals are written too.
+def tile_rings(method, iterations, keep_in_place=False, normals=False):
+    """The rings around a vertex that its result reads (see the module docstring): the halo a tile needs.
+    ``normals``: the result's vertex normals are written too.
 
     Examples
     --------
-    >>> from core import tiles
-    >>> tiles.rings_read("hc", 10), tiles.rings_read("plain", 10), tiles.rings_read("hc", 10, normals=True)
+    >>> import core
+    >>> core.tile_rings("hc", 10), core.tile_rings("plain", 10), core.tile_rings("hc", 10, normals=True)
     (20, 10, 21)
     """
     rings = (2 if method == "hc" else 1) * int(iterations)
@@ -55,17 +55,24 @@ def rings_read(method, iterations, keep_in_place=False, normals=False):
     return rings + (1 if normals else 0)
 
 
-def margin(rings, longest_edge):
+def tile_margin(rings, longest_edge):
     """How far (in every coordinate) beyond its box a tile reaches so that it holds every vertex within
-    ``rings`` rings of its own: welded copies (core.welding) may lie the welding tolerance apart, so each
-    ring is taken that much longer."""
+    ``rings`` rings of its own: welded copies (core.mesh.welding) may lie the welding tolerance apart, so
+    each ring is taken that much longer.
+
+    Examples
+    --------
+    >>> import core
+    >>> round(core.tile_margin(20, 0.5), 6)  # 20 rings of edges at most 0.5 long, each 1e-6 longer
+    10.00001
+    """
     return rings * longest_edge * (1.0 + WELD_TOLERANCE) * (1.0 + _SLACK) + _SLACK * longest_edge
 
 
 @dataclass(frozen=True)
 class Box:
     """An axis-aligned box of space: a point p is its own where low <= p < high in every coordinate,
-    p <= high where ``closed`` (the boxes' outer sides), so the boxes of ``split`` own every point once."""
+    p <= high where ``closed`` (the boxes' outer sides), so the boxes of ``tile_boxes`` own every point once."""
 
     low: np.ndarray
     high: np.ndarray
@@ -99,13 +106,9 @@ class Box:
         return Box(self.low, high, closed), Box(low, self.high, self.closed)
 
 
-def bounding_box(low, high):
-    """The Box of the points between ``low`` and ``high`` (all of them its own)."""
-    return Box(np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64), np.ones(3, dtype=bool))
-
-
-def split(sample, scale, box, margin, most):
-    """Boxes owning every point of ``box``, each of whose tiles holds about ``most`` vertices at most.
+def tile_boxes(sample, scale, low, high, margin, most):
+    """Boxes (``Box``) owning every point between ``low`` and ``high`` once, each of whose tiles (the box
+    and ``margin`` around it) holds about ``most`` vertices at most.
 
     ``sample``: (m, 3) an even sample of the vertices, each standing for ``scale`` of them. A box is cut
     at the median of its own sample points along its longest side while its tile holds too many; raises
@@ -114,17 +117,17 @@ def split(sample, scale, box, margin, most):
 
     Examples
     --------
-    >>> import numpy as np
-    >>> from core import tiles
+    >>> import numpy as np, core
     >>> points = np.random.default_rng(0).uniform(size=(10_000, 3))
-    >>> boxes = tiles.split(points, 1.0, tiles.bounding_box([0, 0, 0], [1, 1, 1]), 0.02, 3_000)
+    >>> boxes = core.tile_boxes(points, 1.0, [0, 0, 0], [1, 1, 1], 0.02, 3_000)
     >>> len(boxes), max(int(box.reaches(points, 0.02).sum()) for box in boxes) <= 3_000
     (4, True)
     >>> int(sum(box.owns(points) for box in boxes).max())  # every point has one box
     1
     """
     sample = np.asarray(sample, dtype=np.float64)
-    done, todo = [], [box]
+    whole = Box(np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64), np.ones(3, dtype=bool))
+    done, todo = [], [whole]
     while todo:
         box = todo.pop()
         if box.reaches(sample, margin).sum() * scale <= most:
@@ -147,14 +150,31 @@ def split(sample, scale, box, margin, most):
     return done
 
 
-def automatic(options):
-    """Whether core.MeshSmoother ``options`` leave the amount to the Automatic Amount (as MeshSmoother reads them)."""
+def tiles_choose(options):
+    """Whether core.MeshSmoother ``options`` leave the amount to the Automatic Amount (as MeshSmoother reads
+    them): then a tiled run chooses it once (``region_amount``).
+
+    Examples
+    --------
+    >>> import core
+    >>> core.tiles_choose({}), core.tiles_choose({"iterations": 10}), core.tiles_choose({"method": "plain"})
+    (True, False, False)
+    """
     hc = options.get("method", "hc") == "hc" or options.get("keep_sharp_edges", False)
     return hc and options.get("alpha", AUTO) == AUTO and options.get("iterations", AUTO) == AUTO
 
 
-def refused(options, tiled_words="in tiles"):
-    """What in core.MeshSmoother ``options`` cannot run tiled, as a sentence, or None."""
+def tiled_problem(options, tiled_words="in tiles"):
+    """What in core.MeshSmoother ``options`` cannot run tiled, as a sentence, or None.
+
+    Examples
+    --------
+    >>> import core
+    >>> core.tiled_problem({"iterations": 10}) is None
+    True
+    >>> core.tiled_problem({"keep_sharp_edges": True})
+    'Keep Sharp Edges cannot run in tiles: its filter of face normals needs whole parts'
+    """
     if options.get("keep_sharp_edges"):
         return f"Keep Sharp Edges cannot run {tiled_words}: its filter of face normals needs whole parts"
     if options.get("mode", "simultaneous") != "simultaneous":
@@ -185,7 +205,21 @@ def region_amount(positions, edges, triangles, options, total_vertices):
     mesh would be (welded, the border rule), core.AmountChooser chooses on it (on patches, as on any big
     mesh), and the iterations are cut to the work budget of the whole mesh's ``total_vertices``, as a
     whole run cuts them. The deviation limit is DEVIATION_IN_NOISE times the noise found, or where the
-    region's largest part is quiet or lightly noisy that part's own radius (core.mesh_noise)."""
+    region's largest part is quiet or lightly noisy that part's own radius (core.mesh.noise). Returns a
+    TileAmount.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> u, v = np.meshgrid(np.linspace(0, 1, 20), np.linspace(0, 1, 20))
+    >>> noisy = np.c_[u.ravel(), v.ravel(), np.random.default_rng(0).normal(scale=0.01, size=400)]
+    >>> grid = np.arange(400).reshape(20, 20)[:-1, :-1].ravel()
+    >>> triangles = np.concatenate([np.c_[grid, grid + 1, grid + 21], np.c_[grid, grid + 21, grid + 20]])
+    >>> edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    >>> chosen = core.region_amount(noisy, edges, triangles, {}, total_vertices=10_000_000)
+    >>> chosen.amount.iterations, chosen.options["alpha"], chosen.options["keep_in_place"]  # 60M / 10M
+    (6, 0.0, True)
+    """
     run = MeshSmoother(positions, edges, faces=triangles, **options)
     if not run.automatic:
         raise ValueError("region_amount is for runs with the Automatic Amount (alpha and iterations 'auto')")

@@ -14,7 +14,7 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    within each side is averaged away. The guidance (Zhang, Deng, Zhang, Bouaziz and Liu 2015, "Guided
    Mesh Normal Filtering"; ``guidance_normals``), computed once per step, is the mean normal of the most
    consistent patch each face lies in: steady where a single face is not, it tells a crease from noise
-   that tilts faces by nearly as much as the crease turns. It runs where core.mesh_noise finds noise
+   that tilts faces by nearly as much as the crease turns. It runs where core.mesh.noise finds noise
    (``guided``; core.MeshSmoother asks, steps set or not): it needs patches on one side of each crease,
    which scans have and a coarse model (every face at a corner) does not. Elsewhere Sun et al.'s filter
    compares the faces' own normals, g = n, recomputed every pass. On bench_sharp_edges.py's tuning parts
@@ -76,10 +76,11 @@ except (ImportError, TypeError, ValueError):  # SciPy without these kernels, or 
     _csr_matvec = _csr_matvecs = _csc_matvecs = None
 from numpy.typing import ArrayLike
 
-from .adjacency import Umbrella, umbrella_operator
-from .metrics import fan_triangles
-from .slices import to_end
-from .validation import (
+from ..adjacency import Umbrella, umbrella_operator
+from ..geometry import face_normals, fan_triangles, project_rows_within
+from ..parallel import BLOCK
+from ..slices import to_end
+from ..validation import (
     bbox_diagonal,
     check_fixed,
     check_influence,
@@ -102,22 +103,6 @@ REFIT_ITERATIONS = 5
 DEFAULT_ALPHA = 0.0  # the push-back's weights (paper section 4): beta 0 takes back each step's
 DEFAULT_BETA = 0.0  # neighbourhood mean (the drift), keeps all of the vertex-by-vertex part (the noise)
 DEFAULT_ITERATIONS = 5  # steps when the caller gives no amount and no Automatic Amount runs
-# The Automatic Amount (for a noise of ``ratio`` median edge lengths, core.mesh_noise's estimate):
-# * steps: FIRST_STEPS + STEPS_PER_RATIO x ratio, at most MAX_STEPS, and at most WORK_BUDGET / triangles
-#   (each step costs NORMAL_ITERATIONS passes over ~6 face pairs per triangle): the error on the tuning
-#   parts falls with the steps up to 10 where the noise is heavy, and is flat from 4 to 6 where it is light;
-# * angle: at least NOISE_ANGLE_GAIN x atan(ratio): noise tilts neighbouring faces by about that much,
-#   and a filter that sees noisy faces as creases leaves the noise (at 1 % noise along the normals on the
-#   tuning parts, 50°-60° leave 20-50 % less error than 30°). A crease gentler than the noise is noise.
-# * QUIET_RATIO for meshes where no part has noise above core.mesh_noise's threshold (they move within
-#   its small radius).
-FIRST_STEPS = 4
-STEPS_PER_RATIO = 20.0
-MAX_STEPS = 10
-WORK_BUDGET = 12_000_000  # triangle-steps
-NOISE_ANGLE_GAIN = 2.5
-QUIET_RATIO = 0.05
-CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its progress the noise estimate takes
 TANGENTIAL = 0.5  # share of the tangential umbrella move per step on vertices off the creases (step 3)
 FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
 PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the passes of a step
@@ -129,19 +114,7 @@ STEP_SLICES = GUIDED_SLICES + NORMAL_ITERATIONS + FIT_SLICES + REFIT_SLICES + FO
 # The guidance's vertex rings (about 6 faces) count their consistency this many times against the face
 # rings' (about 13): on the tuning parts at 0.5 % noise 1.5-3 leave the same dihedral error, 1 more.
 VERTEX_RING_WEIGHT = 2.0
-_BLOCK = 1 << 16  # face pairs per block of the filtering's dot products: its temporaries stay in cache
-
-
-def steps_for_noise(ratio, triangles):
-    """The Automatic Amount's steps for noise of ``ratio`` median edge lengths on ``triangles`` triangles."""
-    wanted = min(MAX_STEPS, round(FIRST_STEPS + STEPS_PER_RATIO * ratio))
-    return int(max(1, min(wanted, WORK_BUDGET // max(1, triangles))))
-
-
-def angle_for_noise(angle, ratio):
-    """The Automatic Amount's sharpness angle: ``angle``, or wider where noise of ``ratio`` median edge
-    lengths tilts neighbouring faces by more (at most 80°)."""
-    return max(angle, min(math.radians(80.0), NOISE_ANGLE_GAIN * math.atan(ratio)))
+_BLOCK = BLOCK  # face pairs per block of the filtering's dot products: its temporaries stay in cache
 
 
 def check_sharpness_angle(value):
@@ -238,19 +211,6 @@ class FaceRings:
         self.faces_at = np.diff(self.incidence.indptr)
         self.triangles = triangles
         yield
-
-
-def face_normals(points, triangles):
-    """(t, 3) unit normals (right-hand rule over the corners); (0, 0, 0) for a degenerate triangle."""
-    coordinates = np.ascontiguousarray(points.T)  # coordinate rows: 1-D gathers and element-wise work
-    first, second, third = (np.ascontiguousarray(triangles[:, k]) for k in range(3))
-    u = [row.take(second) - row.take(first) for row in coordinates]
-    v = [row.take(third) - row.take(first) for row in coordinates]
-    normals = np.empty((triangles.shape[0], 3), dtype=u[0].dtype)
-    for k in range(3):  # u x v, as np.cross computes it
-        i, j = (k + 1) % 3, (k + 2) % 3
-        normals[:, k] = u[i] * v[j] - u[j] * v[i]
-    return _unit(normals)
 
 
 def _unit(vectors, good=None):
@@ -615,14 +575,14 @@ class SharpSmoothing:
         False: Sun et al.'s two steps alone, without HC's push-back.
     guided : bool
         True: the filter's weights compare guidance normals, and the faces take their nearest planes (what
-        core.MeshSmoother runs where core.mesh_noise finds noise). False: Sun et al.'s filter alone.
+        core.MeshSmoother runs where core.mesh.noise finds noise). False: Sun et al.'s filter alone.
         The guidance is for meshes fine enough that most faces lie in a patch on one side of every crease
         (scans): on a coarse model (a cube of 12 triangles) every face is at a corner and it blends the sides.
 
     Examples
     --------
     >>> import numpy as np, core
-    >>> from core.sharp_edges import SharpSmoothing
+    >>> from core.mesh.sharp_edges import SharpSmoothing
     >>> positions = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
     >>> faces = [[0, 1, 3, 2], [2, 3, 7, 6], [6, 7, 5, 4], [4, 5, 1, 0], [2, 6, 4, 0], [7, 3, 1, 5]]
     >>> run = SharpSmoothing(positions, faces, iterations=2)
@@ -740,7 +700,7 @@ class SharpSmoothing:
         unfolding = _unfold(moved, start, before, self.triangles, normals, _unit(self.rings.ring @ normals))
         yield from _counted(unfolding, slices)
         if np.any(self.max_deviation):
-            _within(moved, self.original, self.max_deviation)
+            project_rows_within(moved, self.original, self.max_deviation)
         self.done += 1
         if self.tolerance:
             largest = float(np.sqrt(np.max(np.einsum("ij,ij->i", moved - start, moved - start), initial=0.0)))
@@ -812,23 +772,13 @@ def _turned(now, normals, around):
     return (np.einsum("ij,ij->i", now, normals) < 0.0) | (np.einsum("ij,ij->i", now, around) < 0.0)
 
 
-def _within(points, start, radius):
-    """``points`` projected, in place, onto the balls of ``radius`` (one distance, or one per row) around ``start``."""
-    away = points - start
-    lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
-    bound = np.broadcast_to(radius, lengths.shape)
-    over = np.flatnonzero(lengths > bound)
-    if over.size:
-        points[over] = start[over] + away[over] * (bound[over] / lengths[over])[:, None]
-
-
 def sharp_smooth(positions: ArrayLike, faces, **options) -> np.ndarray:
     """Keep Sharp Edges run to the end: ``SharpSmoothing(positions, faces, **options)``'s result.
 
     Examples
     --------
     >>> import numpy as np
-    >>> from core.sharp_edges import sharp_smooth
+    >>> from core.mesh.sharp_edges import sharp_smooth
     >>> u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 12))
     >>> grid = np.arange(144).reshape(12, 12)
     >>> quads = np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:], grid[1:, :-1]], -1).reshape(-1, 4)
