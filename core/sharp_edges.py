@@ -176,7 +176,7 @@ class FaceRings:
 
     Attributes
     ----------
-    triangles : (t, 3) the triangles; corners : (3, t) the same, a corner at a time.
+    triangles : (t, 3) the triangles; corners : (3, t) the same, a corner at a time (intp).
     incidence : (n, t) CSR, 1 where vertex i is a corner of triangle f.
     indptr, indices, counts : the faces sharing a vertex with each face, itself included: a CSR pattern
         of (t, t), columns increasing, without values (each pass reads it with weights of its own).
@@ -185,7 +185,7 @@ class FaceRings:
     faces_at : (n,) the number of triangles around each vertex, |F_i|.
     border : (n,) bool, the vertices on an edge of one triangle.
     across : (t, 3) the triangle across each triangle's edge from corner k to corner k + 1 (itself on an
-        open border; one of them where more than two triangles share the edge).
+        open border; one of them where more than two triangles share the edge), intp.
     """
 
     def __init__(self, triangles, n_vertices):
@@ -202,8 +202,8 @@ class FaceRings:
     def _build(self, triangles, n_vertices):
         t = triangles.shape[0]
         self.triangles = triangles
-        self.corners = np.ascontiguousarray(triangles.T, dtype=np.int32 if max(t, n_vertices) < 2**31 else np.int64)
-        columns = np.repeat(np.arange(t, dtype=self.corners.dtype), 3)
+        self.corners = np.ascontiguousarray(triangles.T, dtype=np.intp)  # NumPy's gathers take intp as it is
+        columns = np.repeat(np.arange(t, dtype=np.int32 if t < 2**31 else np.int64), 3)
         self.incidence = sp.csr_matrix((np.ones(3 * t), (triangles.ravel(), columns)), shape=(n_vertices, t))
         self.incidence.sum_duplicates()
         self.incidence.data[:] = 1.0  # a triangle with a repeated corner counts once at that vertex
@@ -225,11 +225,6 @@ class FaceRings:
         t = self.counts.size
         return sp.csr_matrix((np.ones(self.indices.size), self.indices, self.indptr), shape=(t, t))
 
-    def chunk(self, first, end):
-        """Rows first:end of the pattern: (their columns, each row's count, each row's start among them)."""
-        start = self.indptr[first]
-        return self.indices[start : self.indptr[end]], self.counts[first:end], self.indptr[first:end] - start
-
     def each_chunk(self, task):
         """``task(first, end)`` for every chunk of rows, the chunks shared out over the threads in runs."""
         runs = np.array_split(np.arange(len(self.chunks)), self.threads)
@@ -245,6 +240,16 @@ class FaceRings:
 
         self.blocks.run(lambda block: block.neighbour_sums(values, combine))
         return out
+
+    def padded(self, first, end):
+        """Rows first:end of the pattern as a (K, rows) intp array, K the longest row: entry (k, r) is row r's
+        k-th column, its last column repeated past its end (the same face again: no new candidate for a
+        smallest or largest value, and the first of a tie stays first); and the (K, rows) mask of the real
+        entries. Row-side values then broadcast, and a reduction over the first axis is element-wise."""
+        counts = self.counts[first:end]
+        reach = np.arange(int(counts.max()) if counts.size else 0)[:, None]
+        positions = self.indptr[first:end] + np.minimum(reach, counts - 1)
+        return self.indices.take(positions).astype(np.intp), reach < counts
 
     def rows_of(self, rows):
         """The pattern's ``rows`` (an index array): (their columns, each row's count, each row's start)."""
@@ -304,7 +309,7 @@ def _edge_neighbours(triangles, n_vertices):
     ordered = keys[order]
     same = ordered[1:] == ordered[:-1]
     first, second = order[:-1][same], order[1:][same]
-    across = np.repeat(np.arange(t, dtype=np.int32 if t < 2**31 else np.int64), 3)  # on a border: itself
+    across = np.repeat(np.arange(t), 3)  # on a border: itself
     across[first], across[second] = second // 3, first // 3
     alone = ~(np.r_[same, False] | np.r_[False, same])
     border = np.zeros(n_vertices, dtype=bool)
@@ -345,14 +350,6 @@ def _unit_planar(vectors):
     return vectors
 
 
-def _first_smallest(values, counts, starts):
-    """Per row of a chunk (``counts`` entries from ``starts``): (the smallest value, the place of its first
-    entry in the chunk)."""
-    best = np.minimum.reduceat(values, starts)
-    place = np.where(values <= np.repeat(best, counts), np.arange(values.size), values.size)
-    return best, np.minimum.reduceat(place, starts)
-
-
 def guidance_normals(normals, rings):
     """Zhang, Deng, Zhang, Bouaziz and Liu 2015's guidance ("Guided Mesh Normal Filtering"): each face takes
     the mean normal of the most consistent patch it lies in. The patches are the face rings (the faces
@@ -384,22 +381,23 @@ def guidance_normals(normals, rings):
         summed += step
     spread, steepest = np.empty(t), np.empty(t)
 
-    def patches(first, end):
-        columns, counts, starts = rings.chunk(first, end)
-        cosine = np.repeat(means[0, first:end], counts) * planar[0].take(columns)
+    def patches(first, end):  # max (1 - n_a . m) = 1 - min n_a . m
+        columns, _ = rings.padded(first, end)
+        cosine = means[0, first:end] * planar[0].take(columns)
         for c in (1, 2):
-            cosine += np.repeat(means[c, first:end], counts) * planar[c].take(columns)
-        spread[first:end] = np.maximum.reduceat(np.subtract(1.0, cosine, out=cosine), starts)
-        steepest[first:end] = np.maximum.reduceat(steep.take(columns), starts)
+            cosine += means[c, first:end] * planar[c].take(columns)
+        spread[first:end] = 1.0 - cosine.min(axis=0)
+        steepest[first:end] = steep.take(columns).max(axis=0)
 
     rings.each_chunk(patches)
     consistency = spread * steepest / (1e-9 + rings.ring_sums(summed))
-    chosen, best = np.empty(t, dtype=rings.indices.dtype), np.empty(t)
+    chosen, best = np.empty(t, dtype=np.intp), np.empty(t)
 
     def most_consistent(first, end):
-        columns, counts, starts = rings.chunk(first, end)
-        best[first:end], place = _first_smallest(consistency.take(columns), counts, starts)
-        chosen[first:end] = columns[place]
+        columns, _ = rings.padded(first, end)
+        candidates = consistency.take(columns)
+        place = (candidates.argmin(axis=0), np.arange(end - first))  # the first on a tie
+        best[first:end], chosen[first:end] = candidates[place], columns[place]
 
     rings.each_chunk(most_consistent)
     guidance = means.T[chosen]
@@ -420,7 +418,7 @@ def _vertex_ring_consistency(normals, rings, steep, summed):
     starts = incidence.indptr[:-1]
     around = np.flatnonzero(rings.faces_at > 0)
     rows = np.repeat(np.arange(n), rings.faces_at)
-    columns = incidence.indices
+    columns = incidence.indices.astype(np.intp)
     cosine = normals[:, 0].take(columns) * means[:, 0].take(rows)
     for c in (1, 2):
         cosine += normals[:, c].take(columns) * means[:, c].take(rows)
@@ -438,26 +436,29 @@ def nearest_plane_normals(points, normals, rings):
     these faces take the side their corners lie on: the crease stays one edge, not a rounded strip.
 
     With face i's centroid c_i and the second moment C_i = sum_k (x_k - c_i)(x_k - c_i)^T of its corners
-    about it, that sum is n_j^T C_i n_j + 3 (n_j . (c_i - c_j))^2: ten numbers a pair, all of the size
-    of the faces (no cancellation far from the origin). A chunk of the ring pattern's rows at a time."""
+    about it, that sum is n_j^T C_i n_j + 3 (n_j . c_i - n_j . c_j)^2: per pair the candidate's normal and
+    offset, the rest is face i's. Positions about their mean: the offsets stay of the mesh's size. A chunk
+    of the ring pattern's rows at a time (``FaceRings.padded``)."""
     t = normals.shape[0]
     x = np.ascontiguousarray(points.T, dtype=np.float64)
+    x = x - x.mean(axis=1, keepdims=True)
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
     centroids = np.empty((3, t))
     parallel.run_chunks(lambda a, b: _centroids(x, rings.corners[:, a:b], centroids[:, a:b]), t, _FACE_CHUNK)
-    chosen = np.empty(t, dtype=rings.indices.dtype)
+    offsets = np.einsum("kt,kt->t", planar, centroids)  # n_j . c_j
+    chosen = np.empty(t, dtype=np.intp)
 
     def nearest(first, end):
-        columns, counts, starts = rings.chunk(first, end)
+        columns, _ = rings.padded(first, end)
         moments = _corner_moments(x, rings.corners[:, first:end], centroids[:, first:end])
         candidate = [row.take(columns) for row in planar]
-        offset = candidate[0] * (np.repeat(centroids[0, first:end], counts) - centroids[0].take(columns))
+        distance = candidate[0] * centroids[0, first:end] - offsets.take(columns)
         for c in (1, 2):
-            offset += candidate[c] * (np.repeat(centroids[c, first:end], counts) - centroids[c].take(columns))
-        cost = 3.0 * offset * offset
+            distance += candidate[c] * centroids[c, first:end]
+        cost = 3.0 * distance * distance
         for moment, (a, b) in zip(moments, _MOMENT_PAIRS):
-            cost += (1.0 if a == b else 2.0) * np.repeat(moment, counts) * candidate[a] * candidate[b]
-        chosen[first:end] = columns[_first_smallest(cost, counts, starts)[1]]
+            cost += (moment if a == b else 2.0 * moment) * candidate[a] * candidate[b]
+        chosen[first:end] = columns[cost.argmin(axis=0), np.arange(end - first)]  # the first on a tie
 
     rings.each_chunk(nearest)
     return normals[chosen]
@@ -544,33 +545,31 @@ def _filter_pass(rings, cos_threshold, planar=None, total=None, judged=None, wei
     computed from the cosines of ``judged`` (3, t) and kept in ``keep`` (if given). With ``judged``, returns
     the lonely faces: at most one positive weight in their row (``filter_steps``)."""
     t = rings.counts.size
-    positive = None if judged is None else np.empty(t, dtype=np.int32)
+    positive = None if judged is None else np.empty(t, dtype=np.intp)
 
     def chunk(first, end):
-        columns, counts, starts = rings.chunk(first, end)
-        pairs = slice(rings.indptr[first], rings.indptr[end])
         if judged is None:
-            chunk_weights = weights[pairs]
-        else:
-            chunk_weights = _pair_weights(judged, columns, counts, first, end, cos_threshold)
-            positive[first:end] = np.add.reduceat(chunk_weights > 0.0, starts, dtype=np.int32)
-            if keep is not None:
-                keep[pairs] = chunk_weights
-        if total is not None:
-            _weighted_rows(chunk_weights, columns, counts, planar, total[:, first:end])
+            pairs = slice(rings.indptr[first], rings.indptr[end])
+            _weighted_rows(weights[pairs], rings.indices[pairs], rings.counts[first:end], planar, total[:, first:end])
+            return
+        columns, real = rings.padded(first, end)
+        gathered = [row.take(columns) for row in judged]
+        chunk_weights = judged[0, first:end] * gathered[0]
+        for k in (1, 2):
+            chunk_weights += judged[k, first:end] * gathered[k]
+        chunk_weights -= cos_threshold
+        np.maximum(chunk_weights, 0.0, out=chunk_weights)
+        chunk_weights *= chunk_weights
+        chunk_weights *= real  # the repeated columns past each row's end weigh nothing
+        positive[first:end] = np.count_nonzero(chunk_weights, axis=0)
+        if keep is not None:
+            keep[rings.indptr[first] : rings.indptr[end]] = chunk_weights.T[real.T]
+        if total is not None:  # the weights of the normals themselves: their gathers serve twice
+            for k, values in enumerate(gathered if planar is judged else (row.take(columns) for row in planar)):
+                np.sum(chunk_weights * values, axis=0, out=total[k, first:end])
 
     rings.each_chunk(chunk)
     return None if judged is None else np.flatnonzero(positive <= 1)
-
-
-def _pair_weights(judged, columns, counts, first, end, cos_threshold):
-    """(g_i . g_j - T)^2 where positive, else 0, over the ring pairs of rows first:end."""
-    cosine = np.repeat(judged[0, first:end], counts) * judged[0].take(columns)
-    for k in (1, 2):
-        cosine += np.repeat(judged[k, first:end], counts) * judged[k].take(columns)
-    cosine -= cos_threshold
-    np.maximum(cosine, 0.0, out=cosine)
-    return np.multiply(cosine, cosine, out=cosine)
 
 
 def _weighted_rows(weights, columns, counts, planar, out):
