@@ -46,10 +46,11 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    too).
 
 Everything runs on all faces or vertices at once: the face rings are one sparse pattern (the faces
-sharing a vertex with each face: incidence times its transpose), built once per run; the filtering
-computes the weight of each pair of faces in it once (about 6 per triangle; once per step with the
-guidance, every pass without) and sums it both ways, a fitting pass is three sparse products on the
-flattened coordinates.
+sharing a vertex with each face, about 13: the corners' pattern times the incidence), built once per run
+in blocks of rows, and every pass over it works a chunk of rows at a time (its gathers in cache), the
+chunks shared out over the threads (core.parallel). The guided filter keeps one single-precision weight
+a pair for its passes; the plain one weighs each chunk as it sums it. A fitting pass gathers each
+triangle's corners and sums around each vertex (one product with the incidence).
 Fixed vertices never move (their positions still place their faces' planes); ``influence`` scales each
 step's move, as core.smoothing scales an iteration's.
 """
