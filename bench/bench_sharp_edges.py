@@ -33,9 +33,10 @@ clean faces meet at more than 25°), the volume change against the clean part, t
 ours no worse than MeshLab's two-step (default and best) in RMS in every cell; sharp edges within 5°
 at 0.5 % noise; |ΔV| ≤ 0.5 %.
 
-``--cost`` times the Automatic Amount with the option on against 10 HC iterations on noisy tori of
-meshes.py (isotropic noise 0.1 % of the diagonal, float32), and the gap: the longest wait between two
-calls of the progress callback (what a cancel waits for).
+``--cost`` times the Automatic Amount with the option on against HC's default (``core.smooth_mesh`` with
+nothing set) on noisy tori of meshes.py (isotropic noise 0.1 % of the diagonal, float32), each run in a
+fresh process, interleaved, medians of ``--repeat``; with the gap (the longest wait between two calls of
+the progress callback: what a status line or a cancel waits for) and the process's peak memory.
 
 ``--bounds`` measures, instead of the peers, what the vertex fitting could reach with perfect normals:
 ours with the clean part's face normals in place of the filtered ones at every step, and at the first
@@ -53,7 +54,7 @@ default and the best HC setting.
     python bench/bench_sharp_edges.py                                   # both sets (~10 min)
     python bench/bench_sharp_edges.py --sets tuning --parts cube --sigmas 0.005 --kinds normal
     python bench/bench_sharp_edges.py --organic bunny,cow --sigmas 0.001,0.0025,0.005 --sets none
-    python bench/bench_sharp_edges.py --sets none --cost 250k,1M       # time on noisy tori (~4 min)
+    python bench/bench_sharp_edges.py --sets none --cost 250k,1M       # time and memory on noisy tori (~6 min)
     python bench/bench_sharp_edges.py --bounds --sigmas 0.005           # with perfect normals (~1 min)
 
 The report goes to stdout and bench/results/; the numbers to a JSON file beside it.
@@ -510,27 +511,76 @@ def report(record, out):
 
 def timed_with_gap(function, *args, **kwargs):
     """(seconds, the longest wait between two calls of the progress callback or the ends: what a cancel
-    waits for, the run's report) of ``function(*args, return_report=True, progress=..., **kwargs)``."""
+    waits for or a status line shows, the wait before the first call, the run's report) of
+    ``function(*args, return_report=True, progress=..., **kwargs)``."""
     called = [time.perf_counter()]
     _, report = function(*args, return_report=True, progress=lambda _: called.append(time.perf_counter()), **kwargs)
     called.append(time.perf_counter())
-    return called[-1] - called[0], float(np.max(np.diff(called))), report
+    return called[-1] - called[0], float(np.max(np.diff(called))), called[1] - called[0], report
 
 
-def cost(sizes, out):
+def cost_child(size, method):
+    """One timed run in this (fresh) process, printed as JSON: HC's default ("hc") or Keep Sharp Edges with
+    the Automatic Amount ("sharp") on the noisy torus of ``size`` vertices, with this process's peak RSS
+    (the torus, NumPy and SciPy included) and its RSS before the run."""
+    import resource
+
     import meshes
 
+    vertices, faces = meshes.torus(size)
+    noisy = meshes.add_noise(vertices, 0.001, seed=1).astype(np.float32)
+    edges = meshes.edges_from_faces(faces)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    options = {"keep_sharp_edges": True} if method == "sharp" else {}
+    seconds, gap, first, report = timed_with_gap(core.smooth_mesh, noisy, edges, faces=faces, **options)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(
+        json.dumps(
+            {
+                "seconds": seconds,
+                "gap": gap,
+                "first": first,
+                "steps": report.iterations,
+                "peak_mb": peak,
+                "before_mb": before,
+                "vertices": len(vertices),
+            }
+        )
+    )
+
+
+def cost(sizes, repeat, out, record):
+    """HC's default and Keep Sharp Edges (Automatic Amount) on noisy tori, each run in a fresh process,
+    interleaved, ``repeat`` times: medians of time, longest progress gap, peak memory."""
+    import subprocess
+
     out("\n## Cost on big meshes\n")
-    out("| vertices | 10 HC iterations (s) | Keep Sharp Edges, Automatic Amount (s) | steps | s per step | gap (s) |")
-    out("|---:|---:|---:|---:|---:|---:|")
+    out(
+        f"Noisy tori (isotropic noise 0.1 % of the diagonal, float32), each run in a fresh process, HC's default "
+        f"and Keep Sharp Edges interleaved, medians of {repeat}; gap: the longest wait between two calls of the "
+        "progress callback (what a status line or a cancel waits for); peak: the process's largest RSS (torus, "
+        "NumPy and SciPy included; the RSS before the run in brackets).\n"
+    )
+    out(
+        "| vertices | HC default (s) | Keep Sharp Edges (s) | ratio | steps | s per step | gap (s) | first call (s) "
+        "| peak MB |"
+    )
+    out("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for size in sizes:
-        vertices, faces = meshes.torus(size)
-        noisy = meshes.add_noise(vertices, 0.001, seed=1).astype(np.float32)
-        edges = meshes.edges_from_faces(faces)
-        _, hc = timed(core.smooth_mesh, noisy, edges, faces=faces, alpha=0.1, beta=0.6, iterations=10)
-        ours, gap, report = timed_with_gap(core.smooth_mesh, noisy, edges, faces=faces, keep_sharp_edges=True)
-        steps = report.iterations
-        out(f"| {len(vertices):,} | {hc:.1f} | {ours:.1f} | {steps} | {ours / max(steps, 1):.1f} | {gap:.2f} |")
+        runs = {"hc": [], "sharp": []}
+        for _ in range(repeat):
+            for method in runs:
+                command = [sys.executable, __file__, "--cost-child", f"{size}:{method}"]
+                done = subprocess.run(command, capture_output=True, text=True, check=True)
+                runs[method].append(json.loads(done.stdout.strip().splitlines()[-1]))
+        record.setdefault("cost", []).append({"size": size, **runs})
+        hc, ours = (float(np.median([r["seconds"] for r in runs[m]])) for m in ("hc", "sharp"))
+        middle = {key: float(np.median([r[key] for r in runs["sharp"]])) for key in runs["sharp"][0]}
+        out(
+            f"| {int(middle['vertices']):,} | {hc:.1f} | {ours:.1f} | {ours / hc:.1f} | {middle['steps']:g} | "
+            f"{ours / max(middle['steps'], 1):.1f} | {middle['gap']:.2f} | {middle['first']:.2f} | "
+            f"{middle['peak_mb']:.0f} ({middle['before_mb']:.0f}) |"
+        )
 
 
 def main():
@@ -541,9 +591,14 @@ def main():
     parser.add_argument("--kinds", default="normal,iso")
     parser.add_argument("--organic", default="", help="organic scans to run with the option on, e.g. bunny")
     parser.add_argument("--cost", default="", help="torus sizes to time, e.g. 250k,1M")
+    parser.add_argument("--repeat", type=int, default=3, help="--cost runs of each method (medians)")
+    parser.add_argument("--cost-child", default="", help=argparse.SUPPRESS)  # SIZE:METHOD, one run (cost)
     parser.add_argument("--bounds", action="store_true", help="with perfect normals, instead of the peers")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
+    if args.cost_child:
+        size, method = args.cost_child.split(":")
+        return cost_child(int(size), method)
     sigmas = inputs.parse_list(args.sigmas, float)
     kinds = inputs.parse_list(args.kinds)
     only = set(inputs.parse_list(args.parts)) if args.parts else None
@@ -584,7 +639,7 @@ def main():
                 int(float(x.rstrip("kKmM")) * (1e6 if x[-1] in "mM" else 1e3 if x[-1] in "kK" else 1))
                 for x in inputs.parse_list(args.cost)
             ]
-            cost(sizes, out)
+            cost(sizes, args.repeat, out, record)
         out.sibling(".json").write_text(json.dumps(record, indent=1))
 
 

@@ -30,6 +30,8 @@ from . import arguments, files, tiled
 from .files import FileError
 
 INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl+C
+PROGRESS_FIRST = 1.0  # seconds of smoothing before the first progress line
+PROGRESS_EVERY = 1.0  # seconds between progress lines at most once they started
 
 
 def plural(count, word, words=None):
@@ -57,6 +59,7 @@ class Outcome:
     error: str = ""
     blender_lines: list = field(default_factory=list)  # what Blender printed while a failed file ran
     stage: str = "reading"  # reading, smoothing, writing, done: where an interrupt found it
+    progress: object = None  # called with the fraction done while the file's smoothing runs (Console.progress)
 
     def change_text(self):
         """core.Change.brief of the mesh that moved furthest (relative to its size)."""
@@ -102,6 +105,19 @@ class Console:
             devnull = os.open(os.devnull, os.O_WRONLY)
             os.dup2(devnull, stream.fileno())
             os.close(devnull)
+
+    def progress(self, outcome, started):
+        """A callable for ``Outcome.progress``: prints 'smoothing FILE: 42 %' once the smoothing has run for
+        PROGRESS_FIRST seconds, then every PROGRESS_EVERY seconds at most (a long run is never silent)."""
+        last = [started + PROGRESS_FIRST - PROGRESS_EVERY]
+
+        def report(fraction):
+            now = time.perf_counter()
+            if now - last[0] >= PROGRESS_EVERY:
+                last[0] = now
+                self.say(f"hc_smooth: smoothing {outcome.source}: {100 * fraction:.0f} %")
+
+        return report
 
     def stage(self, outcome, stage, path):
         outcome.stage = stage
@@ -267,6 +283,7 @@ def smooth_mesh_file(outcome, plan, settings, console):
     console.stage(outcome, "reading", outcome.source)
     mesh = files.read_mesh(outcome.source)
     console.stage(outcome, "smoothing", outcome.source)
+    outcome.progress = console.progress(outcome, time.perf_counter())
     name = os.path.splitext(os.path.basename(outcome.source))[0]
     wanted = {plan.settings.vertex_group, plan.settings.influence_group} - {""}
     groups = mesh.groups(wanted) if wanted and hasattr(mesh, "groups") else {}
@@ -463,8 +480,10 @@ def smooth_jobs(jobs, settings, outcome, given):
     """Run the mesh operators' jobs and count what they did into ``outcome``; writes nothing."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)  # said once, at the start
-        for _ in jobs_module.run(jobs, settings, given=given):
-            pass
+        # chunk=1: a slice an iteration, the same result as in one go; the slices give the progress lines
+        for fraction in jobs_module.run(jobs, settings, chunk=1 if outcome.progress else None, given=given):
+            if outcome.progress:
+                outcome.progress(fraction)
     for job in jobs:
         outcome.changes.append(jobs_module.measure(job))
         if settings.deviation_map:
