@@ -20,7 +20,7 @@ from .. import core
 from ..jobs import InputError, points
 from ..jobs import mesh as mesh_jobs
 from ..settings_spec import PointSettings
-from . import arguments, file_route, files
+from . import arguments, batch, file_route, files
 from .files import FileError
 
 INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl+C
@@ -123,6 +123,9 @@ def main(argv, prog=arguments.PROG):
         outcomes = []
         try:
             return run(plan, settings, console, outcomes)
+        except batch.BatchError as error:  # before any file ran: nothing written
+            console.say(f"hc_smooth: {error}", sys.stderr)
+            return 2
         except KeyboardInterrupt:
             return interrupted(plan, outcomes, console)
 
@@ -137,30 +140,55 @@ def run(plan, settings, console, outcomes):
         message = core.convergence_message(settings.alpha, settings.beta) if hc else None
     if message:
         console.say(f"hc_smooth: warning: {message}")
-    cleaned = set()
+    for folder in dict.fromkeys(os.path.dirname(target) for _, target in plan.files):
+        for name in files.remove_stale_temporaries(folder) if os.path.isdir(folder) else ():
+            console.say(f"hc_smooth: note: removed {os.path.join(folder, name)}, left by an interrupted run")
     total = len(plan.files)
-    for number, (source, target) in enumerate(plan.files, 1):
-        folder = os.path.dirname(target)
-        if folder not in cleaned and os.path.isdir(folder):
-            cleaned.add(folder)
-            for name in files.remove_stale_temporaries(folder):
-                console.say(f"hc_smooth: note: removed {os.path.join(folder, name)}, left by an interrupted run")
-        outcome = Outcome(source=source, target=target)
-        outcomes.append(outcome)
-        process(outcome, plan, settings, console)
-        console.say(f"[{number}/{total}] {progress_line(outcome)}")
+
+    def report(outcome):
+        console.say(f"[{len(outcomes)}/{total}] {progress_line(outcome)}")
         for text in outcome.legends if not outcome.error else ():
             console.say(f"  {text}")
         for text in outcome.warnings:
             console.say(f"  warning: {text}")
         for line in outcome.blender_lines:
             console.say(f"  blender: {line}")
-    console.say(summary_table(outcomes))
+
+    here, away = split_batch(plan)
+    if away:
+        if here:
+            console.say("hc_smooth: note: .blend files run here, one at a time (the workers have no Blender)")
+        batch.smooth_files(plan, away, done=lambda outcome: (outcomes.append(outcome), report(outcome)), failed=lost)
+    for source, target in here:
+        outcome = Outcome(source=source, target=target)
+        outcomes.append(outcome)
+        process(outcome, plan, settings, console)
+        report(outcome)
+    order = {source: index for index, (source, _) in enumerate(plan.files)}
+    console.say(summary_table(sorted(outcomes, key=lambda outcome: order[outcome.source])))
     failed = [outcome for outcome in outcomes if outcome.error]
     if failed:
         console.say(f"hc_smooth: {len(failed)} of {total} files failed", sys.stderr)
         return 1
     return 0
+
+
+def split_batch(plan):
+    """(files this process smooths, files the workers smooth): with --jobs or --scheduler, every PLY, OBJ and
+    STL file goes to the workers; .blend files stay here (they need Blender)."""
+    if not plan.batch:
+        return plan.files, []
+    blend = [(source, target) for source, target in plan.files if is_blend(source)]
+    return blend, [pair for pair in plan.files if not is_blend(pair[0])]
+
+
+def is_blend(path):
+    return os.path.splitext(path)[1].lower() == arguments.BLEND
+
+
+def lost(source, target, reason):
+    """The outcome of a file that no worker could finish (Dask gave up on it: its workers kept dying)."""
+    return Outcome(source=source, target=target, error=f"no worker finished it ({reason})", stage="done")
 
 
 @contextlib.contextmanager
@@ -218,7 +246,7 @@ def process(outcome, plan, settings, console):
     bug = None
     with warnings.catch_warnings(record=True) as caught:
         try:
-            if os.path.splitext(outcome.source)[1].lower() == arguments.BLEND:
+            if is_blend(outcome.source):
                 blend_route().smooth_blend_file(outcome, plan, settings, console)
             else:
                 file_route.smooth_mesh_file(outcome, plan, settings, console)

@@ -28,3 +28,42 @@ def command(root, name=NAME):
     """The command's module (cli/command.py) of the package in ``root``."""
     load(root, name)
     return importlib.import_module(f"{name}.cli.command")
+
+
+def sent(function, *args):
+    """``function(*args)`` as bytes that run it where ``pickle.loads`` reads them: a task any Dask worker can
+    run with the standard library alone (the worker is given ``pickle.loads`` and these bytes). The functions
+    of this module travel as code (cloudpickle by value), so a worker needs nothing of HC Smooth but its
+    folder; their results come back as classes of the package loaded as ``NAME``."""
+    import cloudpickle
+
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    return cloudpickle.dumps(_Call(function, args))
+
+
+class _Call:
+    """Unpickling it calls ``function(*args)``: what ``sent`` pickles."""
+
+    def __init__(self, function, args):
+        self.function, self.args = function, args
+
+    def __reduce__(self):
+        return self.function, self.args
+
+
+def on_worker(root, *args):
+    """On a batch's worker: cli/batch.py's ``smooth_task(*args)`` of the package in ``root``."""
+    load(root)
+    return importlib.import_module(f"{NAME}.cli.batch").smooth_task(*args)
+
+
+def problem(root):
+    """Why this process cannot run the package in ``root`` (on a worker: what it lacks), or None."""
+    import os
+
+    if not os.path.isfile(os.path.join(root, "cli", "file_route.py")):
+        return f"no HC Smooth at {root} (workers need it at the same path)"
+    for module in ("numpy", "scipy"):
+        if importlib.util.find_spec(module) is None:
+            return f"no {module} in {sys.executable}"
+    return None

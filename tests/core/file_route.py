@@ -16,8 +16,8 @@ BLENDER_MODULES = ("bpy", "_bpy", "bmesh", "mathutils", "bpy_extras", "gpu", "bl
 # Runs the script (argv[1]) on argv[2:] with Blender's modules unimportable; at exit, says which of them
 # were loaded (none can be: an import of one raises).
 WITHOUT_BLENDER = f"""
-import runpy, sys
-BLOCKED = {BLENDER_MODULES!r}
+import os, runpy, sys
+BLOCKED = {BLENDER_MODULES!r} + tuple(filter(None, os.environ.get("TEST_BLOCKED", "").split()))
 
 class NoBlender:
     def find_spec(self, name, path=None, target=None):
@@ -34,14 +34,16 @@ finally:
 """
 
 
-def run_without_blender(args, cwd, script=SCRIPT, timeout=600):
+def without_blender(args, script=SCRIPT):
+    """The command line that runs scripts/hc_smooth_files.py ``args`` where bpy cannot be imported (nor the
+    modules named in the environment's TEST_BLOCKED)."""
+    return [sys.executable, "-c", WITHOUT_BLENDER, str(script), *map(str, args)]
+
+
+def run_without_blender(args, cwd, script=SCRIPT, timeout=600, env=None):
     """scripts/hc_smooth_files.py ``args`` in a Python where bpy cannot be imported (CompletedProcess)."""
     return subprocess.run(
-        [sys.executable, "-c", WITHOUT_BLENDER, str(script), *map(str, args)],
-        cwd=cwd,
-        capture_output=True,
-        text=True,
-        timeout=timeout,
+        without_blender(args, script), cwd=cwd, capture_output=True, text=True, timeout=timeout, env=env
     )
 
 
