@@ -83,7 +83,7 @@ def main():
         scans = work / "scans"
         scans.mkdir()
         sizes = [torus_ply(scans / f"scan{i:02d}.ply", count(args.vertices), i) for i in range(args.files)]
-        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster:
+        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as cluster:
             routes = {
                 "serial": [],
                 "--jobs 2": ["--jobs", "2"],

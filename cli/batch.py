@@ -90,7 +90,7 @@ def connected(plan, distributed):
     if plan.scheduler:
         try:
             client = distributed.Client(plan.scheduler, timeout="20s")
-        except (OSError, TimeoutError, ValueError) as error:
+        except Exception as error:  # noqa: BLE001 - refused, timed out, or not a Dask scheduler at all
             raise BatchError(f"cannot reach the Dask scheduler at {plan.scheduler}: {error}") from None
         with client:
             yield client
@@ -99,7 +99,7 @@ def connected(plan, distributed):
         n_workers=plan.jobs,
         threads_per_worker=1,
         processes=True,
-        dashboard_address=None,
+        dashboard_address=":0",  # its HTTP server (health checks) on a free port: 8787 may be taken
         silence_logs=logging.ERROR,
         env={"HC_SMOOTH_THREADS": str(threads_per_worker(plan.jobs))},
     )

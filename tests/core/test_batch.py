@@ -38,7 +38,7 @@ def serial(tmp_path, scans):
 def cluster():
     """A LocalCluster of 2 worker processes, as `dask scheduler` and two `dask worker` would be."""
     with (
-        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster,
+        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster,
         distributed.Client(cluster) as client,
     ):
         yield cluster, client
