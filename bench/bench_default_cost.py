@@ -45,7 +45,7 @@ from core.mesh import amount as mesh_amount  # noqa: E402
 
 CHUNK_WORK = 5_000_000  # vertex-iterations a slice, as operators/mesh_smooth.py's MODAL_WORK
 FIXED = dict(alpha=0.1, beta=0.6, iterations=10)
-ADDON = dict(weld=True)  # as operators/jobs.py runs it (border: the paper's rule)
+ADDON = dict(weld=True)  # as jobs/mesh.py runs it (border: the paper's rule)
 
 
 def count(text):

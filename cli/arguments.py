@@ -90,7 +90,8 @@ examples:
   blender -b -c hc_smooth scan.obj -o out/ --iterations 20 --alpha 0.2 --beta 0.7 --format ply
   blender -b -c hc_smooth scene.blend --object Scan --fixed-group Keep -o out/
   blender -b -c hc_smooth points.ply --points --rounds 4 -o out/
-  ls scans/*.ply | xargs -P 4 -n 1 blender -b -c hc_smooth -o smoothed/    (one process per file)
+  blender -b -c hc_smooth scans/ -o smoothed/ --jobs 4                      (4 worker processes, Dask)
+  blender -b -c hc_smooth scans/ -o smoothed/ --scheduler tcp://host:8786    (a Dask cluster's workers)
 """
 
 
@@ -184,6 +185,17 @@ def add_setting(group, setting, text):
     group.add_argument(_option(setting.flag), **options)
 
 
+def _count(text):
+    """A whole number of at least 1 (--jobs)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text} is not a whole number") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text} is below 1")
+    return value
+
+
 def make_parser(prog=PROG):
     parser = _Parser(
         prog=prog,
@@ -226,6 +238,22 @@ def make_parser(prog=PROG):
         help="the most memory a file's run may take, e.g. 4G or 500M (default: 3/4 of the machine's); a binary "
         "PLY file whose whole run would take more is smoothed in tiles (docs/large_scans.md)",
     )
+    batch = parser.add_argument_group('many files at once (Dask: python -m pip install "dask[distributed]")')
+    batch.add_argument(
+        "--jobs",
+        type=_count,
+        default=1,
+        metavar="N",
+        help="smooth PLY, OBJ and STL files in N worker processes on this machine (default 1: one at a time, "
+        "here); .blend files run here, one at a time",
+    )
+    batch.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        default="",
+        help="send PLY, OBJ and STL files to the workers of the Dask scheduler at ADDRESS "
+        "(tcp://host:8786); they need HC Smooth, the inputs and the output folder at the same paths",
+    )
     smoothing = parser.add_argument_group("smoothing (as the operators' properties)")
     for name, setting in MESH_OPTIONS.items():
         add_setting(smoothing, setting, setting_help(setting, POINT_OPTIONS.get(name), name not in POINT_OPTIONS))
@@ -267,6 +295,13 @@ class Plan:
     notes: list = field(default_factory=list)  # said before the run (an input named twice)
     verbose: bool = False
     memory_limit: int | None = None  # bytes, --memory-limit (None: cli/tiled.py's default)
+    jobs: int = 1  # worker processes on this machine (--jobs); 1: the files run here, one at a time
+    scheduler: str = ""  # the Dask scheduler whose workers run the files (--scheduler)
+
+    @property
+    def batch(self):
+        """Whether the files go to workers (cli/batch.py)."""
+        return self.jobs > 1 or bool(self.scheduler)
 
 
 UNATTENDED = "it runs unattended, and a mistyped count must not keep it going without end"
@@ -299,6 +334,8 @@ def parse(argv, prog=PROG):
     Reads the file system (which inputs and outputs exist) but changes nothing on it. ``prog`` names
     the command in messages."""
     args = make_parser(prog).parse_args(list(argv))
+    if args.jobs > 1 and args.scheduler:
+        raise UsageError("give either --jobs N (workers on this machine) or --scheduler ADDRESS (a cluster's)")
     if args.in_place == bool(args.output_dir):
         raise UsageError("give either -o OUTDIR or --in-place (inputs are never overwritten otherwise)")
     for option, needed in NEEDS:
@@ -365,6 +402,8 @@ def parse(argv, prog=PROG):
         notes=notes,
         verbose=args.verbose,
         memory_limit=args.memory_limit,
+        jobs=args.jobs,
+        scheduler=args.scheduler,
     )
 
 

@@ -9,6 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..jobs.mesh import DEVIATION_ATTRIBUTE, DEVIATION_COLOR_ATTRIBUTE
+
 
 def read_positions(data):
     """Positions (n, 3) float32 through the position attribute (the fast path) of a mesh or point cloud."""
@@ -69,8 +71,6 @@ def read_faces(mesh, corner_verts=None):
     return np.append(starts, corner_verts.size), corner_verts
 
 
-DEVIATION_ATTRIBUTE = "hc_deviation"  # the deviation map: float, on points
-DEVIATION_COLOR_ATTRIBUTE = "hc_deviation_color"  # its colours: float colour, on points
 _MAP_TYPES = {DEVIATION_ATTRIBUTE: "FLOAT", DEVIATION_COLOR_ATTRIBUTE: "FLOAT_COLOR"}
 
 

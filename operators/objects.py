@@ -6,11 +6,8 @@ that keeps relative shape keys in step.
 """
 
 from .. import core
+from ..jobs import InputError
 from . import mesh_io
-
-
-class InputError(Exception):
-    """A message for the user about an object or the settings; nothing has been written."""
 
 
 def check_editable(obj):

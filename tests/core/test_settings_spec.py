@@ -276,7 +276,7 @@ def test_every_core_argument_is_an_argument_of_the_mesh_pipeline():
     assert {s.argument for s in arguments} >= {"method", "alpha", "beta", "iterations", "mode", "tolerance"}
     for setting in arguments:
         assert setting.argument in parameters, setting.name
-        # Keep in Place is "auto" in core as well: the add-on's checkbox, on, passes that (operators/jobs.py).
+        # Keep in Place is "auto" in core as well: the add-on's checkbox, on, passes that (jobs/mesh.py).
         automatic = setting.chosen or setting is spec.KEEP_IN_PLACE
         assert (parameters[setting.argument].default == core.AUTO) == automatic, setting.name
         for choice in setting.items:
