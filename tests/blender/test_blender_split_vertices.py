@@ -81,7 +81,7 @@ def test_a_soup_smooths_like_its_mesh(scene, given):
 def test_only_a_mesh_with_a_face_edge_on_one_face_is_searched_for_copies(scene):
     """A closed mesh has no seam an exporter split: the welding's search is skipped; a seam or an open
     border keeps it (the tests above show what it finds)."""
-    jobs = sys.modules[ADDON + ".operators.jobs"]
+    jobs = sys.modules[ADDON + ".operators.mesh_objects"]
     settings = sys.modules[ADDON + ".cli.arguments"].Settings(iterations=10, auto_amount=False)
     seams = {}
     for name, obj in (
