@@ -33,6 +33,7 @@ from scipy.sparse.csgraph import connected_components
 from .. import parallel
 from ..geometry import vertex_normals
 from ..parallel import BLOCK
+from .noise import neighbours
 
 # A kept triangle is flattened where its shadow on the smoothed surface is under FOLDED times its input's
 # shadow, or under FLAT times its input's area (folded where the shadow is not positive).
@@ -147,16 +148,10 @@ def curve_labels(border_edges, vertices):
 def inward_directions(positions, operator, vertices):
     """(k, 3): from each of ``vertices`` to the mean of its neighbours (core.adjacency.Umbrella) in
     ``positions``: into the surface, at a border vertex."""
-    start, stop = operator.indptr[vertices], operator.indptr[vertices + 1]
-    counts = stop - start
-    entries = np.repeat(start - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
-    rows = np.repeat(np.arange(vertices.size), counts)
+    owner, neighbour = neighbours(vertices, operator)
     points = np.asarray(positions, dtype=np.float64)
-    mean = np.stack(
-        [np.bincount(rows, weights=points[operator.indices[entries], k], minlength=vertices.size) for k in range(3)],
-        axis=1,
-    )
-    return mean / np.maximum(counts, 1)[:, None] - points[vertices]
+    mean = np.stack([np.bincount(owner, weights=points[neighbour, k], minlength=vertices.size) for k in range(3)], 1)
+    return mean / np.maximum(operator.degree[vertices], 1)[:, None] - points[vertices]
 
 
 def _group_medians(values, labels):
