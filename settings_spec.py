@@ -53,7 +53,9 @@ class Setting:
     argument: str = None  # the core.MeshSmoother argument it sets (enums: each Choice's ``core`` name)
     chosen: bool = False  # with the Automatic Amount on, chosen by core unless the caller sets it
     # How panels draw it (operators/draw.py). The rules read the values of the settings drawn with it: {name: value}.
-    active: Callable = None  # False: greyed out, still editable (it applies once the rule holds)
+    # active(values, given=()): False: greyed out, still editable (it applies once the rule holds). ``given``:
+    # the names the caller set, as ``automatic`` reads them (an operator's redo panel has them).
+    active: Callable = None
     text: Callable = None  # the label drawn, where it depends on other settings
     invert: str = None  # a vertex group's name: the bool setting that inverts it, drawn beside it as a toggle
 
@@ -81,17 +83,33 @@ def settings_class(name, settings, doc):
 
 
 def automatic(values, given=()):
-    """Whether the Automatic Amount chooses Alpha and Iterations (and Beta and the Deviation Limit unless
-    given): the one rule the panels' greying, the buttons, the operators and the command line read.
+    """Whether the Automatic Amount chooses the amount: the one rule the panels' greying, the buttons, the
+    operators and the command line read.
 
-    ``values``: {name: value} of the mesh settings (``values_of``), at least method, keep_sharp_edges and
-    auto_amount; settings without auto_amount (the modifier's) have no Automatic Amount. ``given``: the names
-    the caller set (Blender's ``is_property_set``, a command line's options): Alpha or Iterations among them
-    runs every number as set. It runs for HC, and for Keep Sharp Edges (its own) whatever the method."""
-    if "auto_amount" not in values:
+    ``values``: {name: value} of the mesh or point-cloud settings (``values_of``); for meshes at least method,
+    keep_sharp_edges and auto_amount. Settings without auto_amount (the modifier's) have no Automatic Amount.
+    ``given``: the names the caller set (Blender's ``is_property_set``, a command line's options): one of
+    SWITCHES_OFF_THE_AMOUNT among them runs every number as set. Meshes: it runs for HC, and for Keep Sharp
+    Edges (its own) whatever the method; point clouds run HC."""
+    if "auto_amount" not in values or not values["auto_amount"] or set(SWITCHES_OFF_THE_AMOUNT) & set(given):
         return False
-    smoother = values["method"] == "HC" or values["keep_sharp_edges"]
-    return bool(smoother and values["auto_amount"]) and not set(SWITCHES_OFF_THE_AMOUNT) & set(given)
+    return ITERATIONS_PER_ROUND.name in values or values["method"] == "HC" or bool(values["keep_sharp_edges"])
+
+
+def chosen(values, given=()):
+    """The names of the mesh settings the Automatic Amount chooses in a run: those of CHOSEN not given, or
+    none where it does not run (then every number runs as set)."""
+    return frozenset(CHOSEN) - set(given) if automatic(values, given) else frozenset()
+
+
+def passed_by_panel(values, changed):
+    """The names of the mesh settings a panel's button hands to the operator, which takes them as given:
+    all but those the Automatic Amount chooses and the user left alone. ``changed``: the names the user
+    changed in the panel; Alpha and Iterations among them do not count, since the panel greys them out
+    while the Automatic Amount runs (its checkbox switches it off), so a button never passes what its panel
+    shows greyed out."""
+    left = chosen(values, set(changed) - set(SWITCHES_OFF_THE_AMOUNT))
+    return tuple(setting.name for setting in MESH if setting.name not in left)
 
 
 def keeps_in_place(values, given=()):
@@ -148,7 +166,7 @@ METHOD = Setting(
     help="smoothing algorithm",
     argument="method",
     points_keep="HC",
-    active=lambda values: not values.get("keep_sharp_edges", False),  # Keep Sharp Edges smooths its own way
+    active=lambda values, given=(): not values.get("keep_sharp_edges", False),  # Keep Sharp Edges smooths its own way
 )
 KEEP_SHARP_EDGES = Setting(
     "keep_sharp_edges",
@@ -180,7 +198,7 @@ SHARPNESS_ANGLE = Setting(
     metavar="DEGREES",
     help="with --keep-sharp-edges: faces meeting at more than this angle, in degrees, stay apart",
     argument="sharpness_angle",
-    active=lambda values: values.get("keep_sharp_edges", False),
+    active=lambda values, given=(): values.get("keep_sharp_edges", False),
 )
 MESH_AUTO_AMOUNT = Setting(
     "auto_amount",
@@ -189,7 +207,7 @@ MESH_AUTO_AMOUNT = Setting(
     "HC: choose Iterations (with Alpha 0) from the noise the mesh itself shows, by cross-validating what the "
     "iterations remove, and give closed parts back the volume they had. Off: use Alpha and Iterations as set",
     True,
-    active=lambda values: values["method"] == "HC" or values.get("keep_sharp_edges", False),
+    active=lambda values, given=(): values["method"] == "HC" or values.get("keep_sharp_edges", False),
 )
 KEEP_IN_PLACE = Setting(
     "keep_in_place",
@@ -203,7 +221,7 @@ KEEP_IN_PLACE = Setting(
     help="let vertices slide along the surface as the paper's HC moves them (textures, UVs and outlines move "
     "with them); by default the Automatic Amount moves every vertex only across the surface",
     argument="keep_in_place",
-    active=lambda values: keeps_in_place(values),
+    active=lambda values, given=(): keeps_in_place(values, given),
 )
 ALPHA = Setting(
     "alpha",
@@ -221,8 +239,8 @@ ALPHA = Setting(
     help="pull towards the original",
     cli_default="{default}; HC: chosen with the iterations unless --alpha or --iterations is given",
     # Plain Laplacian has no alpha; with the Automatic Amount, alpha applies once it is off.
-    active=lambda values: (
-        (values["method"] != "LAPLACIAN" or values.get("keep_sharp_edges", False)) and not automatic(values)
+    active=lambda values, given=(): (
+        (values["method"] != "LAPLACIAN" or values.get("keep_sharp_edges", False)) and not automatic(values, given)
     ),
     text=lambda values: (
         "Alpha (keep current)" if values["method"] == "LAPLACIAN_CENTRAL" else "Alpha (pull to original)"
@@ -243,7 +261,7 @@ BETA = Setting(
     precision=3,
     flag="beta",
     help="HC correction weight",
-    active=lambda values: values["method"] == "HC" or values.get("keep_sharp_edges", False),
+    active=lambda values, given=(): values["method"] == "HC" or values.get("keep_sharp_edges", False),
     argument="beta",
     chosen=True,
 )
@@ -259,7 +277,7 @@ ITERATIONS = Setting(
     flag="iterations",
     help="smoothing iterations",
     cli_default="{default}; HC: chosen from the noise unless --alpha or --iterations is given",
-    active=lambda values: not automatic(values),
+    active=lambda values, given=(): not automatic(values, given),
     argument="iterations",
     chosen=True,
 )
@@ -344,7 +362,7 @@ KEEP_OUTLINE = Setting(
     False,
     flag="keep-outline",
     help="smooth open boundaries as curves instead of pulling them in (--pin-boundary wins)",
-    active=lambda values: not values["pin_boundary"],
+    active=lambda values, given=(): not values["pin_boundary"],
 )
 INFLUENCE_GROUP = Setting(
     "influence_group",
@@ -436,10 +454,8 @@ MESH_VERTICES = (
 )
 MESH_RESULT = (OUTPUT, DEVIATION_MAP)
 MESH = MESH_SMOOTHING + MESH_VERTICES + MESH_RESULT
-# What the Automatic Amount chooses unless the caller sets it; either of the second set given switches it off
-# (then every number runs as set).
+# What the Automatic Amount chooses unless the caller sets it (SWITCHES_OFF_THE_AMOUNT, below, given: none).
 CHOSEN = tuple(setting.name for setting in MESH if setting.chosen)
-SWITCHES_OFF_THE_AMOUNT = (ALPHA.name, ITERATIONS.name)
 
 # --- point clouds: object.hc_smooth_points --------------------------------------------------------------
 
@@ -458,7 +474,7 @@ POINT_ALPHA = replace(
     description="Pull towards the original positions (small: more smoothing; raise it for nearly clean, "
     "sparse points). Used when Automatic Amount is off",
     cli_default="chosen from the noise unless given, then --steps-per-round applies",
-    active=lambda values: not values["auto_amount"],
+    active=lambda values, given=(): not automatic(values, given),
     text=None,
 )
 POINT_BETA = replace(
@@ -492,7 +508,7 @@ ITERATIONS_PER_ROUND = Setting(
     metavar="N",
     help="HC steps per round",
     cli_default="chosen from the noise unless given, then {default} and --alpha apply",
-    active=lambda values: not values["auto_amount"],
+    active=lambda values, given=(): not automatic(values, given),
 )
 NEIGHBOURS = Setting(
     "neighbours",
@@ -562,6 +578,10 @@ KEEP_RFS_MESH = Setting(
     False,
 )
 
+# Either of these given switches the Automatic Amount off (then every number runs as set): meshes' Alpha and
+# Iterations, point clouds' Alpha and Steps per Round.
+SWITCHES_OFF_THE_AMOUNT = (ALPHA.name, ITERATIONS.name, ITERATIONS_PER_ROUND.name)
+
 POINTS = (
     AUTO_AMOUNT,
     POINT_ALPHA,
@@ -588,8 +608,9 @@ POINTS = (
 # panels' soft one, chosen from the seconds per 1000 HC iterations that bench/bench_modifier_limits.py measures
 # (docs/modifier.md, "Limits").
 MODIFIER_MAX_ITERATIONS = 1000
-# The command line runs unattended (batches, farms): its Iterations has the modifier's hard maximum too, so
-# that a mistyped count cannot keep it going without end (a long operator run can be cancelled with Esc).
+# The command line runs unattended (batches, farms): its Iterations has the modifier's hard maximum too, and so
+# have a point cloud's HC steps (Rounds times Steps per Round, at least one step a round), so that a mistyped
+# count cannot keep it going without end (a long operator run can be cancelled with Esc).
 COMMAND_MAX_ITERATIONS = MODIFIER_MAX_ITERATIONS
 MODIFIER_ITERATIONS = replace(
     ITERATIONS,

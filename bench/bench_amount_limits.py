@@ -6,7 +6,7 @@ iterations; closed meshes get their volume back as the operator does) three pick
 
 * oracle: the least true RMS distance to the clean surface, the most any choice of (beta, iterations)
   at alpha 0 can reach;
-* GCV: the least generalized cross-validation score over every (beta, iterations), as core.mesh_amount
+* GCV: the least generalized cross-validation score over every (beta, iterations), as core.mesh.amount
   computes it but given the clean normals;
 * Cp: Mallows' Cp, the unbiased estimate of the error given the *true* noise sigma and the clean
   normals, R(k) + sigma^2 (2 t(k) - 1), which no mesh-only estimate can beat on average.
@@ -52,7 +52,7 @@ def paths(case, iterations):
             smoothed = data.result().positions
             positions = smoothed
             if case.closed:
-                positions = core.volume.restore_volume(case.noisy, smoothed, case.faces)[0]
+                positions = core.mesh.volume.restore_volume(case.noisy, smoothed, case.faces)[0]
             along = np.einsum("ij,ij->i", case.noisy - smoothed, normals)
             total = 0.0
             for block, probe in blocks:

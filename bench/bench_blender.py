@@ -82,7 +82,7 @@ def closed_torus(n_vertices, shuffle, seed=0):
 
 def bench_closed(n_vertices, shuffle, repeats):
     """Object mode end to end, the report alone, the Smooth modifier and Edit mode on a closed torus."""
-    jobs = sys.modules[ADDON + ".operators.jobs"]
+    jobs, mesh_objects = sys.modules[ADDON + ".jobs.mesh"], sys.modules[ADDON + ".operators.mesh_objects"]
     bpy.ops.wm.read_homefile(use_empty=True)
     obj, original = closed_torus(n_vertices, shuffle)
     reset = lambda: restore(obj, original)  # noqa: E731
@@ -94,7 +94,7 @@ def bench_closed(n_vertices, shuffle, repeats):
     times["object"] = median_time(hc_object, repeats, reset)
     reset()
     props = sys.modules[ADDON + ".cli.arguments"].Settings(iterations=ITERATIONS, auto_amount=False)
-    (job,) = [jobs.make_job(obj, props)]
+    (job,) = [mesh_objects.make_job(obj, props)]
     list(jobs.run([job], props))
 
     def report():

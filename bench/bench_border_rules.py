@@ -1,4 +1,4 @@
-"""Where the error of an open border goes: the border rules of core.borders and two candidates, measured
+"""Where the error of an open border goes: the border rules of core.mesh.borders and two candidates, measured
 against the scan's own surface, on the held-out open scans of bench_default_heldout.py.
 
 Issue 22 asks for borders that neither pull in nor lose accuracy (item 5) and for a default within 15 % of
@@ -84,10 +84,10 @@ def vertex_normals(points, faces):
 class Borders:
     """The border curve of a mesh: its vertices with two border neighbours (``curve``), those neighbours
     (``ends``) and the vertices where the border is no simple curve (``held``, fixed by every rule but
-    free, as core.borders holds them)."""
+    free, as core.mesh.borders holds them)."""
 
     def __init__(self, faces, n):
-        edges = core.borders.border_edges(faces, n)
+        edges = core.mesh.borders.border_edges(faces, n)
         count = np.bincount(edges.ravel(), minlength=n)
         self.on = count > 0
         self.curve = np.flatnonzero(count == 2)

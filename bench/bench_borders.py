@@ -33,7 +33,7 @@ default (Keep in Place) and the sliding default (``keep_in_place=False``); mean 
     .envs/bench/bin/python bench/bench_borders.py --primitives          # a few seconds
 
 ``--timing N``: on a noisy torus of N vertices, its triangle soup (about N vertices, one sixth of them
-welded) and the torus cut open (two border loops), the time of core.welding.weld alone and of
+welded) and the torus cut open (two border loops), the time of core.mesh.welding.weld alone and of
 core.smooth_mesh (alpha 0.1, beta 0.6, 10 iterations) under each rule, best of ``--repeats``.
 """
 
@@ -84,7 +84,7 @@ class Scan:
         self.vertices, self.faces = load_as_imported(path)
         self.edges = edges_of(self.faces)
         operator = core.umbrella_operator(self.edges, len(self.vertices))
-        weld = core.welding.weld(self.vertices, operator)
+        weld = core.mesh.welding.weld(self.vertices, operator)
         n = len(self.vertices)
         self.label = weld.label if weld is not None else np.arange(n)
         self.first = weld.first if weld is not None else np.arange(n)
@@ -92,7 +92,7 @@ class Scan:
         clean = self.vertices[self.first]
         self.normals = inputs.vertex_normals(clean, welded_faces)
         self.diagonal = inputs.diagonal(clean)
-        border_edges = core.borders.border_edges(welded_faces, len(self.first))
+        border_edges = core.mesh.borders.border_edges(welded_faces, len(self.first))
         border = np.zeros(len(self.first), dtype=bool)
         border[border_edges.ravel()] = True
         self.border = border
@@ -336,8 +336,8 @@ def timing(out, size, repeats):
     for name, points, triangles in cases:
         edges = meshes.edges_from_faces(triangles)
         operator = core.umbrella_operator(edges, len(points))
-        weld_seconds = best_time(repeats, core.welding.weld, points, operator)
-        border = len(np.unique(core.borders.border_edges(triangles, len(points))))
+        weld_seconds = best_time(repeats, core.mesh.welding.weld, points, operator)
+        border = len(np.unique(core.mesh.borders.border_edges(triangles, len(points))))
         cells = [name, f"{len(points):,}", f"{border:,}", f"{weld_seconds:.2f}"]
         for rule in RULES.values():
             options = dict(faces=triangles, alpha=0.1, beta=0.6, iterations=10, **rule)

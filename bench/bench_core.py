@@ -400,9 +400,9 @@ def bench_size(n_target, args, peers, out):
 
 def amount_timing(sizes, args, out):
     """core.choose_amount on the benchmark's torus, its probes on the whole mesh and on patches (from
-    core.mesh_amount.PATCH_FROM movable vertices up): time, iterations chosen and the largest difference of
+    core.mesh.amount.PATCH_FROM movable vertices up): time, iterations chosen and the largest difference of
     t(k), the degrees of freedom per vertex, between the two."""
-    from core import mesh_amount as noise
+    from core.mesh import amount as noise
 
     table = out.table(
         "vertices", "noise (% of diagonal)", "probes on", "seconds", "iterations chosen", "largest t(k) difference"

@@ -37,7 +37,7 @@ import numpy as np
 import core
 from bench import meshes
 from bench.common import Parameter, count, repeats
-from core import mesh_amount
+from core.mesh import amount as mesh_amount
 
 CHUNK_WORK = 5_000_000  # vertex-iterations a slice, as operators/mesh_smooth.py's MODAL_WORK
 FIXED = dict(alpha=0.1, beta=0.6, iterations=10)
@@ -113,7 +113,7 @@ def bunny(times):
 
 def normals_of(vertices, faces):
     """Area-weighted unit vertex normals."""
-    return core.volume.vertex_normals(vertices, faces)
+    return core.geometry.vertex_normals(vertices, faces)
 
 
 PARAMETERS = (

@@ -363,7 +363,7 @@ def amount_text(params):
     if "noise" in params:
         text += f", σ̂ {100 * params['noise']:.3f}"
     if params.get("held_parts"):
-        text += f", {params['held_parts']} parts held"  # the default would have collapsed them (core.collapse)
+        text += f", {params['held_parts']} parts held"  # the default would have collapsed them (core.mesh.collapse)
     return text
 
 
@@ -636,7 +636,7 @@ PARAMETERS = (
     Parameter("no_scanner", False, "skip the real scans with no noise added"),
     Parameter("reference", "scan", f"the real scans' truth: {', '.join(REFERENCES)}"),
     Parameter("seed", 0),
-    Parameter("border", quality.BORDER, "the default's open-border rule (core.borders)"),
+    Parameter("border", quality.BORDER, "the default's open-border rule (core.mesh.borders)"),
     Parameter("sources", "", "report these JSON files' numbers instead (comma-separated)"),
 )
 QUICK = {"sets": "tuning", "meshes": "cube", "kinds": "iso", "sigmas": "0.0025", "no_scanner": True}

@@ -59,7 +59,7 @@ QUICK = {"vertices": "2k", "repeats": 1}
 
 def run(args, out):
     install_extension(ROOT / "build" / "bench")
-    jobs = sys.modules[ADDON + ".operators.jobs"]
+    jobs, mesh_objects = sys.modules[ADDON + ".jobs.mesh"], sys.modules[ADDON + ".operators.mesh_objects"]
     mesh_io = sys.modules[ADDON + ".operators.mesh_io"]
     core = sys.modules[ADDON + ".core"]
     bpy.ops.wm.read_homefile(use_empty=True)
@@ -83,7 +83,7 @@ def run(args, out):
     # The map's parts, on one run's arrays.
     reset()
     props = sys.modules[ADDON + ".cli.arguments"].Settings(deviation_map=True)
-    (job,) = [jobs.make_job(obj, props)]
+    (job,) = [mesh_objects.make_job(obj, props)]
     list(jobs.run([job], props))
     normals = jobs.input_measure(job).result().normals
     parts = {"core.deviation_map": [], "attributes written": []}

@@ -1,4 +1,4 @@
-"""Keep in Place (core.in_place): where to remove the slide, and what Keep Sharp Edges slides.
+"""Keep in Place (core.mesh.in_place): where to remove the slide, and what Keep Sharp Edges slides.
 
 Cells: a mesh of bench_quality_inputs with noise (``--cells mesh/kind/sigma,...``; the noise as
 bench_default_heldout.py makes it, the real scans' truth as stored). For each, three measures in % of the
@@ -23,7 +23,7 @@ import core
 from bench import bench_default_heldout as heldout
 from bench import bench_quality_inputs as inputs
 from bench.common import Parameter
-from core.volume import vertex_normals
+from core.geometry import vertex_normals
 
 CELLS = "face/normal/0.005,cow/normal/0.0025,bunny10k/normal/0.0025,cube/normal/0.0025,cube/iso/0.0025"
 

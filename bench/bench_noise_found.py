@@ -1,7 +1,7 @@
-"""Does the Automatic Amount find noise where there is some, and only there? (core.mesh_noise)
+"""Does the Automatic Amount find noise where there is some, and only there? (core.mesh.noise)
 
 For each mesh, clean and with Gaussian noise of 0.05, 0.1, 0.3 and 0.5 median edge lengths (along the
-normals and isotropic, seed 0): whether noise was found (*), the robust estimate of core.mesh_noise
+normals and isotropic, seed 0): whether noise was found (*), the robust estimate of core.mesh.noise
 over the true noise and, where noise was found, the Automatic Amount's sigma (GCV's, which the
 deviation limit uses) over the true noise. Clean meshes: the robust estimate in edge lengths, and the
 largest move of a default run in % of the bounding-box diagonal.
@@ -131,7 +131,7 @@ def measure(part):
     """The row's cells for one mesh."""
     operator = core.umbrella_operator(part.edges, len(part.positions))
     edge = primitives.median_edge(part)
-    noise = core.mesh_noise.find_noise(part.positions, operator)
+    noise = core.mesh.noise.find_noise(part.positions, operator)
     moved = 0.0
     if not noise.found:
         result = core.smooth_mesh(part.positions, part.edges, faces=part.faces or None)
@@ -143,7 +143,7 @@ def measure(part):
     for kind in ("normal", "isotropic"):
         for ratio in LEVELS:
             noisy, sigma = primitives.with_noise(part, ratio, kind if part.faces else "isotropic")
-            found = core.mesh_noise.find_noise(noisy.positions, operator)
+            found = core.mesh.noise.find_noise(noisy.positions, operator)
             cell = f"{'*' if found.found else ''}{found.level() / sigma:.2f}"
             if found.found:
                 amount = core.choose_amount(noisy.positions, operator=operator)
@@ -162,7 +162,7 @@ def run(args, out):
     tuning, held_out = all_meshes(wanted)
     header = ["mesh", "vertices", "clean: estimate / edge", "clean: moved % diag"]
     header += [f"{kind} {ratio}" for kind in ("normal", "iso") for ratio in LEVELS]
-    out(f"* = noise found (threshold {core.mesh_noise.NOISE_THRESHOLD} edge lengths); noisy cells: robust")
+    out(f"* = noise found (threshold {core.mesh.noise.NOISE_THRESHOLD} edge lengths); noisy cells: robust")
     out("estimate / truth, and where found the Automatic Amount's sigma / truth.")
     for title, parts in (("Tuning set", tuning), ("Held-out set", held_out)):
         out(f"\n### {title}\n")

@@ -8,7 +8,7 @@ and wall time of the smoothing call (conversions to the peers' data structures e
 
     python bench/run.py points                       # 20k and 100k points, every shape and sigma
     python bench/run.py points --sizes 20k --shapes sphere,cube --sigmas 0.01
-    python bench/run.py points --timing 100k,1M      # end-to-end time of core.smooth_point_cloud only
+    python bench/run.py points --timing 100k,1M --repeats 3   # end-to-end time by stage, against CGAL jet
     python bench/run.py points --timing 1M --warm 6  # the same after touching 6 GB of fresh memory
     python bench/run.py points --emst 200x5000       # exact EMST of scan rings (rings x points per ring)
     python bench/run.py points --hc-steps 1M --repeats 3   # 66 HC steps alone, float32/64, with/without influence
@@ -293,6 +293,17 @@ def quality(args, out):
                     )
 
 
+def cgal_jet_with_insertion(points, k=24):
+    """CGAL jet smoothing as a user of its Python binding runs it: the points inserted, then smoothed
+    (reading them back out, a Python loop over the points, is left out)."""
+    from CGAL import CGAL_Point_set_processing_3 as P
+
+    start = time.perf_counter()
+    point_set = _cgal_point_set(points)
+    P.jet_smooth_point_set(point_set, k)
+    return time.perf_counter() - start
+
+
 def timing(args, out):
     if args.warm:
         # On a VM, memory the guest touches for the first time can cost seconds per GB: touched and freed
@@ -300,28 +311,40 @@ def timing(args, out):
         clock = time.perf_counter()
         np.ones(int(args.warm * (1 << 27)))
         out(f"(touched {args.warm:g} GB of fresh memory first: {time.perf_counter() - clock:.1f} s)\n")
-    out("## End-to-end time of core.smooth_point_cloud (noisy sphere, σ 0.5 %, float32)\n")
+    try:
+        import CGAL.CGAL_Point_set_processing_3  # noqa: F401
+
+        peer = cgal_jet_with_insertion
+    except ImportError:
+        peer = None
+        out("CGAL (pip cgal) is not installed: our times only.\n")
+    out("## End-to-end time of core.smooth_point_cloud (noisy sphere, σ 0.5 %, float32) against CGAL jet (k 24)\n")
     out(
-        "| points | total (s) | neighbours | noise | EMST | SDG | RFS | HC | local amount | swapping | amount | faces "
-        "| points without faces |"
+        "Runs alternate ours / CGAL jet (insertion included); each row is one of ours with its stages, then "
+        "the medians and their ratio.\n"
     )
-    out("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    out(
+        "| points | run | total (s) | neighbours | noise | EMST | SDG | RFS | HC | local amount | swapping "
+        "| CGAL jet (s) | amount | faces |"
+    )
+    out("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for n in [parse_count(s) for s in args.timing.split(",")]:
         points, _ = noisy("sphere", n, 0.005, seed=args.seed)
         points = points.astype(np.float32)
-        totals = []
-        for _ in range(args.repeats):
+        totals, peers = [], []
+        for run in range(args.repeats):
             start = time.perf_counter()
             _, report = core.smooth_point_cloud(points, return_mesh=True, **hc_options(args))
             totals.append(time.perf_counter() - start)
+            peers.append(peer(points) if peer else float("nan"))
             s = report.seconds
             out(
-                f"| {n} | {totals[-1]:.1f} | {s.get('neighbours', 0):.1f} | {s.get('noise', 0):.2f} | "
+                f"| {n} | {run + 1} | {totals[-1]:.1f} | {s.get('neighbours', 0):.1f} | {s.get('noise', 0):.2f} | "
                 + " | ".join(f"{s.get(k, 0):.1f}" for k in ("emst", "sdg", "rfs", "hc", "local amount", "swap"))
-                + f" | {amount(report)} | {len(report.mesh.faces)} | {report.isolated} |"
+                + f" | {peers[-1]:.1f} | {amount(report)} | {len(report.mesh.faces)} |"
             )
-        if len(totals) > 1:
-            out(f"| {n} | median {np.median(totals):.1f} | | | | | | | | | | | |")
+        ours, jet = float(np.median(totals)), float(np.median(peers))
+        out(f"| {n} | **median** | **{ours:.1f}** | | | | | | | | | **{jet:.1f}** | **{ours / jet:.2f}× jet** | |")
 
 
 def hc_steps_timing(args, out):

@@ -8,12 +8,12 @@ add-on's default (``core.smooth_mesh`` with nothing set, split vertices welded) 
 and on. Measured: the RMS distance of the vertices to the clean primitive's surface over the input's
 (below 1: nearer the shape than the noisy input; above 1: farther; a vertex sliding along the surface
 costs nothing), the RMS radius over the clean part's, the correlation between neighbours of what the
-run took away along the normals (core.collapse.residual_correlation: above 0, shape went with the noise),
+run took away along the normals (core.mesh.collapse.residual_correlation: above 0, shape went with the noise),
 and the parts the Automatic Amount left as they were because the run would have changed their shape
-(core.collapse).
+(core.mesh.collapse).
 
     python bench/run.py primitives               # ~20 s
-    python bench/run.py primitives --no-guard    # core.collapse off: what the runs do to the parts it holds
+    python bench/run.py primitives --no-guard    # core.mesh.collapse off: what the runs do to the parts it holds
 """
 
 import numpy as np
@@ -49,7 +49,7 @@ def smoothed_part(part, surface, noisy, sharp, hold_parts):
     error = rms(surface, result) / rms(surface, noisy)
     operator = core.umbrella_operator(part.edges, len(noisy))
     one_part = np.zeros(len(noisy), dtype=np.int64)  # each shape is one part
-    correlation = core.collapse.residual_correlation(noisy, result, part.triangles(), operator, one_part, 1)[0]
+    correlation = core.mesh.collapse.residual_correlation(noisy, result, part.triangles(), operator, one_part, 1)[0]
     return error, radius(result) / radius(part.positions), report.held_parts, correlation
 
 
@@ -62,7 +62,7 @@ def write_table(out, rows, pick, title):
 
 
 PARAMETERS = (
-    Parameter("no_guard", False, "core.collapse off: parts never held (hold_parts=False)"),
+    Parameter("no_guard", False, "core.mesh.collapse off: parts never held (hold_parts=False)"),
     Parameter("shapes", "", "only these primitives and parts (default all)"),
 )
 QUICK = {"shapes": "cube,cone_trifan"}
@@ -94,8 +94,8 @@ def run(args, out):
         rows.append((name, len(part.positions), cells))
     out("# The default on noisy primitives\n")
     guard = "off (hold_parts=False)" if args.no_guard else "on"
-    out(f"core.collapse {guard}. Isotropic noise in median edge lengths, seeds {SEEDS[0]} / {SEEDS[1]};")
-    out("in brackets the parts left as they were (core.collapse).")
+    out(f"core.mesh.collapse {guard}. Isotropic noise in median edge lengths, seeds {SEEDS[0]} / {SEEDS[1]};")
+    out("in brackets the parts left as they were (core.mesh.collapse).")
     write_table(out, rows, lambda r: f"{r[0]:.2f}", "RMS distance to the clean surface over the input's:")
     write_table(out, rows, lambda r: f"{r[1]:.2f}", "RMS radius (about the centroid) over the clean part's:")
     write_table(

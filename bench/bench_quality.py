@@ -116,7 +116,7 @@ def hc_default_settings():
     }
 
 
-BORDER = "free"  # the open-border rule hc_default runs with (core.borders)
+BORDER = "free"  # the open-border rule hc_default runs with (core.mesh.borders)
 
 
 def hc_default(case, **options):
@@ -155,12 +155,12 @@ def hc_fixed(case, params):
 def walk_grid(case, alphas, betas, checkpoints, rows=None, border="free", measures=None):
     """RMS of HC (on ``rows``, all vertices if None) at every (alpha, beta, checkpoint), NaN past the end
     of a path: each path runs once, read at its checkpoints, and stops past its minimum. ``border``: the
-    open-border rule of the runs (core.borders; "free" is the paper's algorithm). ``measures``: {name:
+    open-border rule of the runs (core.mesh.borders; "free" is the paper's algorithm). ``measures``: {name:
     function of the positions (all vertices) -> float}, read at the same checkpoints; then a path stops
     once every measure is past its minimum, and the return is (grid, {name: grid of that measure})."""
     operator = core.umbrella_operator(case.edges, len(case.noisy))
     held = np.zeros(len(case.noisy), dtype=bool)
-    operator, held = core.borders.apply_border(border, operator, case.faces, held)
+    operator, held = core.mesh.borders.apply_border(border, operator, case.faces, held)
     shape = (len(alphas), len(betas), len(checkpoints))
     grid = np.full(shape, np.nan)
     extra = {name: np.full(shape, np.nan) for name in measures or {}}

@@ -1,4 +1,4 @@
-"""Keep Sharp Edges (core.sharp_edges) on sharp-edged parts, against HC and feature-preserving peers.
+"""Keep Sharp Edges (core.mesh.sharp_edges) on sharp-edged parts, against HC and feature-preserving peers.
 
 Parts: the cube and the thin plate of bench_quality_inputs.py and the CAD-like parts of sharp_parts.py
 (a bevelled box, a cylinder with a through hole, a fandisk-like block). ``tuning`` (cube, bevelled box,
@@ -11,7 +11,7 @@ seed per cell (bench_quality.make_case's seeding).
 Methods, same run, same input:
 
 * ours: ``core.smooth_mesh(noisy, edges, faces=faces, weld=True, keep_sharp_edges=True)`` (the Automatic
-  Amount, as the add-on would run it), and at the fixed default (``core.sharp_edges.DEFAULT_ITERATIONS``
+  Amount, as the add-on would run it), and at the fixed default (``core.mesh.sharp_edges.DEFAULT_ITERATIONS``
   steps, no Automatic Amount);
 * HC Smooth's default (``core.smooth_mesh`` with nothing set) and the best HC setting of
   bench_default_heldout.py's grid (α × β × iterations, read on all vertices);
@@ -33,9 +33,10 @@ clean faces meet at more than 25°), the volume change against the clean part, t
 ours no worse than MeshLab's two-step (default and best) in RMS in every cell; sharp edges within 5°
 at 0.5 % noise; |ΔV| ≤ 0.5 %.
 
-``--cost`` times the Automatic Amount with the option on against 10 HC iterations on noisy tori of
-meshes.py (isotropic noise 0.1 % of the diagonal, float32), and the gap: the longest wait between two
-calls of the progress callback (what a cancel waits for).
+``--cost`` times the Automatic Amount with the option on against HC's default (``core.smooth_mesh`` with
+nothing set) on noisy tori of meshes.py (isotropic noise 0.1 % of the diagonal, float32), each run in a
+fresh process, interleaved, medians of ``--repeat``; with the gap (the longest wait between two calls of
+the progress callback: what a status line or a cancel waits for) and the process's peak memory.
 
 ``--bounds`` measures, instead of the peers, what the vertex fitting could reach with perfect normals:
 ours with the clean part's face normals in place of the filtered ones at every step, and at the first
@@ -53,12 +54,13 @@ default and the best HC setting.
     python bench/run.py sharp_edges                                   # both sets (~10 min)
     python bench/run.py sharp_edges --sets tuning --parts cube --sigmas 0.005 --kinds normal
     python bench/run.py sharp_edges --organic bunny,cow --sigmas 0.001,0.0025,0.005 --sets none
-    python bench/run.py sharp_edges --sets none --cost 250k,1M       # time on noisy tori (~4 min)
+    python bench/run.py sharp_edges --sets none --cost 250k,1M       # time and memory on noisy tori (~6 min)
     python bench/run.py sharp_edges --bounds --sigmas 0.005           # with perfect normals (~1 min)
 
 The report goes to stdout and bench/results/; the numbers to a JSON file beside it.
 """
 
+import json
 import math
 import sys
 import time
@@ -71,8 +73,8 @@ from bench import bench_default_heldout as heldout
 from bench import bench_quality as quality
 from bench import bench_quality_inputs as inputs
 from bench import sharp_parts
-from bench.common import Parameter, counts
-from core import sharp_edges
+from bench.common import ROOT, Parameter, counts, repeats
+from core.mesh import sharp_edges
 
 SETS = {"tuning": ("cube", "bevelled_box", "holed_cylinder"), "heldout": ("plate", "fandisk")}
 SIGMAS = "0.001,0.0025,0.005,0.01"
@@ -153,7 +155,7 @@ def ours(case, automatic=True):
         case.noisy, case.edges, faces=case.faces, weld=True, keep_sharp_edges=True, return_report=True, **options
     )
     chosen = {"steps": report.iterations, "angle": round(math.degrees(report.sharpness_angle), 1)}
-    return result, {**chosen, "held_parts": report.held_parts}  # parts left as they were (core.collapse)
+    return result, {**chosen, "held_parts": report.held_parts}  # parts left as they were (core.mesh.collapse)
 
 
 def two_step(case, params):
@@ -249,7 +251,7 @@ def measure_cell(name, set_name, kind, sigma, seed, cache, peers=True):
 
 
 class _CleanNormals:
-    """core.sharp_edges with the clean face normals in place of the filtered ones at the steps of
+    """core.mesh.sharp_edges with the clean face normals in place of the filtered ones at the steps of
     ``steps`` (all if None): a ``with`` block patches its filter and its nearest planes."""
 
     def __init__(self, normals, steps=None):
@@ -279,7 +281,7 @@ class _CleanNormals:
 
 
 class _BestRingNormal:
-    """core.sharp_edges with the first step's nearest planes chosen by the truth: each face takes, of its
+    """core.mesh.sharp_edges with the first step's nearest planes chosen by the truth: each face takes, of its
     ring's filtered normals, the one nearest its clean normal. A ``with`` block patches the choice."""
 
     def __init__(self, normals):
@@ -306,7 +308,7 @@ class _BestRingNormal:
 
 
 class _CleanPlanes:
-    """core.sharp_edges where every face, at every step, takes of its ring's clean planes (each face's clean
+    """core.mesh.sharp_edges where every face, at every step, takes of its ring's clean planes (each face's clean
     normal through its clean centroid) the one nearest its current corners: the choice of side with the
     sides' planes known exactly, made as ``nearest_plane_normals`` makes it. A ``with`` block patches the
     filter (its normals are not used) and the choice."""
@@ -501,27 +503,76 @@ def report(record, out):
 
 def timed_with_gap(function, *args, **kwargs):
     """(seconds, the longest wait between two calls of the progress callback or the ends: what a cancel
-    waits for, the run's report) of ``function(*args, return_report=True, progress=..., **kwargs)``."""
+    waits for or a status line shows, the wait before the first call, the run's report) of
+    ``function(*args, return_report=True, progress=..., **kwargs)``."""
     called = [time.perf_counter()]
     _, report = function(*args, return_report=True, progress=lambda _: called.append(time.perf_counter()), **kwargs)
     called.append(time.perf_counter())
-    return called[-1] - called[0], float(np.max(np.diff(called))), report
+    return called[-1] - called[0], float(np.max(np.diff(called))), called[1] - called[0], report
 
 
-def cost(sizes, out):
+def cost_child(size, method):
+    """One timed run in this (fresh) process, printed as JSON: HC's default ("hc") or Keep Sharp Edges with
+    the Automatic Amount ("sharp") on the noisy torus of ``size`` vertices, with this process's peak RSS
+    (the torus, NumPy and SciPy included) and its RSS before the run."""
+    import resource
+
     from bench import meshes
 
+    vertices, faces = meshes.torus(size)
+    noisy = meshes.add_noise(vertices, 0.001, seed=1).astype(np.float32)
+    edges = meshes.edges_from_faces(faces)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    options = {"keep_sharp_edges": True} if method == "sharp" else {}
+    seconds, gap, first, report = timed_with_gap(core.smooth_mesh, noisy, edges, faces=faces, **options)
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(
+        json.dumps(
+            {
+                "seconds": seconds,
+                "gap": gap,
+                "first": first,
+                "steps": report.iterations,
+                "peak_mb": peak,
+                "before_mb": before,
+                "vertices": len(vertices),
+            }
+        )
+    )
+
+
+def cost(sizes, repeat, out, record):
+    """HC's default and Keep Sharp Edges (Automatic Amount) on noisy tori, each run in a fresh process,
+    interleaved, ``repeat`` times: medians of time, longest progress gap, peak memory."""
+    import subprocess
+
     out("\n## Cost on big meshes\n")
-    out("| vertices | 10 HC iterations (s) | Keep Sharp Edges, Automatic Amount (s) | steps | s per step | gap (s) |")
-    out("|---:|---:|---:|---:|---:|---:|")
+    out(
+        f"Noisy tori (isotropic noise 0.1 % of the diagonal, float32), each run in a fresh process, HC's default "
+        f"and Keep Sharp Edges interleaved, medians of {repeat}; gap: the longest wait between two calls of the "
+        "progress callback (what a status line or a cancel waits for); peak: the process's largest RSS (torus, "
+        "NumPy and SciPy included; the RSS before the run in brackets).\n"
+    )
+    out(
+        "| vertices | HC default (s) | Keep Sharp Edges (s) | ratio | steps | s per step | gap (s) | first call (s) "
+        "| peak MB |"
+    )
+    out("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for size in sizes:
-        vertices, faces = meshes.torus(size)
-        noisy = meshes.add_noise(vertices, 0.001, seed=1).astype(np.float32)
-        edges = meshes.edges_from_faces(faces)
-        _, hc = timed(core.smooth_mesh, noisy, edges, faces=faces, alpha=0.1, beta=0.6, iterations=10)
-        ours, gap, report = timed_with_gap(core.smooth_mesh, noisy, edges, faces=faces, keep_sharp_edges=True)
-        steps = report.iterations
-        out(f"| {len(vertices):,} | {hc:.1f} | {ours:.1f} | {steps} | {ours / max(steps, 1):.1f} | {gap:.2f} |")
+        runs = {"hc": [], "sharp": []}
+        for _ in range(repeat):
+            for method in runs:
+                command = [sys.executable, "-m", "bench.bench_sharp_edges", str(size), method]
+                done = subprocess.run(command, capture_output=True, text=True, check=True, cwd=ROOT)
+                runs[method].append(json.loads(done.stdout.strip().splitlines()[-1]))
+        record.setdefault("cost", []).append({"size": size, **runs})
+        hc, ours = (float(np.median([r["seconds"] for r in runs[m]])) for m in ("hc", "sharp"))
+        middle = {key: float(np.median([r[key] for r in runs["sharp"]])) for key in runs["sharp"][0]}
+        out(
+            f"| {int(middle['vertices']):,} | {hc:.1f} | {ours:.1f} | {ours / hc:.1f} | {middle['steps']:g} | "
+            f"{ours / max(middle['steps'], 1):.1f} | {middle['gap']:.2f} | {middle['first']:.2f} | "
+            f"{middle['peak_mb']:.0f} ({middle['before_mb']:.0f}) |"
+        )
 
 
 PARAMETERS = (
@@ -531,11 +582,20 @@ PARAMETERS = (
     Parameter("kinds", "normal,iso"),
     Parameter("organic", "", "organic scans to run with the option on, e.g. bunny"),
     Parameter("cost", "", "torus sizes to time, e.g. 250k,1M", counts),
+    repeats(3, "--cost runs of each method, each in a fresh process (medians)"),
     Parameter("bounds", False, "with perfect normals, instead of the peers"),
     Parameter("no_peers", False, "ours alone"),
     Parameter("seed", 0),
 )
-QUICK = {"sets": "tuning", "parts": "holed_cylinder", "sigmas": "0.005", "kinds": "iso", "cost": "5k", "no_peers": True}
+QUICK = {
+    "sets": "tuning",
+    "parts": "holed_cylinder",
+    "sigmas": "0.005",
+    "kinds": "iso",
+    "cost": "5k",
+    "repeats": 1,
+    "no_peers": True,
+}
 
 
 def run(args, out):
@@ -575,5 +635,9 @@ def run(args, out):
                 record["organic"].append(measure_cell(name, "organic", kind, sigma, args.seed, cache, peers=False))
     report(record, out)
     if args.cost:
-        cost(args.cost, out)
+        cost(args.cost, args.repeats, out, record)
     return record
+
+
+if __name__ == "__main__":  # one --cost run in a fresh process: python -m bench.bench_sharp_edges SIZE METHOD
+    cost_child(int(sys.argv[1]), sys.argv[2])

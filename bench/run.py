@@ -44,6 +44,8 @@ BENCHMARKS = {
     "sharp_edges": "bench_sharp_edges",
     "points": "bench_points",
     "quality_points": "bench_quality_points",
+    "batch": "bench_batch",
+    "tiled": "bench_tiled",
 }
 # The benchmarks that drive Blender: they run in a Python with the bpy module (.envs/bpy45 or .envs/bpy52), the
 # others in .envs/bench (bench/requirements.txt).

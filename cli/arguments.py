@@ -90,7 +90,8 @@ examples:
   blender -b -c hc_smooth scan.obj -o out/ --iterations 20 --alpha 0.2 --beta 0.7 --format ply
   blender -b -c hc_smooth scene.blend --object Scan --fixed-group Keep -o out/
   blender -b -c hc_smooth points.ply --points --rounds 4 -o out/
-  ls scans/*.ply | xargs -P 4 -n 1 blender -b -c hc_smooth -o smoothed/    (one process per file)
+  blender -b -c hc_smooth scans/ -o smoothed/ --jobs 4                      (4 worker processes, Dask)
+  blender -b -c hc_smooth scans/ -o smoothed/ --scheduler tcp://host:8786    (a Dask cluster's workers)
 """
 
 
@@ -108,6 +109,25 @@ def _number(text):
     if not math.isfinite(value):  # nan passes no comparison and inf no limit: refuse both here
         raise argparse.ArgumentTypeError(f"{text} is not a finite number")
     return value
+
+
+SIZE_UNITS = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
+
+
+def _size(text):
+    """'4G', '500M', '4GB', '1.5g', '1000000' (bytes) -> bytes."""
+    number = text.strip().upper().removesuffix("B")
+    unit = number[-1:] if number[-1:] in SIZE_UNITS and number[-1:] else ""
+    try:
+        value = float(number[: len(number) - len(unit)]) * SIZE_UNITS[unit]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text} is not a size (e.g. 4G, 500M)") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"{text} is not a positive size")
+    return int(value)
+
+
+_size.__name__ = "size"
 
 
 def _shown(setting):
@@ -165,6 +185,17 @@ def add_setting(group, setting, text):
     group.add_argument(_option(setting.flag), **options)
 
 
+def _count(text):
+    """A whole number of at least 1 (--jobs)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text} is not a whole number") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text} is below 1")
+    return value
+
+
 def make_parser(prog=PROG):
     parser = _Parser(
         prog=prog,
@@ -198,6 +229,30 @@ def make_parser(prog=PROG):
         "--verbose",
         action="store_true",
         help="say when each file starts being read, smoothed and written",
+    )
+    large = parser.add_argument_group("scans larger than memory")
+    large.add_argument(
+        "--memory-limit",
+        type=_size,
+        metavar="SIZE",
+        help="the most memory a file's run may take, e.g. 4G or 500M (default: 3/4 of the machine's); a binary "
+        "PLY file whose whole run would take more is smoothed in tiles (docs/large_scans.md)",
+    )
+    batch = parser.add_argument_group('many files at once (Dask: python -m pip install "dask[distributed]")')
+    batch.add_argument(
+        "--jobs",
+        type=_count,
+        default=1,
+        metavar="N",
+        help="smooth PLY, OBJ and STL files in N worker processes on this machine (default 1: one at a time, "
+        "here); .blend files run here, one at a time",
+    )
+    batch.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        default="",
+        help="send PLY, OBJ and STL files to the workers of the Dask scheduler at ADDRESS "
+        "(tcp://host:8786); they need HC Smooth, the inputs and the output folder at the same paths",
     )
     smoothing = parser.add_argument_group("smoothing (as the operators' properties)")
     for name, setting in MESH_OPTIONS.items():
@@ -239,6 +294,38 @@ class Plan:
     objects: list = field(default_factory=list)
     notes: list = field(default_factory=list)  # said before the run (an input named twice)
     verbose: bool = False
+    memory_limit: int | None = None  # bytes, --memory-limit (None: cli/tiled.py's default)
+    jobs: int = 1  # worker processes on this machine (--jobs); 1: the files run here, one at a time
+    scheduler: str = ""  # the Dask scheduler whose workers run the files (--scheduler)
+
+    @property
+    def batch(self):
+        """Whether the files go to workers (cli/batch.py)."""
+        return self.jobs > 1 or bool(self.scheduler)
+
+
+UNATTENDED = "it runs unattended, and a mistyped count must not keep it going without end"
+
+
+def _check_step_counts(args):
+    """Refuse more HC steps than settings_spec.COMMAND_MAX_ITERATIONS: --iterations, or for point clouds
+    --rounds times --steps-per-round (chosen from the noise when not given: at least one a round)."""
+    most = settings_spec.COMMAND_MAX_ITERATIONS
+    why = f"the most the command line runs (as the HC Smooth modifier): {UNATTENDED}"
+    if args.iterations is not None and args.iterations > most:
+        raise UsageError(f"--iterations {args.iterations} is above {most}, {why}")
+    if not args.points:
+        return  # --rounds and --steps-per-round without --points are refused with their own message
+    rounds = settings_spec.ROUNDS.default if args.rounds is None else args.rounds
+    steps = 1 if args.steps_per_round is None else args.steps_per_round
+    if rounds * steps <= most:
+        return
+    if args.steps_per_round is None:
+        counts = f"--rounds {rounds} (at least one step each)"
+    else:
+        with_rounds = f"the default {rounds} rounds" if args.rounds is None else f"--rounds {rounds}"
+        counts = f"--steps-per-round {steps} with {with_rounds}"
+    raise UsageError(f"{counts} makes {rounds * steps} HC steps, above {most}, {why}")
 
 
 def parse(argv, prog=PROG):
@@ -247,18 +334,15 @@ def parse(argv, prog=PROG):
     Reads the file system (which inputs and outputs exist) but changes nothing on it. ``prog`` names
     the command in messages."""
     args = make_parser(prog).parse_args(list(argv))
+    if args.jobs > 1 and args.scheduler:
+        raise UsageError("give either --jobs N (workers on this machine) or --scheduler ADDRESS (a cluster's)")
     if args.in_place == bool(args.output_dir):
         raise UsageError("give either -o OUTDIR or --in-place (inputs are never overwritten otherwise)")
     for option, needed in NEEDS:
         if getattr(args, option) not in (None, False) and not getattr(args, needed):
             metavar = MESH_OPTIONS[needed].metavar
             raise UsageError(f"{_option(option)} needs {_option(needed)}{f' {metavar}' if metavar else ''}")
-    most = settings_spec.COMMAND_MAX_ITERATIONS
-    if args.iterations is not None and args.iterations > most:
-        raise UsageError(
-            f"--iterations {args.iterations} is above {most}, the most the command line runs (as the HC Smooth "
-            "modifier): it runs unattended, and a mistyped count must not keep it going without end"
-        )
+    _check_step_counts(args)
     if args.points:
         refused = [_option(name) for name, keeps in MESH_ONLY.items() if getattr(args, name) not in (None, keeps)]
         if refused:
@@ -279,15 +363,18 @@ def parse(argv, prog=PROG):
             if getattr(args, name) is not None
         }
     )
-    if args.alpha is not None or args.iterations is not None:
-        settings.auto_amount = False  # as the operator with Automatic Amount off: explicit numbers run as given
+    given = frozenset(setting.name for name, setting in MESH_OPTIONS.items() if getattr(args, name) is not None)
+    values = settings_spec.values_of(settings, settings_spec.MESH)
+    if settings_spec.automatic(values) and not settings_spec.automatic(values, given):
+        settings.auto_amount = False  # as the operator: Alpha or Iterations given run every number as set
     point_options = {
         POINT_FIELDS[name]: getattr(args, name) for name in POINT_FIELDS if getattr(args, name) is not None
     }
-    if "alpha" in point_options or "iterations_per_round" in point_options:
-        point_options["auto_amount"] = False  # as the operator: a manual amount uses alpha and steps as set
+    points = settings_spec.values_of(settings_spec.PointSettings(**point_options), settings_spec.POINTS)
+    if settings_spec.automatic(points) and not settings_spec.automatic(points, point_options):
+        point_options["auto_amount"] = False  # as the operator: Alpha or Steps per Round given run them as set
     if args.points:
-        from ..core.pointcloud.sdg import reach_gap_problem  # the rule and its words, once (NumPy only)
+        from ..core import reach_gap_problem  # the rule and its words, once
 
         reach = point_options.get("spacing_factor", settings_spec.SPACING_FACTOR.default)
         gap = point_options.get("gap_factor", settings_spec.GAP_FACTOR.default)
@@ -307,13 +394,16 @@ def parse(argv, prog=PROG):
         check_deviation_targets(files)
     return Plan(
         settings=settings,
-        given=frozenset(setting.name for name, setting in MESH_OPTIONS.items() if getattr(args, name) is not None),
+        given=given,
         files=files,
         points=args.points,
         point_options=point_options,
         objects=args.objects,
         notes=notes,
         verbose=args.verbose,
+        memory_limit=args.memory_limit,
+        jobs=args.jobs,
+        scheduler=args.scheduler,
     )
 
 

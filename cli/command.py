@@ -1,11 +1,9 @@
 """`blender -b -c hc_smooth INPUT... -o OUTDIR`: smooth scan files, one progress line per file, a summary.
 
 ``main(argv)`` is the function registered with bpy.utils.register_cli_command; tests call it directly
-with an argument list (the bpy module cannot run `blender -c`). PLY, OBJ and STL files are read and
-written by cli/formats (NumPy); their arrays go to core without Blender (``smooth_arrays``), in the
-precision the file stores, through the shared job code of the mesh operators (operators/jobs.py) and
-that of the point operator (operators/point_cloud.py). .blend files are opened, their objects smoothed
-by the same job code and saved as a copy.
+with an argument list (the bpy module cannot run `blender -c`), and scripts/hc_smooth_files.py runs it in
+a Python without Blender. PLY, OBJ and STL files take the file route (cli/file_route.py: NumPy and SciPy
+only); .blend files are opened in Blender (cli/blend.py, loaded only for them).
 """
 
 import contextlib
@@ -18,19 +16,16 @@ import traceback
 import warnings
 from dataclasses import dataclass, field
 
-import bpy
-import numpy as np
-
 from .. import core
-from ..console_capture import captured
-from ..operators import jobs as jobs_module
-from ..operators import mesh_io, point_cloud
-from ..operators.objects import InputError, unique_data
-from . import arguments, files
+from ..jobs import InputError, points
+from ..jobs import mesh as mesh_jobs
+from ..settings_spec import PointSettings
+from . import arguments, batch, file_route, files
 from .files import FileError
-from .formats.normals import corner_neighbours
 
 INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl+C
+PROGRESS_FIRST = 1.0  # seconds of smoothing before the first progress line
+PROGRESS_EVERY = 1.0  # seconds between progress lines at most once they started
 
 
 def plural(count, word, words=None):
@@ -47,16 +42,18 @@ class Outcome:
     vertices: int = 0
     iterations: int = 0  # meshes: the most iterations any mesh ran
     sharp: bool = False  # meshes: Keep Sharp Edges ran (its iterations are steps)
-    held: int = 0  # meshes: parts the Automatic Amount left as they were (core.collapse)
+    held: int = 0  # meshes: parts the Automatic Amount left as they were (core.mesh.collapse)
     kept: bool = False  # meshes: every move was kept across the surface (Keep in Place)
     rounds: list = field(default_factory=list)  # point clouds: (rounds, steps per round) per cloud
     seconds: float = 0.0
     changes: list = field(default_factory=list)  # core.Change per smoothed mesh
     legends: list = field(default_factory=list)  # --deviation-attribute: each mesh's deviation map in words
+    notes: list = field(default_factory=list)  # how a file too big for memory ran (cli/tiled.py)
     warnings: list = field(default_factory=list)
     error: str = ""
     blender_lines: list = field(default_factory=list)  # what Blender printed while a failed file ran
     stage: str = "reading"  # reading, smoothing, writing, done: where an interrupt found it
+    progress: object = None  # called with the fraction done while the file's smoothing runs (Console.progress)
 
     def change_text(self):
         """core.Change.brief of the mesh that moved furthest (relative to its size)."""
@@ -69,7 +66,7 @@ class Outcome:
     def amount_text(self):
         """How much smoothing ran: '10 iterations' (and the parts left as they were, if any), or for point
         clouds '3 rounds of 15 steps (45 steps)'."""
-        held = f", {jobs_module.held_words(self.held)}" if self.held else ""
+        held = f", {mesh_jobs.held_words(self.held)}" if self.held else ""
         held += ", kept in place" if self.kept else ""
         if self.sharp:
             return f"Keep Sharp Edges, {plural(self.iterations, 'step')}{held}"
@@ -103,6 +100,19 @@ class Console:
             os.dup2(devnull, stream.fileno())
             os.close(devnull)
 
+    def progress(self, outcome, started):
+        """A callable for ``Outcome.progress``: prints 'smoothing FILE: 42 %' once the smoothing has run for
+        PROGRESS_FIRST seconds, then every PROGRESS_EVERY seconds at most (a long run is never silent)."""
+        last = [started + PROGRESS_FIRST - PROGRESS_EVERY]
+
+        def report(fraction):
+            now = time.perf_counter()
+            if now - last[0] >= PROGRESS_EVERY:
+                last[0] = now
+                self.say(f"hc_smooth: smoothing {outcome.source}: {100 * fraction:.0f} %")
+
+        return report
+
     def stage(self, outcome, stage, path):
         outcome.stage = stage
         if self.verbose:
@@ -130,6 +140,9 @@ def main(argv, prog=arguments.PROG):
         outcomes = []
         try:
             return run(plan, settings, console, outcomes)
+        except batch.BatchError as error:  # before any file ran: nothing written
+            console.say(f"hc_smooth: {error}", sys.stderr)
+            return 2
         except KeyboardInterrupt:
             return interrupted(plan, outcomes, console)
 
@@ -138,36 +151,61 @@ def run(plan, settings, console, outcomes):
     for note in plan.notes:
         console.say(f"hc_smooth: note: {note}")
     if plan.points:
-        message = point_cloud.convergence_note(settings)
+        message = points.convergence_note(settings)
     else:
         hc = settings.method == "HC" and not settings.keep_sharp_edges  # Theorem 5.2 is about HC's umbrella
         message = core.convergence_message(settings.alpha, settings.beta) if hc else None
     if message:
         console.say(f"hc_smooth: warning: {message}")
-    cleaned = set()
+    for folder in dict.fromkeys(os.path.dirname(target) for _, target in plan.files):
+        for name in files.remove_stale_temporaries(folder) if os.path.isdir(folder) else ():
+            console.say(f"hc_smooth: note: removed {os.path.join(folder, name)}, left by an interrupted run")
     total = len(plan.files)
-    for number, (source, target) in enumerate(plan.files, 1):
-        folder = os.path.dirname(target)
-        if folder not in cleaned and os.path.isdir(folder):
-            cleaned.add(folder)
-            for name in files.remove_stale_temporaries(folder):
-                console.say(f"hc_smooth: note: removed {os.path.join(folder, name)}, left by an interrupted run")
-        outcome = Outcome(source=source, target=target)
-        outcomes.append(outcome)
-        process(outcome, plan, settings, console)
-        console.say(f"[{number}/{total}] {progress_line(outcome)}")
-        for text in outcome.legends if not outcome.error else ():
+
+    def report(outcome):
+        console.say(f"[{len(outcomes)}/{total}] {progress_line(outcome)}")
+        for text in outcome.legends + outcome.notes if not outcome.error else ():
             console.say(f"  {text}")
         for text in outcome.warnings:
             console.say(f"  warning: {text}")
         for line in outcome.blender_lines:
             console.say(f"  blender: {line}")
-    console.say(summary_table(outcomes))
+
+    here, away = split_batch(plan)
+    if away:
+        if here:
+            console.say("hc_smooth: note: .blend files run here, one at a time (the workers have no Blender)")
+        batch.smooth_files(plan, away, done=lambda outcome: (outcomes.append(outcome), report(outcome)), failed=lost)
+    for source, target in here:
+        outcome = Outcome(source=source, target=target)
+        outcomes.append(outcome)
+        process(outcome, plan, settings, console)
+        report(outcome)
+    order = {source: index for index, (source, _) in enumerate(plan.files)}
+    console.say(summary_table(sorted(outcomes, key=lambda outcome: order[outcome.source])))
     failed = [outcome for outcome in outcomes if outcome.error]
     if failed:
         console.say(f"hc_smooth: {len(failed)} of {total} files failed", sys.stderr)
         return 1
     return 0
+
+
+def split_batch(plan):
+    """(files this process smooths, files the workers smooth): with --jobs or --scheduler, every PLY, OBJ and
+    STL file goes to the workers; .blend files stay here (they need Blender)."""
+    if not plan.batch:
+        return plan.files, []
+    blend = [(source, target) for source, target in plan.files if is_blend(source)]
+    return blend, [pair for pair in plan.files if not is_blend(pair[0])]
+
+
+def is_blend(path):
+    return os.path.splitext(path)[1].lower() == arguments.BLEND
+
+
+def lost(source, target, reason):
+    """The outcome of a file that no worker could finish (Dask gave up on it: its workers kept dying)."""
+    return Outcome(source=source, target=target, error=f"no worker finished it ({reason})", stage="done")
 
 
 @contextlib.contextmanager
@@ -185,15 +223,6 @@ def interruptible():
             signal.signal(signal.SIGINT, previous)
 
 
-def ctrl_c_interrupts():
-    """Make Ctrl+C raise KeyboardInterrupt again (after Blender loaded a file, which may set its own
-    handler); only inside the command's ``interruptible`` span, on the main thread."""
-    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is not (
-        signal.default_int_handler
-    ):
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-
-
 def interrupted(plan, outcomes, console):
     """What an interrupt left: the files done, the one it stopped (as it was), the ones not started."""
     done = [outcome for outcome in outcomes if outcome.stage == "done" and not outcome.error]
@@ -209,9 +238,20 @@ def interrupted(plan, outcomes, console):
     return INTERRUPTED
 
 
+def blend_route():
+    """cli/blend.py, or FileError in a Python without Blender."""
+    try:
+        from . import blend
+    except ModuleNotFoundError as error:
+        if error.name != "bpy":
+            raise
+        raise FileError("a .blend file needs Blender: smooth it with `blender -b -c hc_smooth`") from None
+    return blend
+
+
 def point_settings(plan):
     """The point operator's settings with what the command line gave."""
-    return point_cloud.PointSettings(**plan.point_options)
+    return PointSettings(**plan.point_options)
 
 
 def process(outcome, plan, settings, console):
@@ -223,10 +263,10 @@ def process(outcome, plan, settings, console):
     bug = None
     with warnings.catch_warnings(record=True) as caught:
         try:
-            if os.path.splitext(outcome.source)[1].lower() == arguments.BLEND:
-                smooth_blend_file(outcome, plan, settings, console)
+            if is_blend(outcome.source):
+                blend_route().smooth_blend_file(outcome, plan, settings, console)
             else:
-                smooth_mesh_file(outcome, plan, settings, console)
+                file_route.smooth_mesh_file(outcome, plan, settings, console)
         except (FileError, InputError, ValueError, OSError) as error:
             outcome.error = str(error)
         except MemoryError:
@@ -246,216 +286,6 @@ def process(outcome, plan, settings, console):
     else:
         outcome.blender_lines = []
     outcome.seconds = time.perf_counter() - start
-
-
-@contextlib.contextmanager
-def in_blender(outcome):
-    """Blender's part of a file, with what it prints collected into the outcome (shown if the file fails)."""
-    lines = []
-    try:
-        with captured() as lines:
-            yield
-    finally:
-        outcome.blender_lines.extend(lines)
-
-
-def smooth_mesh_file(outcome, plan, settings, console):
-    console.stage(outcome, "reading", outcome.source)
-    mesh = files.read_mesh(outcome.source)
-    console.stage(outcome, "smoothing", outcome.source)
-    name = os.path.splitext(os.path.basename(outcome.source))[0]
-    wanted = {plan.settings.vertex_group, plan.settings.influence_group} - {""}
-    groups = mesh.groups(wanted) if wanted and hasattr(mesh, "groups") else {}
-    positions = mesh.positions.astype(mesh.precision, copy=False)  # no copy when the file holds doubles
-    result, added = smooth_arrays(name, positions, mesh.corners, mesh.sizes, plan, settings, outcome, groups)
-    console.stage(outcome, "writing", outcome.target)
-    files.write_bytes(outcome.target, files.result_bytes(mesh, result, outcome.target, added))
-
-
-def smooth_arrays(name, positions, corners, sizes, plan, settings, outcome, groups=None):
-    """(smoothed positions, {name: vertex values}) of a file's mesh: vertex ``positions`` (in the precision
-    the smoothing runs in) and faces given as ``corners`` (vertex indices, face after face) with ``sizes``
-    (corners per face; faces of fewer than three corners, or with a corner repeating the one before it,
-    take no part). No faces: a point cloud (--points). ``groups``: {name: vertex indices} for
-    --fixed-group and --influence-group (an OBJ's groups, weight 1). ``name`` is what messages call the
-    mesh. The values are what the file takes besides the positions: the deviation map with
-    --deviation-attribute, else none.
-
-    The one place that hands a file's arrays to the smoothing, through the operators' job code (the same
-    options and checks, the same core run) but not through a Blender mesh, which would hold them in
-    single precision."""
-    n = len(positions)
-    fixed = group_mask(name, groups, plan.settings.vertex_group, plan.settings.invert_vertex_group, n)
-    if plan.points:
-        if np.any(sizes >= 3):
-            raise FileError(f"'{name}' has edges: it is a mesh, not a point cloud (smooth it without --points)")
-        check_point_groups(plan.settings)
-        point_cloud.check_settings(settings)  # as read_clouds checks an object's
-        cloud = point_cloud.Cloud.of_arrays(name, positions, fixed)
-        smooth_clouds([cloud], settings, outcome)
-        outcome.objects = 1
-        return cloud.result, {}
-    influence = group_mask(name, groups, plan.settings.influence_group, plan.settings.invert_influence_group, n)
-    job = mesh_job(name, positions, corners, sizes, fixed, None if influence is None else influence.astype(float))
-    smooth_jobs([job], settings, outcome, plan.given)
-    outcome.objects = 1
-    added = {}
-    if plan.settings.deviation_map:
-        added[mesh_io.DEVIATION_ATTRIBUTE] = jobs_module.deviation_map(job).deviation.astype(np.float32)
-    return job.result, added
-
-
-def check_point_groups(settings):
-    if settings.influence_group:
-        raise FileError("--influence-group is for meshes: point clouds take --fixed-group only")
-
-
-def group_mask(name, groups, group, invert, n):
-    """The ``n`` vertices' membership of vertex group ``group`` (bool, inverted if asked), None without one."""
-    if not group:
-        return None
-    members = (groups or {}).get(group)
-    if members is None:
-        raise FileError(f"Object '{name}' has no vertex group '{group}'")
-    mask = np.zeros(n, dtype=bool)
-    mask[members] = True
-    return ~mask if invert else mask
-
-
-def mesh_job(name, positions, corners, sizes, fixed, influence):
-    """A job of the mesh operators (operators/jobs.py) for a file's arrays: its edges are the sides of
-    the faces Blender would keep (at least three corners, none repeating the one before it)."""
-    n = len(positions)
-    if n == 0:
-        raise FileError(f"Mesh '{name}' has no vertices: nothing to smooth")
-    starts = np.cumsum(sizes) - sizes
-    following, _ = corner_neighbours(starts, sizes)
-    degenerate = np.repeat(np.arange(len(sizes)), sizes)[corners == corners[following]]
-    keep = sizes >= 3
-    keep[degenerate] = False
-    mask = np.repeat(keep, sizes)
-    edges = np.stack([corners[mask], corners[following][mask]], axis=1)
-    if not len(edges):
-        raise FileError(f"'{name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
-    kept = sizes[keep]
-    faces = core.metrics.fan_triangles((np.concatenate([[0], np.cumsum(kept)]), corners[mask]))
-    fixed = np.zeros(n, dtype=bool) if fixed is None else fixed
-    return jobs_module.Job(None, None, positions, edges, faces, fixed, closed=None, influence=influence)
-
-
-def is_point_cloud(obj):
-    return obj.type == "POINTCLOUD" or (obj.type == "MESH" and bool(len(obj.data.vertices)) and not len(obj.data.edges))
-
-
-def smooth_blend_file(outcome, plan, settings, console):
-    source = outcome.source
-    console.stage(outcome, "reading", source)
-    if not os.path.isfile(source):
-        raise FileError("no such file")
-    files.check_blend_version(files.blend_version(source), bpy.app.version)
-    with in_blender(outcome):
-        try:
-            bpy.ops.wm.open_mainfile(filepath=os.path.abspath(source), load_ui=False)
-            ctrl_c_interrupts()
-        except RuntimeError as error:
-            raise FileError(f"could not open the .blend file: {str(error).strip()}") from None
-    files.check_blend_version(bpy.data.version, bpy.app.version)  # a header this could not read
-    console.stage(outcome, "smoothing", source)
-    if plan.objects:
-        objects = []
-        for name in plan.objects:
-            obj = bpy.data.objects.get(name)
-            if obj is None:
-                raise FileError(f"no object '{name}' in this file")
-            objects.append(obj)
-    else:
-        local = [obj for obj in bpy.data.objects if obj.library is None and obj.type in ("MESH", "POINTCLOUD")]
-        objects = [obj for obj in local if is_point_cloud(obj) == plan.points]  # --points: the clouds, else the meshes
-        others = [obj.name for obj in local if obj not in objects]
-        if not objects:
-            raise FileError(
-                "no local point clouds (meshes without edges, point cloud objects) in this file"
-                + (" (it has meshes: smooth them without --points)" if others else "")
-                if plan.points
-                else "no local mesh objects in this file" + (" (it has point clouds: pass --points)" if others else "")
-            )
-        if others:
-            outcome.warnings.append(
-                f"left as they are: {', '.join(sorted(others))} ("
-                + (
-                    "meshes: smooth them without --points)"
-                    if plan.points
-                    else "point clouds: smooth them with --points)"
-                )
-            )
-    with in_blender(outcome):
-        smooth_objects(objects, plan, settings, outcome)
-    console.stage(outcome, "writing", outcome.target)
-    with in_blender(outcome):
-        files.save_blend_copy(outcome.target)
-
-
-def smooth_objects(objects, plan, settings, outcome):
-    """Smooth the objects as meshes, or as point clouds with --points; everything is read before anything is written."""
-    if plan.points:
-        smooth_point_clouds(objects, settings, outcome)
-    else:
-        smooth_meshes(objects, settings, outcome, plan.given)
-    outcome.objects = len(objects)
-
-
-def smooth_meshes(objects, settings, outcome, given=frozenset()):
-    """A mesh shared by several objects is smoothed once. ``given``: the settings named on the command line."""
-    for obj in objects:
-        if obj.type != "MESH":
-            raise FileError(
-                f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object, not a mesh"
-                + (" (pass --points to smooth it)" if obj.type == "POINTCLOUD" else "")
-            )
-        if is_point_cloud(obj):
-            raise FileError(f"'{obj.name}' has no edges: it is a point cloud (pass --points to smooth it as one)")
-    jobs = [jobs_module.make_job(obj, settings) for obj in unique_data(objects)]
-    smooth_jobs(jobs, settings, outcome, given)
-    jobs_module.write_all(jobs, settings)
-
-
-def smooth_jobs(jobs, settings, outcome, given):
-    """Run the mesh operators' jobs and count what they did into ``outcome``; writes nothing."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", core.ConvergenceWarning)  # said once, at the start
-        for _ in jobs_module.run(jobs, settings, given=given):
-            pass
-    for job in jobs:
-        outcome.changes.append(jobs_module.measure(job))
-        if settings.deviation_map:
-            legend = jobs_module.map_legend(job)
-            outcome.legends.append(f"'{job.obj.name}': {legend}" if len(jobs) > 1 else legend)
-        outcome.vertices += len(job.positions)
-        outcome.iterations = max(outcome.iterations, job.report.iterations)
-        outcome.sharp = outcome.sharp or job.report.keep_sharp_edges
-        outcome.held += job.report.held_parts
-        outcome.kept = outcome.kept or job.report.kept_in_place
-
-
-def smooth_point_clouds(objects, settings, outcome):
-    """With the point operator's own functions (read, run, write), ``settings`` a point_cloud.PointSettings."""
-    for obj in objects:
-        if obj.type == "MESH" and (len(obj.data.edges) or len(obj.data.polygons)):
-            raise FileError(f"'{obj.name}' has edges: it is a mesh, not a point cloud (smooth it without --points)")
-    clouds = point_cloud.read_clouds(objects, settings)
-    smooth_clouds(clouds, settings, outcome)
-    point_cloud.write(clouds, settings, bpy.context)
-
-
-def smooth_clouds(clouds, settings, outcome):
-    """Run the point operator's clouds and count what they did into ``outcome``; writes nothing."""
-    for _ in point_cloud.run(clouds, settings):
-        pass
-    for cloud in clouds:
-        outcome.changes.append(core.measure_change(cloud.positions, cloud.result))
-        outcome.vertices += len(cloud.positions)
-        outcome.rounds.append((cloud.report.rounds, cloud.report.iterations_per_round))
-    outcome.warnings.extend(text for text in (point_cloud.stuck_warning(clouds),) if text)
 
 
 def progress_line(outcome):

@@ -142,6 +142,14 @@ def _replacing(target):
             os.remove(temporary)
 
 
+@contextlib.contextmanager
+def written(target):
+    """A temporary path for a writer that builds ``target`` in place (a copy written into): moved over
+    ``target`` once the block ends, removed (with the folders made for it) if it fails or is interrupted."""
+    with _target_folder(target), _replacing(target) as temporary:
+        yield temporary
+
+
 def write_bytes(target, data):
     """Write ``data`` to ``target`` atomically (created folders removed again if it fails)."""
     with _target_folder(target), _replacing(target) as temporary:

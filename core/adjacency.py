@@ -5,7 +5,7 @@ and reused across iterations, runs and dtypes. Only the sparsity pattern is stor
 apply the weights 1/|adj(i)| themselves.
 
 A mesh's edges give a symmetric adj() (j in adj(i) <=> i in adj(j)). Some rules give a vertex fewer
-neighbours than its edges do (a border vertex follows only its border, core.borders): the pattern is
+neighbours than its edges do (a border vertex follows only its border, core.mesh.borders): the pattern is
 then directed, built from pairs i -> j (``umbrella_from_pairs``, ``Umbrella.with_rows``), and the
 smoothers read both triangles of it from the pattern itself.
 """

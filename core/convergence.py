@@ -107,6 +107,12 @@ def convergence_lines(method, alpha, beta):
     HC: Theorem 5.2 (alpha > 0, beta > 0.5). The Laplacian variants (section 5): plain and central shrink
     towards a point as iterations grow; with the original point and alpha > 0 they converge, but to a
     shrunken compromise (section 3.3).
+
+    Examples
+    --------
+    >>> from core import convergence_lines
+    >>> convergence_lines("hc", 0.1, 0.6)
+    (True, ['Converges: α > 0 and β > 0.5', '(paper, Theorem 5.2)'])
     """
     if method == "hc":
         if in_convergence_region(alpha, beta):

@@ -26,6 +26,15 @@ except ImportError:  # SciPy without the private kernel
 
 MIN_WORK = 1_000_000  # non-zeros below which one thread is faster
 MIN_BLOCK = 100_000  # elements per thread below which the hand-off costs more than it saves
+
+# Block sizes. Element-wise work goes over its arrays a block at a time: each NumPy call then works on
+# temporaries that stay in the cache (a few MB at most, one block per thread), and a pass over a big
+# mesh needs no full-size temporaries. The wider an element's temporaries, the smaller its block.
+WIDE_BLOCK = 1 << 14  # elements carrying tens of values each (batched fits over a neighbourhood)
+TRIANGLE_BLOCK = 1 << 15  # triangles with their corners' coordinates (a dozen float64 each)
+BLOCK = 1 << 16  # elements carrying a few values each (a normal, a key, a pair of indices)
+VECTOR_BLOCK = 1 << 17  # elements carrying one vector or less (a vertex, a non-zero, a volume term)
+PATTERN_BLOCK = 1 << 20  # integer pattern entries alone
 _pool = None
 _pool_size = 0  # the pool's max_workers, kept here: ThreadPoolExecutor does not expose it
 _pool_lock = threading.Lock()
@@ -66,7 +75,14 @@ def run_all(tasks):
 
 def in_background(task):
     """A Future of ``task()`` run on a thread of its own, beside whatever runs here meanwhile (its
-    NumPy work releases the GIL); with threads off, run now."""
+    NumPy work releases the GIL); with threads off, run now.
+
+    Examples
+    --------
+    >>> import core
+    >>> core.in_background(lambda: 6 * 7).result()
+    42
+    """
     global _background
     if thread_count() == 1:
         future = Future()
@@ -143,7 +159,7 @@ class RowBlocks:
         run_all([lambda block=block: task(block) for block in self.blocks])
 
 
-CHUNK_NONZEROS = 1 << 17  # a chunk's pattern and rows stay in cache for all the coordinates
+CHUNK_NONZEROS = VECTOR_BLOCK  # a chunk's pattern and rows stay in cache for all the coordinates
 
 
 class _Block:

@@ -7,10 +7,9 @@ without neighbours, section 2) are copied through unchanged, so they stay bit-id
 
 ``Smoothing`` declares and checks every argument; ``smooth`` runs it to the end, and ``hc_smooth`` and
 ``laplacian_smooth`` are ``smooth`` with the method fixed. The arguments they share are described
-once, below, and put into each docstring.
+once, in argument_docs, and put into each docstring.
 """
 
-import inspect
 import math
 import warnings
 from collections.abc import Callable, Iterator
@@ -23,7 +22,9 @@ from numpy.typing import ArrayLike
 
 from . import locality, parallel
 from .adjacency import Umbrella, umbrella_operator
+from .argument_docs import documented
 from .convergence import ConvergenceWarning, DivergenceError, convergence_message, divergence_message
+from .geometry import project_within
 from .triangular import triangular_solver
 from .validation import (
     bbox_diagonal,
@@ -40,6 +41,10 @@ from .validation import (
 
 METHODS = ("hc", "plain", "central", "original")
 MODES = ("simultaneous", "sequential")
+# The defaults: inside HC's convergence region (Theorem 5.2: alpha > 0, beta > 0.5), so a run at them
+# settles on a shape of the input's size; the paper's recommended pairing, and the add-on's defaults.
+DEFAULT_ALPHA = 0.1
+DEFAULT_BETA = 0.6
 
 
 class Cancelled(Exception):
@@ -106,91 +111,6 @@ class SmoothOptions(SmoothingOptions, total=False):
     progress: Callable[[int, int], bool | None] | None
 
 
-# The shared arguments, described once: _documented puts each entry where a docstring says {name}.
-_DOCS = {
-    "arrays": """\
-positions : (n, 3) array_like of float32 or float64
-    Vertex positions; never modified. The result has the same shape and dtype.
-edges : (m, 2) array_like of int, or None
-    Vertex pairs, undirected: order, direction and duplicates do not matter, self-loops are
-    ignored. adj(i) is the set of vertices sharing an edge with i. Not read when ``operator`` is
-    given (pass None).""",
-    "numbers": """\
-method : {"hc", "plain", "central", "original"}, default "hc"
-    HC (paper section 4, Algorithm 1) or a Laplacian variant: plain (3.1), with the central
-    point (3.2), with the original point (3.3). See `METHODS`.
-alpha : float in [0, 1], default 0.0
-    Weight of the original point o_i (``"hc"``, ``"original"``) or of the current point q_i
-    (``"central"``); ``"plain"`` does not use it.
-beta : float in [0, 1], default 0.5
-    HC's weight of a vertex's own difference b_i against its neighbours' mean difference
-    (``"hc"`` only).
-iterations : int >= 0
-    How many iterations to run (fewer when ``tolerance`` stops the run).""",
-    "options": """\
-mode : {"simultaneous", "sequential"}, default "simultaneous"
-    ``"simultaneous"`` is the paper's Algorithm 1 (Jacobi). ``"sequential"`` is Gauss–Seidel:
-    vertices in increasing index order, each average using the already-updated positions of its
-    lower-index neighbours (for HC the Laplacian pass; the correction uses the b of the whole pass).
-fixed : (n,) bool mask or array_like of vertex indices, optional
-    Vertices that never move (bit-identical). Vertices without neighbours are fixed too (paper
-    section 2).
-tolerance : float >= 0, default 0.0
-    Stop once the largest move of an iteration is below ``tolerance`` times the bounding-box
-    diagonal of ``positions`` (0: always run ``iterations``).
-original : (n, 3) array_like, optional
-    The paper's original points o when they differ from ``positions`` (a run that goes on from
-    another one's result); default ``positions``.
-operator : Umbrella, optional
-    A prebuilt ``umbrella_operator(edges, n)``, reused across runs; ``edges`` is then not read.
-influence : (n,) array_like of float in [0, 1], optional
-    Per-vertex share of each iteration's move (a painted vertex group): vertex i ends an
-    iteration at q_i + w_i (p_i - q_i). 0 stays bit-identical; 1 (or None) is the paper's step.
-max_deviation : float >= 0, or (n,) ndarray of them, default 0.0
-    The deviation limit: the farthest any vertex may end an iteration from its input position, in
-    the positions' units (every iteration ends with a projection onto that ball); 0: no limit, the
-    paper's algorithm. An array gives each vertex its own distance (0 keeps that vertex in place).""",
-    "progress": """\
-progress : callable, optional
-    ``progress(done, total)`` is called after each iteration; returning False stops the run and
-    raises `Cancelled`.""",
-    "wrapper": """\
-Other Parameters
-----------------
-{options}
-{progress}
-
-Returns
--------
-ndarray
-    The new positions, same shape and dtype as ``positions``.
-
-Raises
-------
-{raises}
-Cancelled
-    ``progress`` returned False.""",
-    "raises": """\
-ValueError
-    Bad input, with a message saying what to fix: wrong shapes, NaN or infinite coordinates,
-    indices out of range, alpha or beta outside [0, 1], negative iterations, an unknown method or
-    mode.
-DivergenceError
-    The run blew up (only possible outside the convergence region); nothing is returned.""",
-}
-
-
-def _documented(thing):
-    """``thing`` with each {name} of its docstring replaced by the entries _DOCS[name]."""
-    if thing.__doc__:  # None under python -OO
-        text = inspect.cleandoc(thing.__doc__)  # Python 3.13 dedents docstrings itself, 3.11 does not
-        for _ in range(2):  # an entry may hold others ("wrapper")
-            for name, entries in _DOCS.items():
-                text = text.replace("{" + name + "}", entries)
-        thing.__doc__ = text
-    return thing
-
-
 def _check_names(options, accepted, function):
     """Raise the TypeError Python raises for a keyword argument that ``function`` does not take: its
     ``**options`` accept the names of the TypedDict ``accepted``."""
@@ -199,14 +119,14 @@ def _check_names(options, accepted, function):
             raise TypeError(f"{function}() got an unexpected keyword argument {name!r}")
 
 
-@_documented
+@documented
 def smooth(
     positions: ArrayLike,
     edges: ArrayLike | None,
     *,
     method: str = "hc",
-    alpha: float = 0.0,
-    beta: float = 0.5,
+    alpha: float = DEFAULT_ALPHA,
+    beta: float = DEFAULT_BETA,
     iterations: int,
     progress: Callable[[int, int], bool | None] | None = None,
     **options: Unpack[SmoothingOptions],
@@ -278,7 +198,7 @@ def smooth(
 BLOW_UP_FACTOR = 10.0
 
 
-@_documented
+@documented
 class Smoothing:
     """One smoothing run, advanced in slices.
 
@@ -337,8 +257,8 @@ class Smoothing:
         edges: ArrayLike | None,
         *,
         method: str = "hc",
-        alpha: float = 0.0,
-        beta: float = 0.5,
+        alpha: float = DEFAULT_ALPHA,
+        beta: float = DEFAULT_BETA,
         iterations: int,
         mode: str = "simultaneous",
         fixed: ArrayLike | None = None,
@@ -358,17 +278,8 @@ class Smoothing:
         start = check_positions(positions)
         max_deviation = check_max_deviation(max_deviation, start.shape[0])
         n = start.shape[0]
-        if original is None or original is positions:
-            origin = start
-        else:
-            origin = check_positions(original, "original")
-            if origin.shape != start.shape:
-                raise ValueError(f"original must have the shape of positions {start.shape}, got {origin.shape}")
-            origin = origin.astype(start.dtype, copy=False)
-        if operator is None:
-            operator = umbrella_operator(edges, n)
-        elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
-            raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
+        origin = start if original is None or original is positions else _checked_original(original, start)
+        operator = _checked_operator(operator, edges, n)
         fixed_mask = check_fixed(fixed, n) | operator.isolated
         weights = check_influence(influence, n)
         if method == "hc" and self.iterations > 0:
@@ -525,16 +436,27 @@ class _Limit:
         self.squared = radius * radius
 
     def apply(self, p, rows=slice(None)):
-        p_rows, start = p[:, rows], self.start[:, rows]
-        away = np.subtract(p_rows, start)
-        squares = np.einsum("ij,ij->j", away, away)
-        per_vertex = isinstance(self.radius, np.ndarray)
-        over = np.flatnonzero(squares > (self.squared[rows] if per_vertex else self.squared))
-        if over.size:
-            radius = self.radius[rows][over] if per_vertex else self.radius
-            scale = (radius / np.sqrt(squares[over])).astype(p.dtype)
-            for k in range(p_rows.shape[0]):
-                p_rows[k, over] = start[k, over] + away[k, over] * scale
+        squared = self.squared[rows] if isinstance(self.radius, np.ndarray) else self.squared
+        radius = self.radius[rows] if isinstance(self.radius, np.ndarray) else self.radius
+        project_within(p[:, rows], self.start[:, rows], radius, squared)
+
+
+def _checked_original(original, start):
+    """The paper's original points o as an array of ``start``'s shape and dtype, or ValueError."""
+    origin = check_positions(original, "original")
+    if origin.shape != start.shape:
+        raise ValueError(f"original must have the shape of positions {start.shape}, got {origin.shape}")
+    return origin.astype(start.dtype, copy=False)
+
+
+def _checked_operator(operator, edges, n):
+    """The umbrella to smooth with: ``operator`` if it is one for ``n`` vertices (else ValueError), or one
+    built from ``edges``."""
+    if operator is None:
+        return umbrella_operator(edges, n)
+    if not isinstance(operator, Umbrella) or operator.n_vertices != n:
+        raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
+    return operator
 
 
 def _box(points):
@@ -555,7 +477,7 @@ def _planar(points, order=None):
     return np.take(points.T, order, axis=1)
 
 
-@_documented
+@documented
 def hc_smooth(
     positions: ArrayLike,
     edges: ArrayLike | None,
@@ -618,7 +540,7 @@ def hc_smooth(
     return smooth(positions, edges, method="hc", alpha=alpha, beta=beta, iterations=iterations, **options).positions
 
 
-@_documented
+@documented
 def laplacian_smooth(
     positions: ArrayLike,
     edges: ArrayLike | None,

@@ -26,7 +26,14 @@ def check_positions(positions, name="positions"):
 
 def nonfinite_rows(array):
     """Indices of the rows holding NaN or inf. A sum is finite unless some entry is not (or it overflows,
-    which the exact check below then clears): one fast pass for the common, clean case."""
+    which the exact check below then clears): one fast pass for the common, clean case.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> core.nonfinite_rows(np.array([[0.0, 0, 0], [np.nan, 0, 0]])).tolist()
+    [1]
+    """
     with np.errstate(over="ignore", invalid="ignore"):  # huge finite coordinates may overflow the sum
         total = array.sum(dtype=np.float64)
     if np.isfinite(total):

@@ -194,8 +194,8 @@ def main():
         rows.append((name, obj, iterations_of(said[0]), seconds))
     print()
 
-    triangles = core.metrics.fan_triangles(faces)
-    clean_volume = core.metrics.enclosed_volume(clean, triangles)
+    triangles = core.geometry.fan_triangles(faces)
+    clean_volume = core.mesh.metrics.enclosed_volume(clean, triangles)
     table = []
     for name, obj, iterations, seconds in rows:
         points = scene_setup.positions(obj.data)
@@ -210,7 +210,7 @@ def main():
                 "iterations": iterations,
                 "seconds": seconds,
                 "change": change,
-                "vs_clean": core.metrics.enclosed_volume(points.astype(np.float64), triangles) / clean_volume - 1,
+                "vs_clean": core.mesh.metrics.enclosed_volume(points.astype(np.float64), triangles) / clean_volume - 1,
                 "distances": distances(signed, diagonal),
             }
         )

@@ -48,7 +48,7 @@ def smooth(path):
 
 def _crease_keys(points, faces, degrees=25.0):
     """Keys (low * n + high) of the edges whose two triangles meet at more than ``degrees``."""
-    from core import sharp_edges
+    from core.mesh import sharp_edges
 
     pairs = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
     keys = pairs[:, 0] * len(points) + pairs[:, 1]
@@ -71,7 +71,7 @@ def render(arrays, output, samples):
     diagonal = float(np.linalg.norm(clean.max(axis=0) - clean.min(axis=0)))
     layout = (np.arange(len(faces) + 1) * 3, faces.ravel())
     surface = scene_setup.CleanSurface(clean, layout)
-    clean_volume = core.metrics.enclosed_volume(clean, faces)
+    clean_volume = core.mesh.metrics.enclosed_volume(clean, faces)
     creases = _crease_keys(clean, faces)
     panels = []
     titles = (
@@ -92,7 +92,7 @@ def render(arrays, output, samples):
         mesh.attributes.new("sharp_edge", "BOOLEAN", "EDGE").data.foreach_set("value", sharp)
         signed = surface.signed_distance(points)
         scene_setup.set_point_attribute(obj, scene_setup.ERROR_ATTRIBUTE, 100 * signed / diagonal)
-        volume = core.metrics.enclosed_volume(points, faces) / clean_volume - 1
+        volume = core.mesh.metrics.enclosed_volume(points, faces) / clean_volume - 1
         rms = 100 * float(np.sqrt(np.mean(signed**2))) / diagonal
         label = f"{title}\nvolume {100 * volume:+.2f} %\nRMS distance {rms:.3f} %"
         panels.append((obj, label))

@@ -269,7 +269,7 @@ def meshes(peer_python):
     """(arrays, titles): the clean, noisy and smoothed positions with the triangles and UVs, and each panel's
     (key, label), the label with the texture shift, which is also printed."""
     import core
-    from core.volume import vertex_normals
+    from core.geometry import vertex_normals
 
     clean, triangles, uvs = clean_suzanne()
     diagonal = float(np.linalg.norm(clean.max(axis=0) - clean.min(axis=0)))

@@ -31,7 +31,7 @@ is the central step with a per-vertex weight (see build()); the Repeat zone mixe
 some vertex has λ < 1, so without a painted group it evaluates the unweighted step alone.
 
 The Deviation Limit r is core's max_deviation= in world space, as the operators take it (they run core on the
-world-space shape, core.world): every iteration ends with p = o + d min(1, r / |L d|), d = p - o, L the 3x3
+world-space shape, core.mesh.world): every iteration ends with p = o + d min(1, r / |L d|), d = p - o, L the 3x3
 part of the object's world matrix (Object Info on the Self Object), after the influence (0 = no limit). The
 steps themselves are linear in the positions, so they are the same in object and world space. Plain and
 central Laplacian then run in the Repeat zone too (one Blur node cannot stop after each iteration); without a
@@ -54,12 +54,16 @@ Warnings panel (the Warning node, Blender 4.3 and later; on 4.2 the pass-through
 import bpy
 
 from .. import settings_spec
-from ..core.smoothing import BLOW_UP_FACTOR
+from ..core import BLOW_UP_FACTOR
 
 GROUP_NAME = "HC Smooth"
 # Bump whenever the nodes or the interface change: an older group in a file is then rebuilt in place.
-VERSION = 5
+VERSION = 6
 DEVIATION_ATTRIBUTE = "hc_deviation"  # the Deviation Map's output, as the mesh operators store it
+NAME_TAKEN = (
+    f"Deviation Map not stored: the mesh already has an attribute '{DEVIATION_ATTRIBUTE}' (yours, a UV map or "
+    "vertex group of that name, or an earlier map); rename or remove it"
+)
 VERSION_KEY = "hc_smooth_version"
 
 # Blur weight standing in for "only the neighbours" (plain Laplacian): the centre's own share is
@@ -458,14 +462,20 @@ def _start_of_map(t, geometry, on, transform):
 
 def _deviation_map(t, geometry, on, start_position, start_normal, transform):
     """``geometry`` with, where ``on``, the point attribute hc_deviation: the world-space move (position - start
-    through ``transform``) along the world-space start normal."""
+    through ``transform``) along the world-space start normal. Where the mesh already has an attribute of that
+    name (the user's of any type or domain, a UV map or a vertex group, or an earlier map) nothing is stored
+    and the Warnings panel says why: what the user made is never overwritten."""
+    named = t.node("GeometryNodeInputNamedAttribute", data_type="FLOAT")
+    named.inputs["Name"].default_value = DEVIATION_ATTRIBUTE
+    taken = t.math("GREATER_THAN", t.statistic(geometry, named.outputs["Exists"], "Max"), 0.5)
+    kept = t.warning(t.boolean("AND", on, taken), NAME_TAKEN, "WARNING")
     moved = t.world(t.subtract(t.position(), start_position), transform)
     deviation = t.node_output("ShaderNodeVectorMath", "Value", operation="DOT_PRODUCT", inputs=[moved, start_normal])
     store = t.node("GeometryNodeStoreNamedAttribute", data_type="FLOAT", domain="POINT")
     t.feed(store.inputs["Geometry"], geometry)
     store.inputs["Name"].default_value = DEVIATION_ATTRIBUTE
     t.feed(store.inputs["Value"], deviation)
-    return t.switch("GEOMETRY", on, geometry, store.outputs["Geometry"])
+    return t.switch("GEOMETRY", t.boolean("AND", on, t.boolean("NOT", kept)), geometry, store.outputs["Geometry"])
 
 
 def _checked_inputs(t, value, is_hc):

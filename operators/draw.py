@@ -8,15 +8,16 @@ Plain drawing on a layout, without bpy: the operators' redo panels and ui/panel.
 """
 
 from .. import settings_spec
-from ..core.convergence import convergence_lines
+from ..core import convergence_lines
 from ..settings_spec import values_of
 
 CORE_METHOD = {choice.identifier: choice.core for choice in settings_spec.METHOD.items}
 
 
-def draw_settings(layout, props, settings, obj=None, shown=None):
+def draw_settings(layout, props, settings, obj=None, shown=None, given=()):
     """Draw ``shown`` (default: all of ``settings``, the declarations ``props`` holds) in declaration order.
-    ``obj``: the object whose vertex groups a group name is picked from (None or not a mesh: a plain field)."""
+    ``obj``: the object whose vertex groups a group name is picked from (None or not a mesh: a plain field).
+    ``given``: the names the caller set (a redo panel's operator), which the ``active`` rules read."""
     values = values_of(props, settings)
     inverts = {setting.invert for setting in settings if setting.invert}
     for setting in settings if shown is None else shown:
@@ -24,7 +25,7 @@ def draw_settings(layout, props, settings, obj=None, shown=None):
             continue  # drawn beside its group
         row = layout.row(align=bool(setting.invert))
         if setting.active is not None:
-            row.active = setting.active(values)  # greyed, still editable: it applies once the rule holds
+            row.active = setting.active(values, given)  # greyed, still editable: it applies once the rule holds
         if setting.invert:
             _draw_group(row, props, obj, setting)
         elif setting.text is not None:
@@ -57,23 +58,24 @@ def draw_convergence(layout, method, alpha, beta, always=False):
         column.label(text=line, icon=icon)
 
 
-def draw_mesh_convergence(layout, props, always=False):
+def draw_mesh_convergence(layout, props, always=False, given=()):
     """The convergence lines of mesh settings. In a redo panel (not ``always``) only HC's warning: the
-    Laplacian variants shrink by design."""
+    Laplacian variants shrink by design. ``given``: the names the caller set."""
     values = values_of(props, settings_spec.MESH)
     if values["keep_sharp_edges"] or (values["method"] != "HC" and not always):
         return  # Keep Sharp Edges is not HC's umbrella step: Theorem 5.2 says nothing about it
     # The automatic amount runs alpha 0 for the few iterations it chooses (no drift): only beta can warn.
-    alpha = 1.0 if settings_spec.automatic(values) else values["alpha"]
+    alpha = 1.0 if settings_spec.automatic(values, given) else values["alpha"]
     draw_convergence(layout, values["method"], alpha, values["beta"], always)
 
 
-def modifier_differences(settings):
-    """Why a smoothing with these mesh settings is not what the modifier gives: short lines, none if it is."""
+def modifier_differences(settings, given=()):
+    """Why a smoothing with these mesh settings (``given``: the names the caller set) is not what the modifier
+    gives: short lines, none if it is."""
     lines = []
     if settings.keep_sharp_edges:
         lines.append("The modifier has no Keep Sharp Edges: it runs the method")
-    if settings_spec.automatic(values_of(settings, settings_spec.MESH)):
+    if settings_spec.automatic(values_of(settings, settings_spec.MESH), given):
         lines.append("The modifier takes Alpha, Iterations and Deviation Limit as set")
     if settings.iterations > settings_spec.MODIFIER_MAX_ITERATIONS:
         lines.append(f"The modifier runs at most {settings_spec.MODIFIER_MAX_ITERATIONS} iterations")

@@ -9,6 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..jobs.mesh import DEVIATION_ATTRIBUTE, DEVIATION_COLOR_ATTRIBUTE
+
 
 def read_positions(data):
     """Positions (n, 3) float32 through the position attribute (the fast path) of a mesh or point cloud."""
@@ -53,7 +55,7 @@ def read_corners(mesh):
 
 
 def read_faces(mesh, corner_verts=None):
-    """Faces as core.metrics.fan_triangles takes them, None without faces: the (f, 3) corner vertices of
+    """Faces as core.fan_triangles takes them, None without faces: the (f, 3) corner vertices of
     an all-triangle mesh, else (offsets, corner_verts).
 
     Face offsets come only through the polygons' RNA (~0.1 s per million faces); a mesh with three
@@ -69,8 +71,6 @@ def read_faces(mesh, corner_verts=None):
     return np.append(starts, corner_verts.size), corner_verts
 
 
-DEVIATION_ATTRIBUTE = "hc_deviation"  # the deviation map: float, on points
-DEVIATION_COLOR_ATTRIBUTE = "hc_deviation_color"  # its colours: float colour, on points
 _MAP_TYPES = {DEVIATION_ATTRIBUTE: "FLOAT", DEVIATION_COLOR_ATTRIBUTE: "FLOAT_COLOR"}
 
 
@@ -80,7 +80,9 @@ class DeviationNames:
 
     value: str  # the float point attribute of the map
     color: str  # its colours, a float colour point attribute
-    render: bool  # also the colours renders and exporters use: the mesh has no colour attributes of its own
+    # The mesh has no colour attributes of its own: the map's colours become the active ones (what Solid shading's
+    # Attribute colour shows) and the render colours (what renders and exporters use). Else the user's choice stays.
+    shown: bool
 
     @property
     def usual(self):
@@ -97,7 +99,7 @@ def deviation_names(obj):
     groups = {group.name for group in obj.vertex_groups}
     value, color = (_map_name(mesh, groups, base) for base in (DEVIATION_ATTRIBUTE, DEVIATION_COLOR_ATTRIBUTE))
     own = [attribute for attribute in mesh.color_attributes if _map_base(attribute) is None]
-    return DeviationNames(value, color, render=not own)
+    return DeviationNames(value, color, shown=not own)
 
 
 def _map_name(mesh, groups, base):
@@ -128,16 +130,16 @@ def _map_base(attribute):
 
 
 def write_deviation(mesh, names, deviation, colors):
-    """Store a deviation map as the point attributes ``names`` (a DeviationNames of this mesh) and make its
-    colours the active colour attribute (what Solid shading's Attribute colour shows), and the render colour
-    where ``names.render``. ``colors``: linear RGBA (n, 4), written through the float colour's fast path (the
-    sRGB one converts per value: ~50 times slower)."""
+    """Store a deviation map as the point attributes ``names`` (a DeviationNames of this mesh); on a mesh
+    without colours of its own (``names.shown``) its colours become the active and the render colours, else the
+    user's choice of both stays as it was. ``colors``: linear RGBA (n, 4), written through the float colour's
+    fast path (the sRGB one converts per value: ~50 times slower)."""
     values = _attribute(mesh, names.value, "FLOAT")
     values.data.foreach_set("value", np.ascontiguousarray(deviation, np.float32))
     color = _attribute(mesh, names.color, "FLOAT_COLOR")
     color.data.foreach_set("color", np.ascontiguousarray(colors, np.float32).ravel())
-    mesh.color_attributes.active_color_name = names.color
-    if names.render:
+    if names.shown:
+        mesh.color_attributes.active_color_name = names.color  # what Solid shading's Attribute colour shows
         mesh.color_attributes.default_color_name = names.color  # the one renders and exports use
 
 

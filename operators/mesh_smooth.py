@@ -1,20 +1,20 @@
 """The mesh operators: object.hc_smooth (Object mode) and mesh.hc_smooth (Edit mode).
 
-Thin: read every mesh into a Job (jobs.py), run the core, write back. execute() depends only on the
-operator's properties and the mesh, so the redo panel (F9) can re-run it; invoke() runs long work as
+Thin: read every mesh into a Job (mesh_objects.py), run it (jobs.mesh), write back. execute() depends only
+on the operator's properties and the mesh, so the redo panel (F9) can re-run it; invoke() runs long work as
 a modal timer with progress in the status bar and Esc to cancel (nothing is written until the end).
 """
 
 import bpy
 
 from .. import core, settings_spec
-from . import jobs as jobs_module
-from . import mesh_io
+from ..jobs import mesh as mesh_jobs
+from . import mesh_io, mesh_objects
 from .draw import draw_mesh_convergence, draw_settings
 from .modal_progress import ModalProgress
 from .modifier import draw_add_as_modifier
 from .objects import InputError, unique_data
-from .properties import annotations
+from .properties import annotations, set_by_caller
 
 # Above this many vertex-iterations, an interactive run becomes modal (progress, Esc cancels).
 MODAL_WORK = 5_000_000
@@ -29,11 +29,12 @@ class SmoothProperties:
     def draw(self, context):
         layout = self.layout
         layout.use_property_split = True
-        draw_settings(layout, self, settings_spec.MESH, context.active_object)
-        draw_mesh_convergence(layout, self)
+        given = set_by_caller(self, settings_spec.CHOSEN)  # Alpha or Iterations set: every number as set
+        draw_settings(layout, self, settings_spec.MESH, context.active_object, given=given)
+        draw_mesh_convergence(layout, self, given=given)
         # Object mode only: Edit mode's selection (the vertices to smooth) has no equivalent in a modifier.
         if self.bl_idname == OBJECT_OT_hc_smooth.bl_idname:
-            draw_add_as_modifier(layout, self)
+            draw_add_as_modifier(layout, self, given)
 
 
 class _SmoothOperator(SmoothProperties, ModalProgress):
@@ -46,23 +47,23 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
 
     def finish(self, context, jobs):
         """Write every result (the subclasses wrap this with what their mode needs)."""
-        jobs_module.write_all(jobs, self._settings)
-        if self._settings.deviation_map:
-            show_attribute_colors(context)
+        mesh_objects.write_all(jobs, self._settings)
+        if self._settings.deviation_map and any(job.map_names.shown for job in jobs):
+            show_attribute_colors(context)  # a map made the active colours: show them
 
     def _report_done(self, jobs):
-        self.report({"INFO"}, jobs_module.summary(jobs, self._settings, scene_length(bpy.context.scene)))
-        message = jobs_module.convergence_warning(jobs)
+        self.report({"INFO"}, mesh_jobs.summary(jobs, self._settings, scene_length(bpy.context.scene)))
+        message = mesh_jobs.convergence_warning(jobs)
         if message:
             self.report({"WARNING"}, message)
 
     def _given(self):
         """The numbers the caller set (used as given)."""
-        return frozenset(name for name in settings_spec.CHOSEN if self.properties.is_property_set(name))
+        return set_by_caller(self, settings_spec.CHOSEN)
 
     def _run(self, jobs, chunk=None):
         """The run's generator, on the settings' snapshot and with the numbers the caller set."""
-        return jobs_module.run(jobs, self._settings, chunk=chunk, given=self._given())
+        return mesh_jobs.run(jobs, self._settings, chunk=chunk, given=self._given())
 
     def execute(self, context):
         self._settings = settings_spec.MeshSettings.of(self)  # what prepare, run, write and report read
@@ -101,7 +102,7 @@ class _SmoothOperator(SmoothProperties, ModalProgress):
             return {"CANCELLED"}
         vertices = sum(len(job.positions) for job in self._jobs)
         automatic = settings_spec.automatic(settings_spec.values_of(self._settings, settings_spec.MESH), self._given())
-        iterations = core.mesh_amount.MAX_ITERATIONS if automatic else self.iterations
+        iterations = core.MAX_ITERATIONS if automatic else self.iterations
         if vertices * iterations < MODAL_WORK:
             return self._run_now(context, self._jobs)
         return self.start_modal(context, self._run(self._jobs, chunk=max(1, MODAL_WORK // max(1, vertices))))
@@ -130,7 +131,7 @@ class OBJECT_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
         if not objects:
             others = ", ".join(sorted({obj.type.lower() for obj in context.selected_objects}))
             raise InputError("Select at least one mesh object" + (f" (selected: {others})" if others else ""))
-        return [jobs_module.make_job(obj, self._settings) for obj in unique_data(objects, first=context.active_object)]
+        return [mesh_objects.make_job(obj, self._settings) for obj in unique_data(objects, first=context.active_object)]
 
 
 class MESH_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
@@ -156,7 +157,7 @@ class MESH_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
             hidden = mesh_io.read_bool_attribute(mesh, ".hide_vert")
             if not (selected & ~hidden).any():
                 continue
-            jobs.append(jobs_module.make_job(obj, self._settings, extra_fixed=~selected | hidden))
+            jobs.append(mesh_objects.make_job(obj, self._settings, extra_fixed=~selected | hidden))
         if not jobs:
             raise InputError("Select some visible vertices to smooth")
         return jobs
@@ -165,7 +166,7 @@ class MESH_OT_hc_smooth(_SmoothOperator, bpy.types.Operator):
         try:
             super().finish(context, jobs)
             for job in jobs:
-                jobs_module.release(job)
+                mesh_jobs.release(job)
         finally:
             bpy.ops.object.mode_set(mode="EDIT")
 

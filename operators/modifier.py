@@ -53,11 +53,12 @@ def copy_settings(source, properties):
         setattr(properties, setting.name, getattr(source, setting.name))
 
 
-def draw_add_as_modifier(layout, smoothing):
-    """In object.hc_smooth's redo panel: replace the smoothing just made by the modifier, same settings."""
+def draw_add_as_modifier(layout, smoothing, given=()):
+    """In object.hc_smooth's redo panel: replace the smoothing just made by the modifier, same settings.
+    ``given``: the names its caller set."""
     layout.separator()
     column = layout.column(align=True)
-    for line in modifier_differences(smoothing):
+    for line in modifier_differences(smoothing, given):
         column.label(text=line, icon="INFO")
     button = column.operator(
         OBJECT_OT_hc_smooth_modifier_add.bl_idname, text="Add as Modifier Instead", icon="MODIFIER"

@@ -6,11 +6,8 @@ that keeps relative shape keys in step.
 """
 
 from .. import core
+from ..jobs import InputError
 from . import mesh_io
-
-
-class InputError(Exception):
-    """A message for the user about an object or the settings; nothing has been written."""
 
 
 def check_editable(obj):
@@ -47,7 +44,7 @@ def read_positions(obj, noun=("vertex", "vertices")):
     ``noun``: what the message calls one and several of them."""
     key_block = active_key(obj)
     positions = mesh_io.read_shape_key(key_block) if key_block is not None else mesh_io.read_positions(obj.data)
-    bad = core.validation.nonfinite_rows(positions)
+    bad = core.nonfinite_rows(positions)
     if bad.size:
         raise InputError(
             f"Object '{obj.name}' has {bad.size} {noun[bad.size != 1]} with NaN or infinite coordinates "
@@ -57,10 +54,10 @@ def read_positions(obj, noun=("vertex", "vertices")):
 
 
 def world_frame(obj):
-    """The stretch that takes ``obj``'s coordinates to its world-space shape (core.world.frame), None where its
+    """The stretch that takes ``obj``'s coordinates to its world-space shape (core.world_frame), None where its
     transform keeps lengths; InputError for a transform that flattens it."""
     try:
-        return core.world.frame(obj.matrix_world)
+        return core.world_frame(obj.matrix_world)
     except ValueError as error:
         raise InputError(f"Object '{obj.name}': {error}") from None
 

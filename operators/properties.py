@@ -26,6 +26,18 @@ def bpy_property(setting):
     return PROPERTY[setting.kind](**options)
 
 
+def set_by_caller(props, names):
+    """The names among ``names`` that the caller of an operator set (a script's arguments, a button's, an edit
+    in the redo panel): what the Automatic Amount's rule reads as given (settings_spec.automatic). Values
+    Blender brings back from an operator's last run ("ghost" values) are not: is_property_set leaves them out.
+    A snapshot without Blender's properties (settings_spec.MeshSettings) has none."""
+    properties = getattr(props, "properties", None)
+    if properties is None:
+        return frozenset()
+    declared = properties.bl_rna.properties
+    return frozenset(name for name in names if name in declared and properties.is_property_set(name))
+
+
 def annotations(settings):
     """{identifier: property} for a class body's ``__annotations__`` (Blender registers those)."""
     return {setting.name: bpy_property(setting) for setting in settings}

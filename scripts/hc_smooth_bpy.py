@@ -13,18 +13,21 @@ Run it with a Python that has the `bpy` module (and, for the plain zip of `make 
                                             with HC Smooth enabled; the script reads ARGS after `--`
 
 Blender user folder (where the extension is installed; Blender's BLENDER_USER_RESOURCES), first of:
-  --user-folder DIR                         before the subcommand
+  --user-folder DIR                         anywhere before a `--`
   $BLENDER_USER_RESOURCES
   $XDG_DATA_HOME/hc_smooth/bpy-X.Y          (~/.local/share/..., %LOCALAPPDATA%\\hc_smooth\\bpy-X.Y on Windows;
                                             X.Y: the bpy version) -- never Blender's own ~/.config/blender
                                             unless you name it with --user-folder
 
 Exit status: the command's (0 all smoothed, 1 a file failed, 2 usage), the script's `sys.exit` code
-(1 when it raises), 1 when HC Smooth is not installed in the user folder, 2 for a bad command line.
-This file needs only `bpy`: copy it wherever a pipeline needs it.
+(1 when it raises), 1 when HC Smooth is not installed in the user folder or this Python has no `bpy`,
+2 for a bad command line. A bad command line or a missing `bpy` changes nothing (no user folder made).
+This file needs only `bpy`: copy it wherever a pipeline needs it. PLY, OBJ and STL files smooth without
+Blender too: `python scripts/hc_smooth_files.py` (docs/command_line.md).
 """
 
 import contextlib
+import importlib.util
 import os
 import pathlib
 import sys
@@ -53,17 +56,48 @@ class UsageError(Exception):
 
 
 def parse(argv):
-    """(user folder or None, subcommand, its arguments)."""
-    folder = None
-    if argv[:1] == ["--user-folder"]:
-        if len(argv) < 2:
-            raise UsageError("--user-folder needs a folder")
-        folder, argv = argv[1], argv[2:]
-    elif argv[:1] and argv[0].startswith("--user-folder="):
-        folder, argv = argv[0].split("=", 1)[1], argv[1:]
-    if not argv or argv[0] not in ("install", "hc_smooth", "run"):
+    """(user folder or None, subcommand, its arguments), the subcommand's arguments checked (``check``)."""
+    end = argv.index("--") if "--" in argv else len(argv)  # what follows `--` is the script's
+    folders, rest, index = [], [], 0
+    while index < end:
+        word = argv[index]
+        if word == "--user-folder":
+            if index + 1 >= end:
+                raise UsageError("--user-folder needs a folder")
+            folders.append(argv[index + 1])
+            index += 2
+            continue
+        if word.startswith("--user-folder="):
+            folders.append(word.split("=", 1)[1])
+        else:
+            rest.append(word)
+        index += 1
+    if len(folders) > 1:
+        raise UsageError("give --user-folder once")
+    rest += argv[end:]
+    if not rest or rest[0] not in ("install", "hc_smooth", "run"):
         raise UsageError("give a subcommand: install, hc_smooth or run")
-    return folder, argv[0], argv[1:]
+    check(rest[0], rest[1:])
+    return (folders[0] if folders else None), rest[0], rest[1:]
+
+
+def check(subcommand, args):
+    """Raise UsageError for arguments ``subcommand`` cannot take (before anything is made or imported)."""
+    if subcommand == "install":
+        if len(args) != 1 or not args[0].endswith(".zip"):
+            given = f" (given: {' '.join(args)})" if args else ""
+            raise UsageError(f"install takes one extension zip: install [--user-folder DIR] ZIP{given}")
+        if not os.path.isfile(args[0]):
+            raise UsageError(f"{args[0]} does not exist (build it with `make build` or `make dist`)")
+    elif subcommand == "run":
+        rest = list(args)
+        blend = rest.pop(0) if rest and rest[0].endswith(".blend") else None
+        if not rest or rest[0] == "--" or (len(rest) > 1 and rest[1] != "--"):
+            raise UsageError("usage: run [FILE.blend] SCRIPT.py [-- ARGS...]")
+        if not os.path.isfile(rest[0]):
+            raise UsageError(f"no script {rest[0]}")
+        if blend is not None and not os.path.isfile(blend):
+            raise UsageError(f"no file {blend}")
 
 
 def installed_module(bpy):
@@ -114,11 +148,7 @@ def silenced():
 
 
 def install(bpy, args):
-    if len(args) != 1 or not args[0].endswith(".zip"):
-        raise UsageError("install takes one extension zip")
     zip_path = os.path.abspath(args[0])
-    if not os.path.isfile(zip_path):
-        raise UsageError(f"{args[0]} does not exist (build it with `make build` or `make dist`)")
     result = bpy.ops.extensions.package_install_files(filepath=zip_path, repo="user_default", enable_on_install=True)
     module = f"bl_ext.user_default.{ADDON}"
     if result != {"FINISHED"} or module not in bpy.context.preferences.addons:
@@ -133,13 +163,7 @@ def command(bpy, args):
 
 def run(bpy, args):
     blend = args.pop(0) if args and args[0].endswith(".blend") else None
-    if not args or args[0] == "--" or (len(args) > 1 and args[1] != "--"):
-        raise UsageError("usage: run [FILE.blend] SCRIPT.py [-- ARGS...]")
-    script = args[0]
-    if not os.path.isfile(script):
-        raise UsageError(f"no script {script}")
-    if blend is not None and not os.path.isfile(blend):
-        raise UsageError(f"no file {blend}")
+    script = args[0]  # checked by ``check``
     enable(bpy)
     if blend is not None:
         bpy.ops.wm.open_mainfile(filepath=os.path.abspath(blend))
@@ -160,10 +184,52 @@ def main(argv):
     except UsageError as error:
         print(f"{__doc__}\nhc_smooth_bpy: {error}", file=sys.stderr)
         return 2
-    # Blender reads its user folder once, when bpy is imported.
-    folder = folder or os.environ.get("BLENDER_USER_RESOURCES") or default_user_folder()
+    if importlib.util.find_spec("bpy") is None:
+        print(
+            f"hc_smooth_bpy: this Python ({sys.executable}) has no bpy module: install Blender's "
+            "(python -m pip install bpy: bpy 4.5 needs Python 3.11, bpy 5.2 Python 3.13), or smooth PLY, "
+            "OBJ and STL files without Blender: python scripts/hc_smooth_files.py INPUT... -o OUTDIR",
+            file=sys.stderr,
+        )
+        return 1
+    # Blender reads its user folder once, when bpy is imported; an install makes it, and removes what it
+    # made if the install fails.
+    folder = os.path.abspath(folder or os.environ.get("BLENDER_USER_RESOURCES") or default_user_folder())
+    os.environ["BLENDER_USER_RESOURCES"] = folder
+    made = made_folders(folder) if subcommand == "install" else []
+    try:
+        status = dispatch(subcommand, args)
+    except BaseException:
+        remove_made(made)
+        raise
+    if status:
+        remove_made(made)
+    return status
+
+
+def made_folders(folder):
+    """Make ``folder`` (and missing parents); returns those it made, deepest first."""
+    made, path = [], folder
+    while not os.path.isdir(path) and os.path.dirname(path) != path:
+        made.append(path)
+        path = os.path.dirname(path)
     pathlib.Path(folder).mkdir(parents=True, exist_ok=True)
-    os.environ["BLENDER_USER_RESOURCES"] = os.path.abspath(folder)
+    return made
+
+
+def remove_made(made):
+    """Remove the folders ``made_folders`` made, with what a failed install left in them."""
+    import shutil
+
+    if made:
+        shutil.rmtree(made[0], ignore_errors=True)
+    for path in made[1:]:
+        with contextlib.suppress(OSError):
+            os.rmdir(path)  # only if empty: something else may have landed there meanwhile
+
+
+def dispatch(subcommand, args):
+    """Run ``subcommand`` with bpy; returns the exit status."""
     import bpy
 
     try:

@@ -31,12 +31,13 @@ make_env() {  # make_env NAME PYTHON_VERSION REQUIREMENTS...
     "$dir/bin/python" -m pip install --quiet --no-cache-dir --upgrade pip 2>&1 | grep -v "is ignored: it is neither" || true
     "$dir/bin/python" -m pip install --quiet --no-cache-dir "$@" 2>&1 | grep -v "is ignored: it is neither" || true
     if [ "$name" != lint ]; then
-        "$dir/bin/python" -c "import bpy, numpy, scipy, pytest, hypothesis"  # fail here, not in the tests
+        "$dir/bin/python" -c "import bpy, numpy, scipy, pytest, hypothesis, distributed"  # fail here, not in the tests
     fi
     echo "$stamp" > "$dir/.stamp"
 }
 
-TEST_TOOLS=(pytest==9.* hypothesis==6.*)
+# dask[distributed]: the batches of --jobs and --scheduler (cli/batch.py) and their tests.
+TEST_TOOLS=(pytest==9.* hypothesis==6.* "dask[distributed]==2026.8.*")
 [ $# -gt 0 ] || set -- bpy45 bpy52
 for name in "$@"; do
     case $name in

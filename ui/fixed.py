@@ -1,6 +1,6 @@
 """Which vertices the operator will keep fixed, counted for the panel.
 
-The count comes from the operator's own reader (operators.jobs.make_job), so the panel and the run
+The count comes from the operator's own reader (operators.mesh_objects.make_job), so the panel and the run
 agree by construction, including the reasons a run would refuse (missing group, no edges, NaN...).
 Counting reads the whole mesh as a run would, which draw() must not repeat: counts are cached per
 mesh state, filled automatically for small meshes and by a button for large ones, and dropped
@@ -11,7 +11,8 @@ import bmesh
 import bpy
 import numpy as np
 
-from ..operators import jobs, objects
+from ..jobs import mesh as mesh_jobs
+from ..operators import mesh_objects, objects
 
 # Meshes up to this size are counted on first draw; larger ones when the user presses the button.
 AUTO_COUNT_LIMIT = 100_000
@@ -43,11 +44,11 @@ def count(obj, settings):
     """Count the fixed vertices of ``obj`` (Object mode data) as the operator would, and cache it."""
     key = _key(obj, settings)
     try:
-        job = jobs.make_job(obj, settings)
+        job = mesh_objects.make_job(obj, settings)
     except objects.InputError as error:
         _counts[key] = str(error)
         return _counts[key]
-    still = jobs.make_smoother(job, jobs.core_options(settings)).still()  # the run's own rules
+    still = mesh_jobs.make_smoother(job, mesh_jobs.core_options(settings)).still()  # the run's own rules
     _counts[key] = (int(np.count_nonzero(still)), len(job.positions))
     return _counts[key]
 

@@ -23,16 +23,11 @@ class HCSmoothSettings(bpy.types.PropertyGroup):
         """Set these settings on an operator's properties (a button's OperatorProperties). What the
         operator takes as set it uses as given, so with the Automatic Amount on, the settings it chooses
         are passed only where the user changed them, and Alpha and Iterations (greyed out) never."""
-        automatic = settings_spec.automatic(settings_spec.values_of(self, settings_spec.MESH))
+        changed = [name for name in settings_spec.CHOSEN if self.is_property_set(name)]
+        passed = settings_spec.passed_by_panel(settings_spec.values_of(self, settings_spec.MESH), changed)
         for name in names:
-            chosen = name in settings_spec.CHOSEN
-            if (
-                automatic
-                and chosen
-                and (name in settings_spec.SWITCHES_OFF_THE_AMOUNT or not self.is_property_set(name))
-            ):
-                continue
-            setattr(properties, name, getattr(self, name))
+            if name in passed:
+                setattr(properties, name, getattr(self, name))
 
 
 classes = (HCSmoothSettings,)

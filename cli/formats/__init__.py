@@ -11,6 +11,7 @@ import os
 
 import numpy as np
 
+from ... import core
 from . import normals as normal_maths
 from .obj import ObjFile
 from .ply import PlyFile
@@ -240,11 +241,7 @@ def _obj_bytes(positions, corners, sizes, normals):
 
 
 def _stl_bytes(positions, corners, sizes):
-    starts = starts_of(sizes)
-    # Fans: corner 0 with each pair of neighbouring corners.
-    first = np.repeat(starts, sizes - 2)
-    step = np.arange(int((sizes - 2).sum())) - np.repeat(np.cumsum(sizes - 2) - (sizes - 2), sizes - 2)
-    triangles = np.stack([corners[first], corners[first + step + 1], corners[first + step + 2]], axis=1)
+    triangles = core.fan_triangles((np.append(starts_of(sizes), len(corners)), corners))
     records = np.zeros(len(triangles), dtype=RECORD)
     records["corners"] = positions[triangles]
     flat = np.arange(3 * len(triangles))

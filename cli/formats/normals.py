@@ -4,10 +4,12 @@ A stored normal is the sum, over the face corners that use it, of the corner's f
 the corner's angle, normalised: for a vertex normal (PLY nx/ny/nz, an OBJ `vn` used by every corner of
 a vertex) that is Blender's vertex normal; for an OBJ `vn` used by one face (flat shading) it is that
 face's normal; for a `vn` shared by the faces of one smooth group it is the group's normal at that
-vertex. Polygons take Newell's normal, as Blender does.
+vertex. A polygon's normal is its vector area's direction (Newell's normal), as Blender's is.
 """
 
 import numpy as np
+
+from ... import core
 
 
 def corner_neighbours(starts, sizes):
@@ -22,24 +24,14 @@ def corner_neighbours(starts, sizes):
 
 
 def face_normals(positions, corners, starts, sizes):
-    """Unit normal of each face (Newell's method); (0, 0, 0) for a face without area."""
-    following, _ = corner_neighbours(starts, sizes)
-    here, there = positions[corners], positions[corners[following]]
-    terms = np.stack(
-        [
-            (here[:, 1] - there[:, 1]) * (here[:, 2] + there[:, 2]),
-            (here[:, 2] - there[:, 2]) * (here[:, 0] + there[:, 0]),
-            (here[:, 0] - there[:, 0]) * (here[:, 1] + there[:, 1]),
-        ],
-        axis=1,
-    )
-    sums = np.add.reduceat(terms, starts, axis=0) if len(starts) else np.zeros((0, 3))
-    return unit(sums)
-
-
-def unit(vectors):
-    length = np.linalg.norm(vectors, axis=1, keepdims=True)
-    return np.divide(vectors, length, out=np.zeros_like(vectors), where=length > 0)
+    """Unit normal of each face; (0, 0, 0) for a face without area. A polygon's is the sum of its fan's
+    triangle vectors (its vector area, which Newell's method gives), normalised."""
+    if not len(starts):
+        return np.zeros((0, 3))
+    offsets = np.append(starts, len(corners))
+    vectors = core.face_vectors(positions, core.fan_triangles((offsets, corners)))
+    fans = sizes - 2  # triangles per face
+    return core.unit_rows(np.add.reduceat(vectors, np.cumsum(fans) - fans, axis=0))
 
 
 def corner_vectors(positions, corners, starts, sizes):
@@ -48,8 +40,8 @@ def corner_vectors(positions, corners, starts, sizes):
     following, preceding = corner_neighbours(starts, sizes)
     faces = face_normals(positions, corners, starts, sizes)
     here = positions[corners]
-    a = unit(positions[corners[following]] - here)
-    b = unit(positions[corners[preceding]] - here)
+    a = core.unit_rows(positions[corners[following]] - here)
+    b = core.unit_rows(positions[corners[preceding]] - here)
     angle = np.arccos(np.clip(np.einsum("ij,ij->i", a, b), -1.0, 1.0))
     return np.repeat(faces, sizes, axis=0) * angle[:, None]
 
@@ -64,7 +56,7 @@ def stored_normals(positions, corners, starts, sizes, targets, count):
     sums = np.zeros((count, 3))
     _add(sums, targets[take], vectors[take])
     used = np.linalg.norm(sums, axis=1) > 0
-    return unit(sums), used
+    return core.unit_rows(sums), used
 
 
 def _add(sums, index, vectors):

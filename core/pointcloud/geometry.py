@@ -3,6 +3,7 @@
 import numpy as np
 
 from ..adjacency import pairs_in_order
+from ..geometry import face_normals as shared_face_normals
 from ..parallel import run_chunks
 from .sdg import unique_sorted
 
@@ -60,17 +61,10 @@ def smallest_eigenvectors(xx, yy, zz, xy, xz, yz):
 
 
 def face_normals(points, faces, out=None):
-    """Unit normals of the faces as (f, 3) rows (a face's normal is one gather: faces are reached in
-    scattered order), in ``out`` if given; NaN for a degenerate face. The normal follows the face's
-    vertex order (right-hand rule)."""
-    if out is None:
-        out = np.empty((faces.shape[0], 3))
-
-    def block(lo, hi):
-        out[lo:hi] = _normals_block(points, faces[lo:hi])[0].T
-
-    run_chunks(block, faces.shape[0], _CHUNK)
-    return out
+    """core.geometry.face_normals, NaN for a degenerate face (no dihedral angle to it compares true)."""
+    normals = shared_face_normals(points, faces, out)
+    normals[~normals.any(axis=1)] = np.nan
+    return normals
 
 
 def _quality(double_area, e1, e2):
@@ -258,6 +252,12 @@ def collinear(points):
     >>> import numpy as np
     >>> t = np.linspace(0.0, 1.0, 5)[:, None]
     >>> collinear(t * [1.0, 2.0, 3.0]), collinear(np.eye(3))
+    (True, False)
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> core.collinear(np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])), core.collinear(np.eye(3))
     (True, False)
     """
     centred = np.asarray(points, dtype=np.float64)

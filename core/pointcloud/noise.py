@@ -187,5 +187,12 @@ def steps_per_round(ratio, rounds):
 
 
 def matched_alpha(steps):
-    """The pull that stops HC's reach about where ``steps`` steps get: PULL / steps, at most 1."""
+    """The pull that stops HC's reach about where ``steps`` steps get: PULL / steps, at most 1.
+
+    Examples
+    --------
+    >>> import core
+    >>> core.matched_alpha(10)
+    0.066
+    """
     return float(min(1.0, PULL / max(steps, 1)))

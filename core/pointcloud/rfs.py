@@ -27,6 +27,7 @@ from .geometry import (
     smallest_eigenvectors,
     triple_keys,
 )
+from .stepwise import Slices, drain
 
 _CORONA_CHUNK = 1 << 15  # vertices per piece of the corona's work: its temporaries stay small
 _PAIR_BLOCK = 1 << 16  # incidences per block of _best_pairs
@@ -212,60 +213,88 @@ def keep_best_pairs(points, faces, normals=None):
 def _prune(points, faces, normals=None, settled=None):
     """keep_best_pairs, also returning the faces' Incidence. ``settled`` (optional, one int per
     edge of the Incidence, preset to -1) receives the round in which each overfull edge settled."""
-    n_faces = faces.shape[0]
-    inc = Incidence(faces, max(points.shape[0], 1))
-    if normals is None:
-        normals = face_normals(points, faces)
-    # Whether each incidence's face runs along its edge from the edge's low end (incidence_cos).
-    # Slot j's edge runs from slot j+1 to slot j+2; it starts at the edge's low end when that is lower.
-    forward = np.empty(faces.shape, dtype=bool)
-    for j in range(3):
-        np.less_equal(faces[:, (j + 1) % 3], faces[:, (j + 2) % 3], out=forward[:, j])
-    forward = forward.reshape(-1)
-    n_edges = inc.edge_count.size
-    # Incidence and edge numbers in int32 when they fit: half the bytes to move in every round.
-    narrow = np.int32 if max(3 * n_faces, n_edges) < _INT32_LIMIT else np.int64
-    alive = np.ones(n_faces, dtype=bool)
-    known = np.zeros(n_edges, dtype=bool)  # best pair cached and still valid
-    first = np.full(n_edges, -1, dtype=narrow)
-    second = np.full(n_edges, -1, dtype=narrow)
-    best_cos = np.zeros(n_edges)
-    count = np.zeros(n_edges, dtype=narrow)
-    start = np.zeros(n_edges, dtype=narrow)
-    # Scratch, reset after each use: per face the top priority and whether a candidate keeps it;
-    # per edge whether a candidate would delete a kept face.
-    top = np.full(n_faces, -1, dtype=np.int64)
-    kept = np.zeros(n_faces, dtype=bool)
-    flag = np.zeros(n_edges, dtype=bool)
-    # Incidences of overfull edges, sorted by edge (inc.order is).
-    overfull = inc.edge_count > 2
-    order = inc.order[np.repeat(overfull, inc.edge_count)].astype(narrow, copy=False)
-    edge = np.repeat(np.flatnonzero(overfull).astype(narrow), inc.edge_count[overfull])
-    rounds = 0
+    return drain(_prune_steps(points, faces, normals, settled))
+
+
+def _prune_steps(points, faces, normals=None, settled=None):
+    """_prune stepwise (core.pointcloud.stepwise): yields between rounds, the fraction of the
+    overfull edges' incidences settled."""
+    pruning = _Pruning(points, faces, normals)
+    order, edge = pruning.overfull()
+    total, slices = max(order.size, 1), Slices()
     while order.size:
+        work = order.size
+        order, edge = pruning.settle_round(order, edge, settled)
+        if slices.due(work) and order.size:
+            yield 1.0 - order.size / total
+    return pruning.alive, pruning.inc
+
+
+class _Pruning:
+    """The state of keep_best_pairs between its rounds (see there)."""
+
+    def __init__(self, points, faces, normals):
+        n_faces = faces.shape[0]
+        self.inc = inc = Incidence(faces, max(points.shape[0], 1))
+        self.normals = face_normals(points, faces) if normals is None else normals
+        # Whether each incidence's face runs along its edge from the edge's low end (incidence_cos).
+        # Slot j's edge runs from slot j+1 to slot j+2; it starts at the edge's low end when that is lower.
+        forward = np.empty(faces.shape, dtype=bool)
+        for j in range(3):
+            np.less_equal(faces[:, (j + 1) % 3], faces[:, (j + 2) % 3], out=forward[:, j])
+        self.forward = forward.reshape(-1)
+        self.n_edges = n_edges = inc.edge_count.size
+        # Incidence and edge numbers in int32 when they fit: half the bytes to move in every round.
+        self.narrow = narrow = np.int32 if max(3 * n_faces, n_edges) < _INT32_LIMIT else np.int64
+        self.alive = np.ones(n_faces, dtype=bool)
+        self.known = np.zeros(n_edges, dtype=bool)  # best pair cached and still valid
+        self.first = np.full(n_edges, -1, dtype=narrow)
+        self.second = np.full(n_edges, -1, dtype=narrow)
+        self.best_cos = np.zeros(n_edges)
+        self.count = np.zeros(n_edges, dtype=narrow)
+        self.start = np.zeros(n_edges, dtype=narrow)
+        # Scratch, reset after each use: per face the top priority and whether a candidate keeps it;
+        # per edge whether a candidate would delete a kept face.
+        self.top = np.full(n_faces, -1, dtype=np.int64)
+        self.kept = np.zeros(n_faces, dtype=bool)
+        self.flag = np.zeros(n_edges, dtype=bool)
+        self.rounds = 0  # rounds that settled edges
+
+    def overfull(self):
+        """The incidences of the overfull edges, sorted by edge (inc.order is), and their edges."""
+        inc = self.inc
+        overfull = inc.edge_count > 2
+        order = inc.order[np.repeat(overfull, inc.edge_count)].astype(self.narrow, copy=False)
+        edge = np.repeat(np.flatnonzero(overfull).astype(self.narrow), inc.edge_count[overfull])
+        return order, edge
+
+    def _refresh(self, order, over, run, run_count):
+        """Best pairs of the live overfull edges ``over`` whose cached pair is stale."""
+        self.count[over] = run_count
+        self.start[over] = run
+        stale = over[~self.known[over]]
+        if stale.size:
+            parts = run_blocks(
+                lambda lo, hi: _best_pairs(self.normals, self.forward, stale[lo:hi], order, self.start, self.count),
+                stale.size,
+                share=0.5,
+            )
+            self.first[stale], self.second[stale], self.best_cos[stale] = (np.concatenate(x) for x in zip(*parts))
+            self.known[stale] = True
+
+    def settle_round(self, order, edge, settled):
+        """One round; the incidences (order, edge) still to settle."""
         # Runs of equal edge: the live overfull edges and their incidences.
         run = np.flatnonzero(np.concatenate(([True], edge[1:] != edge[:-1])))
         run_count = np.diff(np.append(run, edge.size))
         over = edge[run]
         if not (run_count > 2).all():  # edges that fell to two faces leave the lists
             still = np.repeat(run_count > 2, run_count)
-            order, edge = order[still], edge[still]
-            continue
-        count[over] = run_count
-        start[over] = run
-        stale = over[~known[over]]
-        if stale.size:
-            parts = run_blocks(
-                lambda lo, hi, stale=stale, order=order: _best_pairs(
-                    normals, forward, stale[lo:hi], order, start, count
-                ),
-                stale.size,
-                share=0.5,
-            )
-            first[stale], second[stale], best_cos[stale] = (np.concatenate(x) for x in zip(*parts))
-            known[stale] = True
+            return order[still], edge[still]
+        self._refresh(order, over, run, run_count)
+        first, second, top, kept, flag = self.first, self.second, self.top, self.kept, self.flag
         # Priority: flatter best pair first, ties by edge number; distinct, so each face has one top edge.
-        priority = _priority(best_cos[over], over, n_edges)
+        priority = _priority(self.best_cos[over], over, self.n_edges)
         face = order // 3
         np.maximum.at(top, face, np.repeat(priority, run_count))
         # Candidates: edges that are the top priority at both faces of their best pair, so no
@@ -290,17 +319,16 @@ def _prune(points, faces, normals=None, settled=None):
         dead = at_face[other & ~flag[at_edge]]  # may repeat: two settling edges can delete the same face
         flag[clash] = False
         if settled is not None:
-            settled[over[settle]] = rounds
-        rounds += 1
-        alive[dead] = False
-        known[inc.edge_of[(3 * dead[:, None] + np.arange(3)).ravel()]] = False
+            settled[over[settle]] = self.rounds
+        self.rounds += 1
+        self.alive[dead] = False
+        self.known[self.inc.edge_of[(3 * dead[:, None] + np.arange(3)).ravel()]] = False
         del inside, at, at_edge, at_face, other, dead  # before the compaction allocates its copies
         # Drop the incidences of the dead faces and of the settled edges (now exactly two faces).
-        survive = alive[face]
+        survive = self.alive[face]
         del face
         survive &= ~np.repeat(settle, run_count)
-        order, edge = order[survive], edge[survive]
-    return alive, inc
+        return order[survive], edge[survive]
 
 
 def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
@@ -337,6 +365,12 @@ def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
     >>> int(np.unique(sides, axis=0, return_counts=True)[1].max())  # no edge in more than two faces
     2
     """
+    return drain(rfs_steps(points, edges, min_quality=min_quality, max_gap=max_gap))
+
+
+def rfs_steps(points, edges, *, min_quality=0.3, max_gap=np.pi):
+    """rfs_mesh stepwise (core.pointcloud.stepwise): yields after the candidate faces and between
+    pruning rounds, the fraction of the stage done; returns the RFSMesh."""
     n = points.shape[0]
     # int32 while the mesh is built when the vertex numbers fit (half the memory), int64 as the mesh's.
     index = np.int32 if n < _INT32_LIMIT else np.int64
@@ -346,7 +380,23 @@ def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
     # np.compress: rows picked by a mask several times faster than indexing with it.
     faces = np.compress(good, faces, axis=0)
     normals = np.compress(good, normals, axis=0)
-    alive, inc = _prune(points, faces, normals)
+    if Slices().due(3 * faces.shape[0]):
+        yield _CANDIDATES_SHARE
+    pruning = _prune_steps(points, faces, normals)
+    while True:
+        try:
+            yield _CANDIDATES_SHARE + (1.0 - _CANDIDATES_SHARE) * next(pruning)
+        except StopIteration as stop:
+            alive, inc = stop.value
+            break
+    return _mesh_of(faces, alive, inc)
+
+
+_CANDIDATES_SHARE = 0.3  # about the share of the stage's time the candidate faces take
+
+
+def _mesh_of(faces, alive, inc):
+    """The RFSMesh of the kept faces (``alive``), with the pairing of their incidences across edges."""
     # The kept faces' incidences, still grouped by edge (ties in face order), at most two per edge.
     live = inc.order[alive[inc.order // 3]]
     live_edge = inc.edge_of[live]

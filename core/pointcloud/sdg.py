@@ -87,7 +87,16 @@ def unique_sorted(keys):
 def reach_gap_problem(spacing_factor, gap_factor, names=("spacing_factor", "gap_factor")):
     """Why the SDG cannot join points with these factors, or None: an edge within reach (``spacing_factor``
     local spacings) must not count as a gap (longer than ``gap_factor`` spacings). ``names``: the two as the
-    caller's user knows them (a panel's labels, the command line's options)."""
+    caller's user knows them (a panel's labels, the command line's options).
+
+    Examples
+    --------
+    >>> import core
+    >>> core.reach_gap_problem(2.0, 3.0) is None
+    True
+    >>> core.reach_gap_problem(3.0, 2.0)
+    'spacing_factor (3) must not exceed gap_factor (2): a neighbour within reach would be cut off as a gap'
+    """
     if spacing_factor <= gap_factor:
         return None
     reach, gap = names

@@ -18,13 +18,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..adjacency import umbrella_operator
-from ..smoothing import Cancelled, smooth
+from ..smoothing import Cancelled, Smoothing
 from ..validation import check_fixed, check_positions, check_unit_interval, power_of_two_scale
 from .local_amount import local_influence, sampled_curvature, thinning
 from .noise import NoiseEstimate, estimate_noise, matched_alpha, steps_per_round
-from .rfs import RFSMesh, rfs_mesh
+from .rfs import RFSMesh, rfs_steps
 from .sdg import reach_gap_problem, surface_description_graph
-from .spanning_tree import NeighbourIndex, boruvka_emst
+from .spanning_tree import NeighbourIndex, emst_steps
 from .swap import EdgeSwapper
 
 
@@ -222,8 +222,10 @@ class PointCloudSmoother:
     """smooth_point_cloud in steps, for callers that interleave it with other work (a modal operator
     that shows progress and lets Esc cancel): checks everything on construction, then ``steps()``
     yields the fraction of the run done after each stage and round, as core.Smoothing.steps does
-    (``stage`` names the stage just finished, ``rounds_done`` counts the rounds); once the generator
-    is exhausted ``result`` and ``report`` are set. ``alpha`` and ``iterations_per_round`` hold
+    (``stage`` names the last stage finished, None before the first, ``rounds_done`` counts the
+    rounds), and on large clouds also between slices of a stage (core.pointcloud.stepwise: about a
+    second of work each at a million points); once the generator is exhausted ``result`` and
+    ``report`` are set. ``alpha`` and ``iterations_per_round`` hold
     "auto" until the first stage has estimated the noise, then the values in use. Abandoning the
     generator leaves the input untouched.
 
@@ -285,6 +287,7 @@ class PointCloudSmoother:
         self.local_amount = bool(local_amount)
         self.result = None
         self.report = None
+        self.stage, self.rounds_done = None, 0  # nothing finished yet
 
     BUILD_STAGES = ("neighbours", "emst", "sdg", "rfs")
 
@@ -292,88 +295,72 @@ class PointCloudSmoother:
         """Record a finished stage; the fraction of the run done (each stage and round counts one)."""
         self.stage, self.rounds_done = stage, rounds_done
         done = len(self.BUILD_STAGES) if stage == "round" else self.BUILD_STAGES.index(stage) + 1
-        return (done + rounds_done) / (len(self.BUILD_STAGES) + self.rounds)
+        self.fraction = (done + rounds_done) / (len(self.BUILD_STAGES) + self.rounds)
+        return self.fraction
+
+    def _stage(self, stage, inner, rounds_done=0):
+        """Run the stepwise generator ``inner`` (core.pointcloud.stepwise), yielding the run's
+        fraction between its slices; then finish ``stage`` (``rounds_done`` for a round) and yield.
+        Returns ``inner``'s result."""
+        start, width = self.fraction, 1.0 / (len(self.BUILD_STAGES) + self.rounds)
+        while True:
+            try:
+                part = next(inner)
+            except StopIteration as stop:
+                result = stop.value
+                break
+            yield start + width * part
+        if stage in ("emst", "rfs"):  # the others time their parts themselves
+            self._lap(stage)
+        yield self._finished(stage, rounds_done)
+        return result
+
+    def _lap(self, name):
+        now = time.perf_counter()
+        self.seconds[name] = self.seconds.get(name, 0.0) + now - self._clock
+        self._clock = now
 
     def steps(self):
-        start, fixed_mask = self.points, self.fixed
-        seconds = {}
-        clock = time.perf_counter()
-
-        def lap(name):
-            nonlocal clock
-            now = time.perf_counter()
-            seconds[name] = seconds.get(name, 0.0) + now - clock
-            clock = now
-
-        index = NeighbourIndex(start, self.neighbours, scale=self.scale)  # distinct points / scale, KD-tree order
+        self.seconds, self._clock, self.fraction = {}, time.perf_counter(), 0.0
+        index = yield from self._stage("neighbours", self._neighbours())
+        tree, _ = yield from self._stage("emst", emst_steps(index))
+        graph = surface_description_graph(index, tree, spacing_factor=self.spacing_factor, gap_factor=self.gap_factor)
+        self._lap("sdg")
+        yield self._finished("sdg")
+        mesh = yield from self._stage("rfs", rfs_steps(index.points, graph.edges, min_quality=self.min_quality))
+        current = index.points  # a float64 copy, ours to move
         m = index.n_points
-        rows_fixed = np.zeros(m, dtype=bool)
-        np.logical_or.at(rows_fixed, index.representative, fixed_mask)  # a fixed copy pins its duplicates
-        lap("neighbours")
+        swapper = EdgeSwapper(mesh.faces, m, mesh.other, mesh.edges) if self.swap and self.rounds > 1 else None
+        # HC runs in the input's precision, as on meshes (float32 halves its memory traffic); the mesh's
+        # geometry (swapping, curvature) stays in float64, which holds every float32 value exactly.
+        precision = np.float32 if self.points.dtype == np.float32 else np.float64
+        rounds = _Rounds(self, index, index.points.astype(precision, copy=False), swapper)
+        for done in range(1, self.rounds + 1):
+            current, mesh = yield from self._stage("round", rounds.run(done, current, mesh), done)
+        self._finish(index, graph, mesh, current, rounds)
+
+    def _neighbours(self):
+        """The neighbour index, the fixed rows and the noise estimate with the amount it picks."""
+        index = yield from NeighbourIndex.in_steps(self.points, self.neighbours, scale=self.scale)
+        self.rows_fixed = np.zeros(index.n_points, dtype=bool)
+        np.logical_or.at(self.rows_fixed, index.representative, self.fixed)  # a fixed copy pins its duplicates
+        self._lap("neighbours")
         noise = estimate_noise(index)  # a fixed-size sample: the same small cost at any size
+        self.noise_in_rows = noise
         self.noise = replace(noise, sigma=noise.sigma * self.scale, spacing=noise.spacing * self.scale)
         if self.iterations_per_round == AUTO:
             self.iterations_per_round = steps_per_round(self.noise.ratio, self.rounds)
         if self.alpha == AUTO:
             self.alpha = matched_alpha(self.rounds * self.iterations_per_round)
-        lap("noise")
-        yield self._finished("neighbours")
-        tree, _ = boruvka_emst(index)
-        lap("emst")
-        yield self._finished("emst")
-        graph = surface_description_graph(index, tree, spacing_factor=self.spacing_factor, gap_factor=self.gap_factor)
-        lap("sdg")
-        yield self._finished("sdg")
-        current = index.points  # float64 copy, ours to move
-        mesh = rfs_mesh(current, graph.edges, min_quality=self.min_quality)
-        lap("rfs")
-        yield self._finished("rfs")
-        swapper = EdgeSwapper(mesh.faces, m, mesh.other, mesh.edges) if self.swap and self.rounds > 1 else None
-        # HC runs in the input's precision, as on meshes (float32 halves its memory traffic); the mesh's
-        # geometry (swapping, curvature) stays in float64, which holds every float32 value exactly.
-        precision = np.float32 if start.dtype == np.float32 else np.float64
-        original = index.points.astype(precision, copy=False)
-        swaps = []
-        operator = None
-        influence = None
-        for done in range(1, self.rounds + 1):
-            if operator is None:
-                operator = umbrella_operator(mesh.edges, m)
-            current = smooth(
-                current.astype(precision, copy=False),
-                None,
-                method="hc",
-                alpha=self.alpha,
-                beta=self.beta,
-                iterations=self.iterations_per_round,
-                fixed=rows_fixed,
-                original=original,
-                operator=operator,
-                influence=influence,
-            ).positions.astype(np.float64, copy=False)
-            lap("hc")
-            local = self.local_amount and "iterations_per_round" in self.automatic and index.k >= 5
-            if local and done == 1 and self.rounds > 1:
-                # Measured on the first round's result, where the noise no longer hides the curvature.
-                influence = local_influence(
-                    sampled_curvature(current, index.neighbour, thinning(noise.ratio)),
-                    self.rounds * self.iterations_per_round,
-                    noise.sigma,
-                    noise.spacing,
-                )
-                lap("local amount")
-            if swapper is not None and done < self.rounds:
-                count = swapper.swap_pass(current)
-                swaps.append(count)
-                if count:
-                    mesh = RFSMesh(swapper.faces.copy(), swapper.edges)
-                    operator = None  # the neighbourhoods changed
-                lap("swap")
-            yield self._finished("round", done)
+        self._lap("noise")
+        return index
 
+    def _finish(self, index, graph, mesh, current, rounds):
+        """Set ``result`` and ``report``."""
+        start, m = self.points, index.n_points
         result = (current[index.representative] * self.scale).astype(start.dtype)
         # Fixed and unmoved points bit-identical to the input, whatever the round trip did.
-        still = fixed_mask | ~np.any(current != index.points, axis=1)[index.representative]
+        still = self.fixed | ~np.any(current != index.points, axis=1)[index.representative]
         result[still] = start[still]
         has_face = np.zeros(m, dtype=bool)
         has_face[mesh.faces.ravel()] = True
@@ -383,13 +370,80 @@ class PointCloudSmoother:
             sdg_edges=int(graph.edges.shape[0]),
             emst_cut=graph.emst_cut,
             isolated=int(m - has_face.sum()),
-            swaps=swaps,
-            seconds=seconds,
+            swaps=rounds.swaps,
+            seconds=self.seconds,
             noise=self.noise,
             rounds=self.rounds,
             iterations_per_round=self.iterations_per_round,
             alpha=self.alpha,
             automatic=self.automatic,
-            influence=None if influence is None else influence[index.representative],
+            influence=None if rounds.influence is None else rounds.influence[index.representative],
         )
         self.result = result
+
+
+# Non-zeros of the umbrella operator x HC steps per slice of a round (each step reads the operator
+# twice): about a second of steps at a million points, a whole round on small clouds.
+_HC_SLICE = 1 << 27
+
+
+class _Rounds:
+    """The rounds of a PointCloudSmoother run: HC steps, the local amount after the first, and a
+    swap pass between consecutive rounds."""
+
+    def __init__(self, smoother, index, original, swapper):
+        self.smoother, self.index, self.original, self.swapper = smoother, index, original, swapper
+        self.operator = None
+        self.influence = None
+        self.swaps = []
+
+    def run_hc(self, current):
+        """``iterations_per_round`` HC steps from ``current``, yielding between slices of steps."""
+        run = self.smoother
+        if self.operator is None:
+            self.operator = umbrella_operator(self.mesh.edges, self.index.n_points)
+        hc = Smoothing(
+            current.astype(self.original.dtype, copy=False),
+            None,
+            method="hc",
+            alpha=run.alpha,
+            beta=run.beta,
+            iterations=run.iterations_per_round,
+            fixed=run.rows_fixed,
+            original=self.original,
+            operator=self.operator,
+            influence=self.influence,
+            stacklevel=6,
+        )
+        chunk = max(1, _HC_SLICE // max(int(self.operator.indptr[-1]), 1))
+        while not hc.finished:
+            hc.advance(chunk)
+            if not hc.finished:
+                yield hc.done / hc.iterations
+        return hc.result().positions.astype(np.float64, copy=False)
+
+    def run(self, done, current, mesh):
+        """Round ``done`` (1, 2, ...) from ``current`` on ``mesh``; returns the positions and the mesh."""
+        run, index = self.smoother, self.index
+        self.mesh = mesh
+        current = yield from self.run_hc(current)
+        run._lap("hc")
+        local = run.local_amount and "iterations_per_round" in run.automatic and index.k >= 5
+        if local and done == 1 and run.rounds > 1:
+            # Measured on the first round's result, where the noise no longer hides the curvature.
+            noise = run.noise_in_rows
+            self.influence = local_influence(
+                sampled_curvature(current, index.neighbour, thinning(noise.ratio)),
+                run.rounds * run.iterations_per_round,
+                noise.sigma,
+                noise.spacing,
+            )
+            run._lap("local amount")
+        if self.swapper is not None and done < run.rounds:
+            count = self.swapper.swap_pass(current)
+            self.swaps.append(count)
+            if count:
+                self.mesh = RFSMesh(self.swapper.faces.copy(), self.swapper.edges)
+                self.operator = None  # the neighbourhoods changed
+            run._lap("swap")
+        return current, self.mesh

@@ -38,6 +38,9 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
+from ..adjacency import pairs_in_order
+from .stepwise import Slices, drain
+
 
 def merge_duplicates(points):
     """Return (first, representative): ``first`` are the indices of the distinct points (the first
@@ -69,6 +72,16 @@ class NeighbourIndex:
     """
 
     def __init__(self, points, k, scale=1.0):
+        drain(self.build(points, k, scale))
+
+    @classmethod
+    def in_steps(cls, points, k, scale=1.0):
+        """The index built stepwise (core.pointcloud.stepwise): yields between blocks of the kNN query."""
+        index = cls.__new__(cls)
+        yield from index.build(points, k, scale)
+        return index
+
+    def build(self, points, k, scale):
         # ``points / scale`` (scale a power of two, see validation.power_of_two_scale): exact, and
         # duplicates are merged after the division, so the rows stay distinct even where it underflows.
         if scale != 1.0 or points.dtype != np.float64:
@@ -84,19 +97,20 @@ class NeighbourIndex:
         self.tree = cKDTree(self.points)
         m = self.points.shape[0]
         self.k = int(min(k, max(m - 1, 0)))
-        if self.k > 0:
-            self.distance = np.empty((m, self.k))
-            self.neighbour = np.empty((m, self.k), dtype=np.int64)
-            step = max(1, _QUERY_ENTRIES // (self.k + 1))  # in blocks: small result arrays, reused
-            for start in range(0, m, step):
-                rows = slice(start, min(start + step, m))
-                distance, neighbour = self.tree.query(self.points[rows], self.k + 1, workers=-1)
-                # Points are distinct, so each point is its own unique nearest (distance 0): column 0.
-                self.distance[rows] = distance[:, 1:]
-                self.neighbour[rows] = neighbour[:, 1:]
-        else:
-            self.distance = np.zeros((m, 0))
-            self.neighbour = np.zeros((m, 0), dtype=np.int64)
+        self.distance = np.zeros((m, self.k))
+        self.neighbour = np.zeros((m, self.k), dtype=np.int64)
+        if self.k == 0:
+            return
+        slices = Slices()
+        step = max(1, _QUERY_ENTRIES // (self.k + 1))  # in blocks: small result arrays, reused
+        for start in range(0, m, step):
+            rows = slice(start, min(start + step, m))
+            distance, neighbour = self.tree.query(self.points[rows], self.k + 1, workers=-1)
+            # Points are distinct, so each point is its own unique nearest (distance 0): column 0.
+            self.distance[rows] = distance[:, 1:]
+            self.neighbour[rows] = neighbour[:, 1:]
+            if slices.due(distance.size) and rows.stop < m:
+                yield rows.stop / m
 
     @property
     def n_points(self):
@@ -284,11 +298,13 @@ def _query_by_bits(tree_points, label_code, ask, bound):
 _FEW_ASKERS = 2048
 
 
-def _per_component_pick(n_components, label_u, label_v, weight, u, v):
-    """For every component, one shortest edge among (u, v, weight) that touches it (inf, -1 if none)."""
-    best = np.full(n_components, np.inf)
-    np.minimum.at(best, label_u, weight)
-    np.minimum.at(best, label_v, weight)
+def _per_component_pick(n_components, label_u, label_v, weight, u, v, best=None):
+    """For every component, one shortest edge among (u, v, weight) that touches it (inf, -1 if none).
+    ``best``: the shortest length per component, when the caller knows it."""
+    if best is None:
+        best = np.full(n_components, np.inf)
+        np.minimum.at(best, label_u, weight)
+        np.minimum.at(best, label_v, weight)
     pick_u = np.full(n_components, -1, dtype=np.int64)
     pick_v = np.full(n_components, -1, dtype=np.int64)
     for label in (label_u, label_v):
@@ -306,86 +322,178 @@ _UNCERTAIN_FRACTION = 0.5
 
 def boruvka_emst(index):
     """EMST edges (rows of ``index.points``) and their lengths, exactly."""
-    m, k = index.n_points, index.k
+    return drain(emst_steps(index))
+
+
+class _ForeignCache:
+    """Exact searches, remembered: a point's nearest foreign point stays its nearest foreign point
+    while it is foreign (the foreign points only get fewer), and once it has joined the point's
+    component, every foreign point is at least as far as it was (``floor``, like an empty search
+    below a bound)."""
+
+    def __init__(self, m):
+        self.distance = np.full(m, np.inf)
+        self.index = np.full(m, -1, dtype=np.int64)
+        self.floor = np.zeros(m)
+
+    def still_foreign(self, label):
+        """Retire the entries whose point has merged (their distance becomes a floor); the rest."""
+        cached = np.flatnonzero(self.index >= 0)
+        merged_in = cached[label[self.index[cached]] == label[cached]]
+        self.floor[merged_in] = np.maximum(self.floor[merged_in], self.distance[merged_in])
+        self.index[merged_in] = -1
+        return np.flatnonzero(self.index >= 0)
+
+    def record(self, ask, found_distance, found, searched):
+        hit = found >= 0
+        self.distance[ask[hit]], self.index[ask[hit]] = found_distance[hit], found[hit]
+        self.floor[ask[~hit]] = np.maximum(self.floor[ask[~hit]], searched[~hit])
+
+
+class _CrossingEdges:
+    """The kNN edges that cross between components, in the order of the lists (by source point,
+    each point's edges nearest first), and the same edges grouped by target point (``by_dst``,
+    positions in the lists): each component's shortest crossing edge is then the shortest over its
+    points' first edge out and shortest edge in, without a scatter over all edges."""
+
+    def __init__(self, index):
+        m, k = index.n_points, index.k
+        self.src = np.repeat(np.arange(m, dtype=np.int64), k)
+        self.dst = index.neighbour.ravel()
+        self.weight = index.distance.ravel()
+        self.by_dst = _grouped_by_target(self.src, self.dst, m)
+
+    def keep(self, crossing):
+        """Keep the edges where ``crossing`` (a mask over them) holds."""
+        kept = crossing[self.by_dst]
+        position = np.cumsum(crossing, dtype=np.int64)
+        position -= 1
+        self.by_dst = position[self.by_dst[kept]]
+        self.src, self.dst, self.weight = self.src[crossing], self.dst[crossing], self.weight[crossing]
+
+    def shortest(self, label, n_components):
+        """Per component the length of its shortest crossing edge (inf if none)."""
+        m = label.size
+        if not self.src.size:
+            return np.full(n_components, np.inf)
+        per_point = np.full(m, np.inf)
+        first_out = np.flatnonzero(np.concatenate(([True], self.src[1:] != self.src[:-1])))
+        per_point[self.src[first_out]] = self.weight[first_out]  # each list is sorted, nearest first
+        target = self.dst[self.by_dst]
+        first_in = np.flatnonzero(np.concatenate(([True], target[1:] != target[:-1])))
+        shortest_in = np.minimum.reduceat(self.weight[self.by_dst], first_in)
+        per_point[target[first_in]] = np.minimum(per_point[target[first_in]], shortest_in)
+        return _group_min(label, per_point, n_components)
+
+
+def _group_min(group, values, n_groups):
+    """Per group (0 <= group < n_groups) the smallest of its ``values`` (inf if none): a counting
+    sort by group and one reduction (np.minimum.at scatters element by element, far slower)."""
+    best = np.full(n_groups, np.inf)
+    placed = None
+    if n_groups < 2**31 and group.size < 2**31:
+        placed = pairs_in_order(group.astype(np.int32), np.zeros(group.size, np.int32), n_groups, values)
+    if placed is None:
+        np.minimum.at(best, group, values)
+        return best
+    indptr, _, ordered = placed
+    filled = indptr[:-1] < indptr[1:]
+    best[filled] = np.minimum.reduceat(ordered, indptr[:-1][filled])
+    return best
+
+
+def _grouped_by_target(src, dst, m):
+    """Positions of the edges (src, dst) grouped by dst, each group in position order."""
+    if m < 2**31:
+        placed = pairs_in_order(dst.astype(np.int32), src.astype(np.int32), m, np.arange(src.size, dtype=np.int64))
+        if placed is not None:
+            return placed[2]  # by dst, then src: position order, as the edges are listed by src
+    return np.argsort(dst, kind="stable")
+
+
+def _knn_picks(n_components, label, edges, cache):
+    """Per component the shortest of its crossing kNN edges and remembered exact answers."""
+    src, dst, weight = edges.src, edges.dst, edges.weight
+    label_src, label_dst = label[src], label[dst]
+    best = edges.shortest(label, n_components)
+    cached = cache.still_foreign(label)  # still foreign: still the exact nearest
+    if not cached.size:
+        return _per_component_pick(n_components, label_src, label_dst, weight, src, dst, best)
+    np.minimum.at(best, label[cached], cache.distance[cached])
+    np.minimum.at(best, label[cache.index[cached]], cache.distance[cached])
+    return _per_component_pick(
+        n_components,
+        np.concatenate([label_src, label[cached]]),
+        np.concatenate([label_dst, label[cache.index[cached]]]),
+        np.concatenate([weight, cache.distance[cached]]),
+        np.concatenate([src, cached]),
+        np.concatenate([dst, cache.index[cached]]),
+        best,
+    )
+
+
+def _exact_picks(index, label, n_components, inside, reach, uncertain, picks, cache):
+    """Improve the picks of the ``uncertain`` components by exact searches of their exhausted points
+    below the best edge known (``picks``: best, pick_u, pick_v, updated in place)."""
+    best, pick_u, pick_v = picks
+    ask = inside[uncertain[label[inside]] & (reach < best[label[inside]])]
+    code = np.zeros(n_components, dtype=np.int64)
+    code[uncertain] = np.arange(1, int(uncertain.sum()) + 1)
+    found_distance, found, searched = _exact_nearest_foreign(
+        index.points, code[label], ask, best[label[ask]], tree=index.tree, k=2 * max(index.k, 1), return_bound=True
+    )
+    cache.record(ask, found_distance, found, searched)
+    hit = found >= 0
+    exact_best, exact_u, exact_v = _per_component_pick(
+        n_components, label[ask[hit]], label[ask[hit]], found_distance[hit], ask[hit], found[hit]
+    )
+    improve = exact_best < best
+    best[improve] = exact_best[improve]
+    pick_u[improve], pick_v[improve] = exact_u[improve], exact_v[improve]
+
+
+def emst_steps(index):
+    """boruvka_emst stepwise (core.pointcloud.stepwise): yields between Borůvka rounds, the fraction
+    of the merging done (on a log scale of the components left); returns (edges, lengths)."""
+    m = index.n_points
     points = index.points
     label = np.arange(m, dtype=np.int64)
     n_components = m
     if m <= 1:
         return np.zeros((0, 2), dtype=np.int64), np.zeros(0)
     radius = index.distance[:, -1]  # d_k(p): every point outside p's list is at least this far
-    src = np.repeat(np.arange(m, dtype=np.int64), k)
-    dst = index.neighbour.ravel()
-    weight = index.distance.ravel()
+    edges = _CrossingEdges(index)
     exhausted = np.zeros(m, dtype=bool)
-    # Exact searches are remembered: a point's nearest foreign point stays its nearest foreign point
-    # while it is foreign (the foreign points only get fewer), and once it has joined the point's
-    # component, every foreign point is at least as far as it was (``floor``, like an empty search
-    # below a bound).
-    cache_distance = np.full(m, np.inf)
-    cache_index = np.full(m, -1, dtype=np.int64)
-    floor = np.zeros(m)
-    tree_u, tree_v, tree_w = [], [], []
+    cache = _ForeignCache(m)
+    tree_u, tree_v = [], []
+    slices = Slices()
     while n_components > 1:
-        if n_components == m:  # every point its own component: each kNN pair crosses (points are distinct)
-            label_src, label_dst = src, dst
-        else:
-            label_src, label_dst = label[src], label[dst]
-            crossing = label_src != label_dst
+        if n_components < m:  # (at first every point is its own component: each kNN pair crosses)
+            crossing = label[edges.src] != label[edges.dst]
             # A point none of whose neighbours is foreign stays so: components only grow.
             offers = np.zeros(m, dtype=bool)
-            offers[src[crossing]] = True
+            offers[edges.src[crossing]] = True
             exhausted |= ~offers
-            src, dst, weight = src[crossing], dst[crossing], weight[crossing]
-            label_src, label_dst = label_src[crossing], label_dst[crossing]
-
-        cached = np.flatnonzero(cache_index >= 0)
-        merged_in = cached[label[cache_index[cached]] == label[cached]]
-        floor[merged_in] = np.maximum(floor[merged_in], cache_distance[merged_in])
-        cache_index[merged_in] = -1
-        cached = np.flatnonzero(cache_index >= 0)  # still foreign: still the exact nearest
-        if cached.size:
-            best, pick_u, pick_v = _per_component_pick(
-                n_components,
-                np.concatenate([label_src, label[cached]]),
-                np.concatenate([label_dst, label[cache_index[cached]]]),
-                np.concatenate([weight, cache_distance[cached]]),
-                np.concatenate([src, cached]),
-                np.concatenate([dst, cache_index[cached]]),
-            )
-        else:
-            best, pick_u, pick_v = _per_component_pick(n_components, label_src, label_dst, weight, src, dst)
-        inside = np.flatnonzero(exhausted & (cache_index < 0))  # exhausted, nearest foreign unknown
-        reach = np.maximum(radius[inside], floor[inside])  # no foreign point is nearer
-        lower = np.full(n_components, np.inf)
-        np.minimum.at(lower, label[inside], reach)
+            edges.keep(crossing)
+        picks = _knn_picks(n_components, label, edges, cache)
+        best = picks[0]
+        inside = np.flatnonzero(exhausted & (cache.index < 0))  # exhausted, nearest foreign unknown
+        reach = np.maximum(radius[inside], cache.floor[inside])  # no foreign point is nearer
+        lower = _group_min(label[inside], reach, n_components)
         uncertain = lower < best
         if uncertain.sum() > _UNCERTAIN_FRACTION * n_components or uncertain.all():
-            ask = inside[uncertain[label[inside]] & (reach < best[label[inside]])]
-            code = np.zeros(n_components, dtype=np.int64)
-            code[uncertain] = np.arange(1, int(uncertain.sum()) + 1)
-            found_distance, found, searched = _exact_nearest_foreign(
-                points, code[label], ask, best[label[ask]], tree=index.tree, k=2 * max(k, 1), return_bound=True
-            )
-            hit = found >= 0
-            cache_distance[ask[hit]], cache_index[ask[hit]] = found_distance[hit], found[hit]
-            floor[ask[~hit]] = np.maximum(floor[ask[~hit]], searched[~hit])
-            exact_best, exact_u, exact_v = _per_component_pick(
-                n_components, label[ask[hit]], label[ask[hit]], found_distance[hit], ask[hit], found[hit]
-            )
-            improve = exact_best < best
-            best[improve] = exact_best[improve]
-            pick_u[improve], pick_v[improve] = exact_u[improve], exact_v[improve]
+            _exact_picks(index, label, n_components, inside, reach, uncertain, picks, cache)
             chosen = np.isfinite(best)  # now exact for every component
         else:
             chosen = ~uncertain & np.isfinite(best)
-        u, v = pick_u[chosen], pick_v[chosen]
+        u, v = picks[1][chosen], picks[2][chosen]
         keep = _spanning_forest(label[u], label[v], n_components)
-        u, v = u[keep], v[keep]
-        tree_u.append(u)
-        tree_v.append(v)
-        tree_w.append(np.sqrt(np.einsum("ij,ij->i", points[u] - points[v], points[u] - points[v])))
-        merged = sp.coo_matrix((np.ones(u.size), (label[u], label[v])), shape=(n_components,) * 2)
+        tree_u.append(u[keep])
+        tree_v.append(v[keep])
+        merged = sp.coo_matrix((np.ones(keep.size), (label[u[keep]], label[v[keep]])), shape=(n_components,) * 2)
         n_components, relabel = connected_components(merged, directed=False)
         label = relabel[label].astype(np.int64)
-    edges = np.stack([np.concatenate(tree_u), np.concatenate(tree_v)], axis=1)
-    return edges, np.concatenate(tree_w)
+        if slices.due(edges.src.size) and n_components > 1:
+            yield 1.0 - np.log(n_components) / np.log(m)
+    u, v = np.concatenate(tree_u), np.concatenate(tree_v)
+    return np.stack([u, v], axis=1), np.sqrt(np.einsum("ij,ij->i", points[u] - points[v], points[u] - points[v]))

@@ -94,7 +94,7 @@ def test_a_noisy_cone_is_left_as_it_was(scene, capfd, sharp):
 
 def test_keep_sharp_edges_leaves_a_torus_it_would_flatten(scene, capfd):
     """Blender's Torus with noise of 0.1 median edge lengths: Keep Sharp Edges' filter would flatten its
-    rings (core.collapse.moved_beyond_noise); the torus stays as it was and the report says why. HC's
+    rings (core.mesh.collapse.moved_beyond_noise); the torus stays as it was and the report says why. HC's
     default smooths it."""
     bpy.ops.mesh.primitive_torus_add()
     obj = bpy.context.active_object

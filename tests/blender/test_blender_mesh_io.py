@@ -53,8 +53,8 @@ def test_closedness_from_corner_edges_matches_the_core(scene, make, change, expe
     edges = mesh_io().read_edges(mesh)
     corner_verts, corner_edges = mesh_io().read_corners(mesh)
     np.testing.assert_array_equal(corner_verts, np.ravel(faces if isinstance(faces, np.ndarray) else faces[1]))
-    assert core.topology.closed_from_corners(edges, corner_verts, corner_edges) is expected
-    assert core.topology.closed_from_triangles(core.metrics.fan_triangles(faces)) is expected
+    assert core.mesh.topology.closed_from_corners(edges, corner_verts, corner_edges) is expected
+    assert core.mesh.topology.closed_from_triangles(core.geometry.fan_triangles(faces)) is expected
 
 
 @pytest.mark.parametrize(
@@ -73,7 +73,9 @@ def test_border_of_the_fanned_faces_matches_the_faces(scene, make):
     unique, counts = np.unique(pairs, axis=0, return_counts=True)
     expected = np.zeros(len(mesh.vertices), dtype=bool)
     expected[unique[counts == 1].ravel()] = True
-    got = np.zeros(len(mesh.vertices), dtype=bool)  # what the border rules hold (core.borders)
-    got[core.borders.border_edges(core.metrics.fan_triangles(mesh_io().read_faces(mesh)), len(got)).ravel()] = True
+    got = np.zeros(len(mesh.vertices), dtype=bool)  # what the border rules hold (core.mesh.borders)
+    got[core.mesh.borders.border_edges(core.geometry.fan_triangles(mesh_io().read_faces(mesh)), len(got)).ravel()] = (
+        True
+    )
     np.testing.assert_array_equal(got, expected)
     assert got.any() != (make is noisy_sphere)

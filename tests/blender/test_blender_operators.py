@@ -54,7 +54,7 @@ def test_object_mode_equals_core_on_the_same_arrays(scene):
 def add_on_default(before, obj, **given):
     """What the add-on runs with nothing set but ``given``: core.smooth_mesh with the Automatic Amount,
     split vertices welded."""
-    triangles = core.metrics.fan_triangles(np.array(faces_of(obj.data)))
+    triangles = core.geometry.fan_triangles(np.array(faces_of(obj.data)))
     return core.smooth_mesh(
         before, edges_of(obj.data), faces=triangles, weld=True, border="free", return_report=True, **given
     )
@@ -189,7 +189,7 @@ def test_keep_outline_runs_cores_curve_rule_and_keeps_the_outline(scene, capfd):
     obj = noisy_grid()
     before = positions_of(obj.data)
     assert bpy.ops.object.hc_smooth(keep_outline=True, iterations=20) == {"FINISHED"}
-    triangles = core.metrics.fan_triangles(np.array(faces_of(obj.data)))
+    triangles = core.geometry.fan_triangles(np.array(faces_of(obj.data)))
     expected = core.smooth_mesh(
         before, edges_of(obj.data), faces=triangles, weld=True, border="curve", alpha=ALPHA, beta=BETA, iterations=20
     )
@@ -335,7 +335,7 @@ def test_the_automatic_amount_keeps_to_a_multiple_of_its_noise(scene, capfd):
     report = capfd.readouterr().out
     limit = float(re.search(r"moves at most ([0-9.e-]+)", report).group(1))
     amount = core.choose_amount(before, edges_of(obj.data))
-    assert limit == pytest.approx(core.mesh_smoother.DEVIATION_IN_NOISE * amount.sigma, rel=1e-2)
+    assert limit == pytest.approx(core.mesh.smooth.DEVIATION_IN_NOISE * amount.sigma, rel=1e-2)
     assert np.linalg.norm(positions_of(obj.data).astype(float) - before, axis=1).max() <= limit * 1.001 + 1e-7
 
 

@@ -13,7 +13,11 @@ from blender_scene import ADDON, noisy_sphere, positions_of
 
 
 def jobs_module():
-    return importlib.import_module(f"{ADDON}.operators.jobs")
+    return importlib.import_module(f"{ADDON}.jobs.mesh")
+
+
+def make_job(obj, props):
+    return importlib.import_module(f"{ADDON}.operators.mesh_objects").make_job(obj, props)
 
 
 def core_module():
@@ -31,9 +35,9 @@ def test_chunked_run_equals_one_call_and_reports_rising_progress(scene):
     jobs = jobs_module()
     for mode in ("SIMULTANEOUS", "SEQUENTIAL"):
         props = settings(mode=mode)
-        whole = [jobs.make_job(noisy_sphere(f"A{mode}"), props)]
+        whole = [make_job(noisy_sphere(f"A{mode}"), props)]
         list(jobs.run(whole, props))
-        chunked = [jobs.make_job(noisy_sphere(f"B{mode}"), props)]
+        chunked = [make_job(noisy_sphere(f"B{mode}"), props)]
         progress = list(jobs.run(chunked, props, chunk=2))
         assert np.array_equal(chunked[0].result, whole[0].result)
         assert chunked[0].report.iterations == 9
@@ -46,7 +50,7 @@ def test_leaving_between_chunks_writes_nothing(scene):
     obj = noisy_sphere()
     before = positions_of(obj.data)
     props = settings()
-    runner = jobs.run([jobs.make_job(obj, props)], props, chunk=2)
+    runner = jobs.run([make_job(obj, props)], props, chunk=2)
     fraction = next(runner)
     while fraction == 0.0:  # the welding and the faces' surface: slices of their own, before the iterations
         fraction = next(runner)
@@ -152,11 +156,11 @@ def test_modal_error_is_reported_and_abandons():
 def test_automatic_amount_reports_progress_while_it_chooses(scene):
     jobs = jobs_module()
     props = settings(auto_amount=True)
-    job = jobs.make_job(noisy_sphere(), props)
+    job = make_job(noisy_sphere(), props)
     progress = list(jobs.run([job], props, chunk=5))
-    choosing = [f for f in progress if f < core_module().mesh_smoother.CHOOSING_SHARE]
+    choosing = [f for f in progress if f < core_module().mesh.smooth.CHOOSING_SHARE]
     assert len(choosing) >= 2 and progress == sorted(progress) and progress[-1] == 1.0
-    whole = jobs.make_job(noisy_sphere("B"), props)
+    whole = make_job(noisy_sphere("B"), props)
     list(jobs.run([whole], props))
     assert job.report.amount == whole.report.amount and np.array_equal(job.result, whole.result)
 
@@ -165,7 +169,7 @@ def test_a_released_job_keeps_its_report(scene):
     """Edit mode drops a job's arrays before Blender builds its BMesh again: the report stays."""
     jobs = jobs_module()
     props = settings()
-    job = jobs.make_job(noisy_sphere(), props)
+    job = make_job(noisy_sphere(), props)
     list(jobs.run([job], props))
     expected = jobs.summary([job], props)
     job.change = None  # measured again by release, from the arrays

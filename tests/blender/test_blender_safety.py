@@ -129,7 +129,7 @@ def test_command_line_moves_relative_keys_too(scene, addon, tmp_path):
 @pytest.mark.parametrize("mode", ["SIMULTANEOUS", "SEQUENTIAL"])
 def test_every_route_gives_the_same_result_with_a_tolerance(scene, addon, tmp_path, mode):
     """F9/execute, the chunked modal runner, the command line and the core: bit for bit."""
-    jobs = sys.modules[ADDON + ".operators.jobs"]
+    jobs, mesh_objects = sys.modules[ADDON + ".jobs.mesh"], sys.modules[ADDON + ".operators.mesh_objects"]
     tolerance = 2e-4  # the routes all take it (and alpha, beta) in single precision, as the operator does
     props = progress.settings(mode=mode, iterations=60, tolerance=tolerance)
     alpha, beta = float(np.float32(props.alpha)), float(np.float32(props.beta))
@@ -147,7 +147,7 @@ def test_every_route_gives_the_same_result_with_a_tolerance(scene, addon, tmp_pa
     )
     assert expected.stopped_early and expected.iterations < 60
     for chunk in (None, 1, 4, 7):
-        (job,) = [jobs.make_job(obj, props)]
+        (job,) = [mesh_objects.make_job(obj, props)]
         list(jobs.run([job], props, chunk=chunk))
         assert np.array_equal(bits(job.result), bits(expected.positions)), chunk
         assert job.report.iterations == expected.iterations

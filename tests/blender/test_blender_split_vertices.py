@@ -1,10 +1,12 @@
 """Split vertices are one surface: a UV seam does not open, a flat-shaded soup smooths like its mesh."""
 
+import sys
+
 import bmesh
 import bpy
 import numpy as np
 import pytest
-from blender_scene import noisy_sphere, positions_of, select_only
+from blender_scene import ADDON, noisy_grid, noisy_sphere, positions_of, select_only
 
 
 def split(obj, every_edge=False):
@@ -74,3 +76,18 @@ def test_a_soup_smooths_like_its_mesh(scene, given):
     assert np.abs(whole[origin] - soup).max() <= 1e-6
     noisy = noisy_sphere("Noisy", seed=4)
     assert np.abs(whole - positions_of(noisy.data)).max() > 1e-3  # it did smooth
+
+
+def test_only_a_mesh_with_a_face_edge_on_one_face_is_searched_for_copies(scene):
+    """A closed mesh has no seam an exporter split: the welding's search is skipped; a seam or an open
+    border keeps it (the tests above show what it finds)."""
+    jobs = sys.modules[ADDON + ".operators.mesh_objects"]
+    settings = sys.modules[ADDON + ".cli.arguments"].Settings(iterations=10, auto_amount=False)
+    seams = {}
+    for name, obj in (
+        ("closed", noisy_sphere("Closed")),
+        ("seam", seamed_uv_sphere("Seam")[0]),
+        ("open", noisy_grid("Open")),
+    ):
+        seams[name] = jobs.make_job(obj, settings).seams
+    assert seams == {"closed": False, "seam": True, "open": True}

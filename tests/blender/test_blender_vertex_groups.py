@@ -90,7 +90,7 @@ def test_groups_named_like_attributes_are_read_in_bulk(scene, name):
 
 def as_the_add_on(obj, before, **options):
     """core's run as the operator makes it with these numbers: welded, the open border free."""
-    triangles = core.metrics.fan_triangles(np.array(faces_of(obj.data)))
+    triangles = core.geometry.fan_triangles(np.array(faces_of(obj.data)))
     return core.smooth_mesh(
         before,
         edges_of(obj.data),

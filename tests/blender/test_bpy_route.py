@@ -5,6 +5,8 @@ route is run by some test, and every `blender` line of the docs has the route's 
 import importlib.metadata
 import os
 import re
+import subprocess
+import sys
 
 import bpy
 import pytest
@@ -129,12 +131,57 @@ def test_default_user_folder_is_its_own_not_blenders(scene, extension_zip, tmp_p
     assert os.listdir(home) == [".local"]  # no ~/.config/blender (Blender's own user folder)
 
 
-def test_user_folder_option_comes_first(extension_zip, tmp_path):
+@pytest.mark.parametrize("where", ["first", "last"])
+def test_user_folder_option_before_or_after_the_subcommand(extension_zip, tmp_path, where):
     work = workdir(tmp_path / "work")
-    completed = run_line(f"{ROUTE} --user-folder mine install {extension_zip}", work, user_env(tmp_path / "other"))
+    line = f"{ROUTE} --user-folder mine install {extension_zip}"
+    if where == "last":
+        line = f"{ROUTE} install {extension_zip} --user-folder mine"
+    completed = run_line(line, work, user_env(tmp_path / "other"))
     assert completed.returncode == 0, completed.stdout + completed.stderr
     assert (work / "mine" / "extensions" / "user_default" / "hc_smooth").is_dir()
     assert not (tmp_path / "other").exists()
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        ("install --user-folder mine/deep", "install takes one extension zip: install [--user-folder DIR] ZIP"),
+        ("install a.zip b.zip --user-folder mine/deep", "(given: a.zip b.zip)"),
+        ("install missing.zip --user-folder mine/deep", "missing.zip does not exist"),
+        ("--user-folder mine/deep install missing.zip --user-folder other", "give --user-folder once"),
+        ("hc_smooth scans -o out --user-folder", "--user-folder needs a folder"),
+    ],
+)
+def test_a_refused_install_makes_no_user_folder(tmp_path, args, message):
+    work = workdir(tmp_path / "work")
+    completed = run_line(f"{ROUTE} {args}", work, user_env(tmp_path / "env", XDG_DATA_HOME=str(tmp_path / "xdg")))
+    assert completed.returncode == 2 and message in completed.stderr, completed.stderr
+    assert "Traceback" not in completed.stderr
+    assert sorted(os.listdir(work)) == ["examples", "scripts"] and sorted(os.listdir(tmp_path)) == ["work"]
+
+
+@pytest.mark.parametrize("args", ["install build/hc_smooth-0.1.0.zip", "hc_smooth scans -o out"])
+def test_a_python_without_bpy_is_told_what_to_do_and_nothing_is_made(tmp_path, args):
+    """`python -S` has no site-packages, so no bpy: a plain message, exit status 1, no user folder (not
+    even the default one, which is named after the bpy version)."""
+    work = workdir(tmp_path / "work")
+    (work / "build").mkdir()
+    (work / "build" / "hc_smooth-0.1.0.zip").write_bytes(b"PK")
+    env = {key: value for key, value in os.environ.items() if key != "BLENDER_USER_RESOURCES"}
+    env.update(XDG_DATA_HOME=str(tmp_path / "xdg"), HOME=str(tmp_path / "home"))
+    completed = subprocess.run(
+        [sys.executable, "-S", "scripts/hc_smooth_bpy.py", *args.split()],
+        cwd=work,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert completed.returncode == 1, completed.stdout + completed.stderr
+    assert f"this Python ({sys.executable}) has no bpy module" in completed.stderr
+    assert "python scripts/hc_smooth_files.py" in completed.stderr and "Traceback" not in completed.stderr
+    assert sorted(os.listdir(tmp_path)) == ["work"] and sorted(os.listdir(work)) == ["build", "examples", "scripts"]
 
 
 @pytest.mark.parametrize(

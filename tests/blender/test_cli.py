@@ -154,6 +154,20 @@ def test_smooths_each_format_like_the_operator(cli, capsys, tmp_path, fmt):
     assert leftovers(tmp_path / "out") == []
 
 
+def test_long_runs_print_progress_lines(cli, capsys, tmp_path, monkeypatch):
+    """A file's smoothing prints 'smoothing FILE: N %' lines once it has run PROGRESS_FIRST seconds, at
+    most every PROGRESS_EVERY (both 0 here: a line for every slice), with Keep Sharp Edges as with HC."""
+    source = export_noisy_sphere(tmp_path / "scan.ply")
+    monkeypatch.setattr(cli.command, "PROGRESS_FIRST", 0.0)
+    monkeypatch.setattr(cli.command, "PROGRESS_EVERY", 0.0)
+    for options in ([], ["--keep-sharp-edges"]):
+        assert cli.main([str(source), "-o", str(tmp_path / f"out{len(options)}"), *options]) == 0
+        lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("hc_smooth: smoothing")]
+        percents = [int(line.rsplit(": ", 1)[1].rstrip(" %")) for line in lines]
+        assert len(percents) >= 3 and percents == sorted(percents) and percents[-1] <= 100, lines
+        assert all(str(source) in line for line in lines)
+
+
 def test_automatic_amount_unless_alpha_or_iterations_given(cli, tmp_path):
     """Nothing given: the operator's default (Automatic Amount); --iterations or --alpha: exactly as given."""
     source = export_noisy_sphere(tmp_path / "scan.ply")

@@ -163,7 +163,7 @@ def test_files_are_smoothed_in_the_precision_they_store(cli, addon, tmp_path, ki
         smoothed = np.array([line.split()[1:] for line in out.read_text().splitlines() if line.startswith("v ")], float)
     else:
         smoothed = columns_of(read_ply(out)[2], "xyz")
-    jobs, settings_spec = sys.modules[ADDON + ".operators.jobs"], sys.modules[ADDON + ".settings_spec"]
+    jobs, settings_spec = sys.modules[ADDON + ".jobs.mesh"], sys.modules[ADDON + ".settings_spec"]
     options = jobs.core_options(settings_spec.MeshSettings())
     edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
     expected = sys.modules[ADDON + ".core"].MeshSmoother(positions, edges, faces=faces, **options).run()

@@ -86,7 +86,7 @@ def test_obj_with_a_material_library_keeps_it_and_every_other_line(cli, tmp_path
 
 def test_binary_stl_keeps_its_header_and_attribute_bytes(cli, formats, tmp_path):
     # noise the Automatic Amount finds and smooths (on the coarser octahedron with noise 0.01 it finds none,
-    # and what it would take away is the shape: the part is left as it was, core.collapse)
+    # and what it would take away is the shape: the part is left as it was, core.mesh.collapse)
     positions, faces = scan_files.octahedron(noise=0.03, subdivisions=3)
     records = np.zeros(len(faces), formats.RECORD)
     records["corners"] = positions[faces]

@@ -71,9 +71,9 @@ def attribute_names(mesh):
     return sorted(attribute.name for attribute in mesh.attributes if not attribute.name.startswith("."))
 
 
-def check_map(mesh, before, triangles, names=(ATTRIBUTE, COLORS)):
+def check_map(mesh, before, triangles, names=(ATTRIBUTE, COLORS), shown=True):
     """hc_deviation (or the ``names`` given) is the move along the input's normals; the colours are core's ramp
-    of it, active."""
+    of it, the active colours where ``shown`` (a mesh without colours of its own)."""
     after = positions_of(mesh)
     assert not np.array_equal(after, before), "nothing moved: the map would be vacuous"
     values = attribute_values(mesh, names[0])
@@ -83,7 +83,7 @@ def check_map(mesh, before, triangles, names=(ATTRIBUTE, COLORS)):
     np.testing.assert_allclose(values, expected, rtol=0, atol=1e-5 * scale)
     extent = core.deviation_extent(values)
     np.testing.assert_array_equal(colors_of(mesh, names[1]), core.deviation_colors(values, extent, linear=True))
-    assert mesh.color_attributes.active_color_name == names[1]
+    assert (mesh.color_attributes.active_color_name == names[1]) is shown
     # Outwards is red, inwards blue.
     colors = colors_of(mesh, names[1])
     assert np.all(colors[values > extent / 2, 0] > colors[values > extent / 2, 2])
@@ -294,13 +294,29 @@ def test_user_attributes_of_the_maps_names_are_kept_and_so_is_the_render_colour(
         assert got[:2] == (domain, data_type) and np.array_equal(got[2], values), name
     assert [layer.name for layer in mesh.uv_layers] == uv_maps
     moved = (f"{ATTRIBUTE}.001", f"{COLORS}.001")
-    check_map(mesh, before, triangles, names=moved)
+    check_map(mesh, before, triangles, names=moved, shown=False)
     assert mesh.color_attributes.default_color_name == "Col"  # renders and exporters keep the scan's colours
     assert f"stored in '{moved[0]}' and '{moved[1]}'" in capfd.readouterr().out
     # Run again: the same two attributes take the new map.
     names = attribute_names(mesh)
     assert bpy.ops.object.hc_smooth(deviation_map=True, auto_amount=False, iterations=2) == {"FINISHED"}
     assert attribute_names(mesh) == names
+
+
+def test_the_users_active_and_render_colours_stay_as_they_were(scene, capfd):
+    """A scan with colours of its own (one the render colour, another the active one, as the user chose): the
+    map leaves both choices alone, the viewport's shading too, and the report says where to pick the map."""
+    obj = noisy_sphere(sigma=0.05)
+    mesh = obj.data
+    for name in ("Col", "Paint"):
+        mesh.color_attributes.new(name, "BYTE_COLOR", "POINT")
+    mesh.color_attributes.default_color_name, mesh.color_attributes.active_color_name = "Col", "Paint"
+    before, triangles = positions_of(mesh), triangles_of(mesh)
+    assert bpy.ops.object.hc_smooth(deviation_map=True) == {"FINISHED"}
+    check_map(mesh, before, triangles, shown=False)
+    assert (mesh.color_attributes.default_color_name, mesh.color_attributes.active_color_name) == ("Col", "Paint")
+    said = capfd.readouterr().out
+    assert f"'{COLORS}' is under Color Attributes" in said
 
 
 def test_a_mesh_without_faces_maps_zero(scene):
@@ -340,6 +356,52 @@ def test_modifier_outputs_the_move_along_the_normals(scene, method):
     expected = expected_deviation(before, after, triangles)
     np.testing.assert_allclose(attribute_values(mesh), expected, rtol=0, atol=1e-5 * np.abs(expected).max())
     assert ATTRIBUTE not in attribute_names(obj.data)  # the original mesh stays as it is
+
+
+def user_data_named_like_the_map(obj, kind):
+    """Give ``obj`` a thing of the user's named hc_deviation: a UV map, an integer face attribute, a float point
+    attribute or a vertex group (Geometry Nodes read each as an attribute of that name)."""
+    mesh, rng = obj.data, np.random.default_rng(7)
+    if kind == "uv map":
+        mesh.uv_layers.new(name=ATTRIBUTE).data.foreach_set("uv", rng.random(2 * len(mesh.loops)).astype(np.float32))
+    elif kind == "face integers":
+        mesh.attributes.new(ATTRIBUTE, "INT", "FACE").data.foreach_set("value", np.arange(len(mesh.polygons)))
+    elif kind == "point floats":
+        mesh.attributes.new(ATTRIBUTE, "FLOAT", "POINT").data.foreach_set(
+            "value", rng.random(len(mesh.vertices)).astype(np.float32)
+        )
+    else:
+        obj.vertex_groups.new(name=ATTRIBUTE).add([0, 5, 9], 0.75, "REPLACE")
+
+
+def users_data(obj, kind):
+    """What ``obj``'s evaluated mesh holds under the map's name: the attribute's data, or the group's weights."""
+    evaluated_object = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    if kind == "vertex group":
+        return vertex_group_weights(evaluated_object, ATTRIBUTE)
+    domain, data_type, values = attribute_data(evaluated_object.data, ATTRIBUTE)
+    return domain, data_type, values.tolist()
+
+
+@pytest.mark.parametrize("kind", ["uv map", "face integers", "point floats", "vertex group"])
+def test_modifier_never_overwrites_what_the_user_named_like_the_map(scene, kind):
+    """The modifier's map leaves a UV map, an attribute or a vertex group named hc_deviation as it is, and says
+    in the Warnings panel why it stored no map (the operators choose another name; the modifier's output
+    name is the one the user's materials read)."""
+    obj = noisy_sphere(sigma=0.05)
+    user_data_named_like_the_map(obj, kind)
+    kept = users_data(obj, kind)
+    modifier = add_modifier(obj, deviation_map=True, alpha=0.1, iterations=4)
+    before = positions_of(obj.data)
+    assert not np.array_equal(positions_of(evaluated(obj)), before)  # smoothed all the same
+    assert users_data(obj, kind) == kept
+    warnings = [w.message for w in modifier.node_warnings]
+    assert any("Deviation Map not stored" in message and ATTRIBUTE in message for message in warnings), warnings
+    # Without a thing of that name the map is stored and nothing is said.
+    other = noisy_sphere(name="Other", sigma=0.05)
+    modifier = add_modifier(other, deviation_map=True, alpha=0.1, iterations=4)
+    assert ATTRIBUTE in attribute_names(evaluated(other))
+    assert not [w.message for w in modifier.node_warnings if "Deviation Map" in w.message]
 
 
 def test_modifier_off_adds_nothing(scene):

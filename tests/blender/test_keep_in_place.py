@@ -86,7 +86,7 @@ def test_off_and_set_numbers_equal_core(scene):
     algorithm, bit for bit), whether on or off."""
     obj = noisy_uv_sphere()
     before = positions_of(obj.data)
-    triangles = core.metrics.fan_triangles(faces_of(obj.data))
+    triangles = core.geometry.fan_triangles(faces_of(obj.data))
     edges = edges_of(obj.data)
     assert bpy.ops.object.hc_smooth(keep_in_place=False) == {"FINISHED"}
     expected = core.smooth_mesh(before, edges, faces=triangles, weld=True, keep_in_place=False)

@@ -55,7 +55,7 @@ def noisy_box(name="Box", sigma=0.01, seed=3):
 
 def core_run(before, obj, **options):
     """What the add-on hands core for a mesh (split vertices welded, the paper's border rule)."""
-    triangles = core.metrics.fan_triangles(np.array(faces_of(obj.data)))
+    triangles = core.geometry.fan_triangles(np.array(faces_of(obj.data)))
     return core.smooth_mesh(
         before, edges_of(obj.data), faces=triangles, weld=True, border="free", return_report=True, **options
     )
@@ -97,7 +97,7 @@ def test_explicit_steps_and_angle_run_as_set(scene):
 def dihedral_errors(positions, obj):
     """|angle - 90°| between the two faces at every crease of the box (edges between faces of different
     sides), in degrees: 0 for a perfect box."""
-    triangles = core.metrics.fan_triangles(np.array(faces_of(obj.data)))
+    triangles = core.geometry.fan_triangles(np.array(faces_of(obj.data)))
     a, b, c = (positions[triangles[:, k]] for k in range(3))
     normals = np.cross(b - a, c - a)
     normals /= np.linalg.norm(normals, axis=1, keepdims=True)
@@ -145,7 +145,7 @@ def test_command_line_takes_the_angle_in_degrees(cli, scene, tmp_path, capsys):
     assert "Keep Sharp Edges, " in capsys.readouterr().out  # what ran: steps, not HC's iterations
     out = tmp_path / "out" / "box.obj"
     smoothed = np.array([line.split()[1:] for line in out.read_text().splitlines() if line.startswith("v ")], float)
-    triangles = core.metrics.fan_triangles(quads)
+    triangles = core.geometry.fan_triangles(quads)
     sides = np.array(quads)
     edges = np.concatenate([sides[:, [k, (k + 1) % 4]] for k in range(4)])  # the quads' sides, as Blender's
     expected = core.smooth_mesh(

@@ -23,7 +23,7 @@ from blender_scene import (
     select_only,
     transformed,
 )
-from test_ui import RecordingLayout
+from test_ui import RecordingLayout, redo_panel
 
 import core
 
@@ -53,18 +53,6 @@ def manual(**settings):
     if "auto_amount" in bpy.ops.object.hc_smooth.get_rna_type().properties:
         settings["auto_amount"] = False
     return settings
-
-
-def redo_panel(operator):
-    """Draw a registered operator's redo panel into a RecordingLayout (an operator's layout is read-only: a
-    stand-in of its class name carries its properties)."""
-    properties = operator.properties
-    names = [prop.identifier for prop in properties.bl_rna.properties if prop.identifier != "rna_type"]
-    operator_class = getattr(bpy.types, operator.bl_idname)
-    stand_in = type("StandIn", (), {"bl_idname": operator_class.bl_idname})()
-    stand_in.__dict__.update({name: getattr(properties, name) for name in names}, layout=RecordingLayout())
-    operator_class.draw(stand_in, bpy.context)
-    return stand_in.layout
 
 
 def module(name):
@@ -731,3 +719,32 @@ def test_saved_file_evaluates_the_same_without_the_add_on(scene, tmp_path):
     fixed |= boundary_mask(bpy.data.objects["Patch"].data)
     want = expected(bpy.data.objects["Patch"], "HC", fixed, influence=weights)
     assert np.abs(reopened - want).max() <= TOLERANCE * diagonal(want)
+
+
+def test_moving_the_object_evaluates_the_modifier_again(scene):
+    """Documented in docs/modifier.md, "Limits": the group reads its object's world matrix (Self Object), and
+    Blender then evaluates it again on every move of the object, even a translation with no Deviation Limit and
+    no Deviation Map; a Smooth modifier's object is only moved."""
+    updates = []
+
+    @bpy.app.handlers.persistent
+    def record(scene, depsgraph):
+        updates.extend(
+            (update.id.name, update.is_updated_geometry) for update in depsgraph.updates if update.id.name in names
+        )
+
+    smoothed = noisy_sphere(name="Smoothed")
+    select_only(smoothed)
+    assert bpy.ops.object.hc_smooth_modifier_add(max_deviation=0.0, deviation_map=False) == {"FINISHED"}
+    plain = noisy_sphere(name="Plain")
+    plain.modifiers.new("Smooth", "SMOOTH")
+    names = {"Smoothed", "Plain"}
+    bpy.context.view_layer.update()
+    bpy.app.handlers.depsgraph_update_post.append(record)
+    try:
+        for obj in (smoothed, plain):
+            obj.location.x += 1.0
+        bpy.context.view_layer.update()
+    finally:
+        bpy.app.handlers.depsgraph_update_post.remove(record)
+    assert ("Smoothed", True) in updates and ("Plain", False) in updates and ("Plain", True) not in updates

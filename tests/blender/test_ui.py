@@ -12,7 +12,7 @@ import types
 import bpy
 import numpy as np
 import pytest
-from blender_scene import ADDON, noisy_grid, noisy_sphere, positions_of
+from blender_scene import ADDON, noisy_grid, noisy_sphere, positions_of, select_only
 
 import core
 from core.convergence import convergence_lines
@@ -34,8 +34,9 @@ def shipped_preset_files():
 class RecordingLayout:
     """Stands in for bpy.types.UILayout: records every call; sub-layouts share the record."""
 
-    def __init__(self, record=None):
+    def __init__(self, record=None, shown=None):
         self.record = [] if record is None else record
+        self.shown = {} if shown is None else shown  # {property name: drawn live (not greyed out)}
         self.active = True
         self.enabled = True
         self.alert = False
@@ -44,7 +45,9 @@ class RecordingLayout:
         self.operator_context = "INVOKE_DEFAULT"
 
     def _sub(self, *args, **kwargs):
-        return RecordingLayout(self.record)
+        sub = RecordingLayout(self.record, self.shown)
+        sub.active = self.active  # greyed out with its parent, as Blender draws it
+        return sub
 
     row = column = box = split = _sub
 
@@ -56,6 +59,8 @@ class RecordingLayout:
     def __getattr__(self, name):  # prop, prop_search, label, menu, separator, ...
         def call(*args, **kwargs):
             self.record.append((name, args, kwargs))
+            if name in ("prop", "prop_search"):
+                self.shown[args[1]] = self.active
 
         return call
 
@@ -73,6 +78,19 @@ def draw(panel_class, context):
     layout = RecordingLayout()
     panel_class.draw(types.SimpleNamespace(layout=layout), context)
     return layout
+
+
+def redo_panel(operator):
+    """Draw a registered operator's redo panel into a RecordingLayout (an operator's layout is read-only: a
+    stand-in of its class name carries its values and its properties, which tell what the caller set)."""
+    properties = operator.properties
+    names = [prop.identifier for prop in properties.bl_rna.properties if prop.identifier != "rna_type"]
+    operator_class = getattr(bpy.types, operator.bl_idname)
+    stand_in = type("StandIn", (), {"bl_idname": operator_class.bl_idname})()
+    stand_in.__dict__.update({name: getattr(properties, name) for name in names}, layout=RecordingLayout())
+    stand_in.properties = properties
+    operator_class.draw(stand_in, bpy.context)
+    return stand_in.layout
 
 
 KINDS = {"ENUM": "enum", "FLOAT": "float", "INT": "int", "BOOLEAN": "bool", "STRING": "string"}
@@ -359,6 +377,51 @@ def test_keep_sharp_edges_button_runs_its_automatic_amount_with_any_method(setti
     capfd.readouterr()
     assert bpy.ops.object.hc_smooth(**passed) == {"FINISHED"}
     assert "automatic amount" in capfd.readouterr().out
+
+
+@pytest.mark.parametrize("given", [{"alpha": 0.0}, {"iterations": 3}, {"alpha": 0.0, "iterations": 3}])
+def test_redo_panel_draws_live_the_numbers_the_caller_set(scene, capfd, given):
+    """Alpha or Iterations set by the caller (a script, or an edit in the F9 panel) run every number as set,
+    the Automatic Amount's checkbox notwithstanding: the redo panel draws them live, warns about the alpha
+    that ran (0 leaves HC's convergence region) and does not say the modifier would take them otherwise."""
+    select_only(noisy_sphere(subdivisions=2))
+    bpy.ops.ed.undo_push(message="Before")
+    capfd.readouterr()
+    assert bpy.ops.object.hc_smooth("INVOKE_DEFAULT", True, **given) == {"FINISHED"}
+    ran = capfd.readouterr().out
+    assert "automatic amount" not in ran  # every number as set
+    operator = bpy.context.window_manager.operators[-1]
+    assert operator.properties.auto_amount is True
+    panel = redo_panel(operator)
+    assert panel.shown["alpha"] and panel.shown["iterations"] and panel.shown["auto_amount"]
+    assert "The modifier takes Alpha, Iterations and Deviation Limit as set" not in panel.labels()
+    if "alpha" in given:
+        assert "Outside the convergence region:" in panel.labels() and "alpha is 0" in ran
+    # Left to the Automatic Amount, they are greyed out: it chooses them (called as a click is, the run
+    # brings the last run's values back, and they are not the caller's).
+    bpy.ops.ed.undo_push(message="Again")
+    assert bpy.ops.object.hc_smooth("INVOKE_DEFAULT", True) == {"FINISHED"}
+    panel = redo_panel(bpy.context.window_manager.operators[-1])
+    assert not panel.shown["alpha"] and not panel.shown["iterations"]
+    assert "automatic amount" in capfd.readouterr().out
+
+
+def test_points_redo_panel_draws_live_the_numbers_the_caller_set(scene):
+    """The point-cloud operator runs Alpha or Steps per Round as set when the caller sets either: its redo
+    panel draws both live then, and greys them out when the Automatic Amount chooses them."""
+    directions = np.random.default_rng(0).normal(size=(800, 3))
+    mesh = bpy.data.meshes.new("Scan")
+    mesh.from_pydata((directions / np.linalg.norm(directions, axis=1)[:, None]).tolist(), [], [])
+    obj = bpy.data.objects.new("Scan", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    select_only(obj)
+    for given, live in (({"alpha": 0.05}, True), ({"iterations_per_round": 4}, True), ({}, False)):
+        bpy.ops.ed.undo_push(message="Before")
+        assert bpy.ops.object.hc_smooth_points("INVOKE_DEFAULT", True, rounds=1, **given) == {"FINISHED"}
+        operator = bpy.context.window_manager.operators[-1]
+        assert operator.bl_idname == "OBJECT_OT_hc_smooth_points" and operator.properties.auto_amount is True
+        panel = redo_panel(operator)
+        assert panel.shown["alpha"] is live and panel.shown["iterations_per_round"] is live, given
 
 
 # --- presets --------------------------------------------------------------------------------------------

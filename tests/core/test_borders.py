@@ -1,4 +1,4 @@
-"""Borders hold (core.borders, MeshSmoother(border=...)): open-border vertices follow their border as a
+"""Borders hold (core.mesh.borders, MeshSmoother(border=...)): open-border vertices follow their border as a
 curve ("curve"), stay ("fixed") or average all neighbours ("free", the paper's algorithm)."""
 
 import numpy as np
@@ -8,9 +8,9 @@ from paper_reference import smooth_loop
 from test_welding import first_appearance, soup_of
 
 import core
-from core import mesh_amount
-from core.borders import apply_border, border_edges
-from core.metrics import fan_triangles
+from core.geometry import fan_triangles
+from core.mesh import amount as mesh_amount
+from core.mesh.borders import apply_border, border_edges
 
 
 def quad_grid(nx, ny):

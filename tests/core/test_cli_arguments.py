@@ -59,6 +59,20 @@ def test_cli_package_imports_no_blender_module():
             "--iterations 100000000000 is above 1000, the most the command line runs (as the HC Smooth modifier): "
             "it runs unattended",
         ),
+        # Point clouds: rounds times steps per round are HC steps too, with the same maximum.
+        (
+            ["a.ply", "-o", "out", "--points", "--rounds", "100000000000"],
+            "--rounds 100000000000 (at least one step each) makes 100000000000 HC steps, above 1000, the most "
+            "the command line runs",
+        ),
+        (
+            ["a.ply", "-o", "out", "--points", "--steps-per-round", "100000000"],
+            "--steps-per-round 100000000 with the default 3 rounds makes 300000000 HC steps, above 1000",
+        ),
+        (
+            ["a.ply", "-o", "out", "--points", "--rounds", "40", "--steps-per-round", "30"],
+            "--steps-per-round 30 with --rounds 40 makes 1200 HC steps, above 1000",
+        ),
         (["a.ply", "-o", "out", "--method", "taubin"], "invalid choice"),
         (["x/a.ply", "y/a.ply", "-o", "out"], "would both be written"),
         # Numbers that are not finite pass no range check by comparison: refused by name, before any file is read.
@@ -95,6 +109,15 @@ def test_usage_errors(tmp_path, monkeypatch, argv, message):
         arguments.parse(argv)
     assert message in str(raised.value)
     assert os.listdir(tmp_path) == []  # planning reads the file system, never writes to it
+
+
+def test_point_steps_up_to_the_maximum_are_taken(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    most = spec.COMMAND_MAX_ITERATIONS
+    plan = arguments.parse(["a.ply", "-o", "out", "--points", "--rounds", "10", "--steps-per-round", str(most // 10)])
+    assert (plan.point_options["rounds"], plan.point_options["iterations_per_round"]) == (10, most // 10)
+    plan = arguments.parse(["a.ply", "-o", "out", "--points", "--rounds", str(most)])
+    assert plan.point_options["rounds"] == most
 
 
 def test_a_good_command_line_makes_a_plan(tmp_path, monkeypatch):

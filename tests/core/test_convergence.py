@@ -1,5 +1,7 @@
 """Section 5 of the paper: what converges, what oscillates, and where the limits lie."""
 
+import warnings
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -146,3 +148,18 @@ def test_panel_lines_follow_the_paper():
             assert convergence_lines("original", alpha, beta)[0] == (alpha > 0)  # to a shrunken shape
             assert not convergence_lines("plain", alpha, beta)[0] and not convergence_lines("central", alpha, beta)[0]
     assert "\u03b2 = 0.4 is not above 0.5" in convergence_lines("hc", 0.1, 0.4)[1]
+
+
+def test_smooth_at_its_defaults_is_inside_the_convergence_region():
+    """core.smooth and core.Smoothing left at their defaults run HC inside Theorem 5.2's region: no
+    ConvergenceWarning, and the defaults are the ones the mesh pipeline documents."""
+    positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    edges = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", core.ConvergenceWarning)
+        result = core.smooth(positions, edges, iterations=3)
+        core.Smoothing(positions, edges, iterations=3)
+    assert result.iterations == 3
+    assert core.in_convergence_region(core.DEFAULT_ALPHA, core.DEFAULT_BETA)
+    with pytest.warns(core.ConvergenceWarning):  # the warning this test relies on is there off the region
+        core.smooth(positions, edges, alpha=0.0, beta=0.5, iterations=3)

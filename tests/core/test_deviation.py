@@ -1,4 +1,4 @@
-"""The deviation map (core.deviation) and the PLY vertex property that carries it (cli.formats).
+"""The deviation map (core.mesh.deviation) and the PLY vertex property that carries it (cli.formats).
 
 The expected deviations are computed here: vertex normals summed triangle by triangle in a Python loop, the
 displacement projected on them. The colours are checked against the ramp's anchors and its symmetry.
@@ -12,7 +12,7 @@ from test_cli_formats import ENCODINGS, header, ply_values, smoothed
 
 import core
 from bench.primitives import grid, ico_sphere, with_noise
-from core import deviation as deviation_module
+from core.mesh import deviation as deviation_module
 
 formats = load("cli.formats")
 FormatError = formats.FormatError
@@ -51,7 +51,7 @@ def test_deviation_is_the_move_along_the_input_normals(part, dtype):
     np.testing.assert_allclose(deviation, expected, rtol=0, atol=tolerance * np.abs(expected).max())
     assert np.abs(expected).max() > 0 and (expected > 0).any() and (expected < 0).any()
     # Normals the caller has give the same numbers; the map holds them.
-    normals = core.metrics.measure_input(before, part.faces).normals
+    normals = core.mesh.metrics.measure_input(before, part.faces).normals
     np.testing.assert_array_equal(core.normal_deviation(before, after, normals=normals), deviation)
     np.testing.assert_array_equal(core.deviation_map(before, after, part.faces).deviation, deviation)
 

@@ -77,10 +77,10 @@ def test_bad_limits_are_refused(bad):
 
 
 def test_the_automatic_amount_limits_to_a_multiple_of_its_noise_and_explicit_numbers_do_not():
-    noisy = sm.noisy(SPHERE[0], sigma=0.15, seed=5)  # noise found: above core.mesh_noise's threshold
+    noisy = sm.noisy(SPHERE[0], sigma=0.15, seed=5)  # noise found: above core.mesh.noise's threshold
     result, report = core.smooth_mesh(noisy, EDGES, return_report=True)
     assert report.amount is not None
-    assert report.max_deviation == pytest.approx(core.mesh_smoother.DEVIATION_IN_NOISE * report.amount.sigma)
+    assert report.max_deviation == pytest.approx(core.mesh.smooth.DEVIATION_IN_NOISE * report.amount.sigma)
     assert np.linalg.norm(result - noisy, axis=1).max() <= report.max_deviation * (1 + 1e-12)
     explicit, report = core.smooth_mesh(noisy, EDGES, alpha=0.1, beta=0.6, iterations=5, return_report=True)
     assert report.max_deviation == 0.0

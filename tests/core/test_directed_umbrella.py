@@ -11,8 +11,8 @@ from paper_reference import smooth_loop
 
 import core
 from core import locality
-from core.borders import apply_border
-from core.metrics import fan_triangles
+from core.geometry import fan_triangles
+from core.mesh.borders import apply_border
 
 
 def dense_pattern(operator):
@@ -82,7 +82,7 @@ def test_renumbered_keeps_a_directed_pattern():
 
 
 def curve_operator(positions, faces):
-    """The umbrella of core.borders' "curve" rule (directed) and the corners it fixes."""
+    """The umbrella of core.mesh.borders' "curve" rule (directed) and the corners it fixes."""
     n = len(positions)
     operator = core.umbrella_operator(sm.edges_of(faces), n)
     return apply_border("curve", operator, fan_triangles(faces), np.zeros(n, dtype=bool))

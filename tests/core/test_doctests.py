@@ -18,7 +18,7 @@ MODULES = ["core"] + sorted(info.name for info in pkgutil.walk_packages(core.__p
 # have no docstring of their own.
 PUBLIC = [
     (owner.__name__, name)
-    for owner in (core, core.pointcloud)
+    for owner in (core, core.mesh, core.pointcloud)
     for name in owner.__all__
     if inspect.ismodule(getattr(owner, name)) or callable(getattr(owner, name))
 ]
@@ -39,8 +39,8 @@ def test_examples_print_what_they_say(name):
 
 
 def test_the_modules_and_names_are_found():
-    assert {"core.smoothing", "core.mesh_smoother", "core.pointcloud.smooth"} <= set(MODULES)
-    assert {("core", "hc_smooth"), ("core", "metrics"), ("core.pointcloud", "rfs_mesh")} <= set(PUBLIC)
+    assert {"core.smoothing", "core.mesh.smooth", "core.pointcloud.smooth"} <= set(MODULES)
+    assert {("core", "hc_smooth"), ("core.mesh", "smooth_mesh"), ("core.pointcloud", "rfs_mesh")} <= set(PUBLIC)
 
 
 @pytest.mark.parametrize(("owner", "name"), PUBLIC)

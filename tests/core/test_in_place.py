@@ -1,4 +1,4 @@
-"""Keep in Place (core.in_place): the default moves vertices across the surface, not along it, so
+"""Keep in Place (core.mesh.in_place): the default moves vertices across the surface, not along it, so
 textures, UVs and open outlines stay where they were; set numbers still run the paper's algorithm."""
 
 import warnings
@@ -8,8 +8,9 @@ import pytest
 
 import core
 from bench.primitives import grid, ico_sphere
-from core.in_place import keep_in_place
-from core.volume import vertex_normals
+from core.geometry import vertex_normals
+from core.mesh.borders import border_edges
+from core.mesh.in_place import keep_in_place, outline_curves
 
 
 def _noisy_along_normals(part, sigma, seed=0):
@@ -117,6 +118,39 @@ def test_open_outline_is_not_pulled_in():
     assert abs(kept_area / clean_area - 1) < 0.01 and abs(kept_reach / clean_reach - 1) < 0.01
     sliding_reach = area(sliding)[1]
     assert sliding_reach < kept_reach
+
+
+def test_outline_is_smoothed_as_a_curve_where_noise_folds_the_layout():
+    """Grid with noise along every axis at 0.6 edge lengths: the layout folds, so vertices take their slide
+    back, but the outline takes back only its move across the border curve: no pull-in, half its jaggies
+    gone; sliding, it is pulled in by more than the noise."""
+    part = grid(40)
+    sigma = 0.03
+    noisy = part.positions + np.random.default_rng(2).normal(0.0, sigma, part.positions.shape)
+    triangles = part.triangles()
+    on_side = (np.abs(part.positions[:, :2]) == 1.0).any(axis=1) & ~(np.abs(part.positions[:, :2]) == 1.0).all(axis=1)
+    axis = np.abs(part.positions[on_side, :2]).argmax(axis=1)
+
+    def inward(points):  # each side vertex's offset from its clean side line, into the grid
+        return 1.0 - np.abs(points[on_side][np.arange(axis.size), axis])
+
+    kept = core.smooth_mesh(noisy, part.edges, faces=triangles, weld=True)
+    sliding = core.smooth_mesh(noisy, part.edges, faces=triangles, weld=True, keep_in_place=False)
+    assert abs(inward(kept).mean()) < 0.1 * sigma < sigma < inward(sliding).mean()
+    assert np.sqrt(np.mean(inward(kept) ** 2)) < 0.5 * np.sqrt(np.mean(inward(noisy) ** 2))
+
+
+def test_outline_curves_lists_each_border_vertex_between_its_two_neighbours():
+    """A strip of two quads: six border vertices in one loop; an extra triangle on a corner makes a vertex
+    where four border edges meet, which ends the curves there."""
+    strip = np.array([[0, 1, 3], [0, 3, 2], [2, 3, 5], [2, 5, 4]])
+    vertices, before, after = outline_curves(border_edges(strip, 6), 6)
+    assert vertices.tolist() == [0, 1, 2, 3, 4, 5]
+    neighbours = {v: {b, a} for v, b, a in zip(vertices.tolist(), before.tolist(), after.tolist())}
+    assert neighbours == {0: {1, 2}, 1: {0, 3}, 2: {0, 4}, 3: {1, 5}, 4: {2, 5}, 5: {3, 4}}
+    bowtie = np.concatenate([strip, [[5, 6, 7]]])
+    vertices, _, _ = outline_curves(border_edges(bowtie, 8), 8)
+    assert 5 not in vertices.tolist() and {6, 7} <= set(vertices.tolist())
 
 
 def test_set_numbers_run_the_paper_algorithm_unless_asked(sphere):

@@ -1,4 +1,4 @@
-"""core.choose_amount: the Automatic Amount for meshes (core/mesh_amount.py)."""
+"""core.choose_amount: the Automatic Amount for meshes (core/mesh/amount.py)."""
 
 import math
 import warnings
@@ -8,7 +8,7 @@ import pytest
 
 import core
 from bench.meshes import icosphere  # pure NumPy, no bench requirements
-from core import mesh_amount as noise
+from core.mesh import amount as noise
 
 
 def edges_of(faces):
@@ -87,7 +87,7 @@ def test_chosen_amount_is_near_the_best_number_of_iterations(ratio):
 
 
 def test_light_noise_is_found_and_smoothed_within_its_radius():
-    """Noise of 0.05 edge lengths, below core.mesh_noise's threshold: a half step takes most of it away,
+    """Noise of 0.05 edge lengths, below core.mesh.noise's threshold: a half step takes most of it away,
     so it is found as light noise; the default removes more of it than the fixed HC default does, and no
     vertex moves farther than LIGHT_DEVIATIONS robust estimates."""
     vertices, faces = bumpy_sphere()
@@ -97,32 +97,32 @@ def test_light_noise_is_found_and_smoothed_within_its_radius():
     list(chooser.steps())
     found = chooser.noise
     assert chooser.amount.noise_found and found.light.all()
-    assert 0.0 < found.sigma[0] < core.mesh_noise.NOISE_THRESHOLD * found.edge_length[0]
+    assert 0.0 < found.sigma[0] < core.mesh.noise.NOISE_THRESHOLD * found.edge_length[0]
     result, report = core.smooth_mesh(noisy, edges, faces=faces, return_report=True)
     fixed = core.hc_smooth(noisy, edges, alpha=0.1, beta=0.6, iterations=10)
     assert surface_error(result, vertices) < surface_error(fixed, vertices) < surface_error(noisy, vertices)
     moved = np.linalg.norm(result - noisy, axis=1)
     assert report.iterations > 0
-    assert moved.max() <= core.mesh_noise.LIGHT_DEVIATIONS * found.sigma[0] * (1 + 1e-9)
+    assert moved.max() <= core.mesh.noise.LIGHT_DEVIATIONS * found.sigma[0] * (1 + 1e-9)
 
 
 def test_detail_below_the_threshold_moves_within_a_share_of_the_size(monkeypatch):
     """Bumps three to four edges wide, no noise: the estimate reads them as 0.056 edge lengths, below the
     threshold, and a half step keeps most of them: no noise found. What the default would take away is
-    the bumps (its residual correlates between neighbours, core.collapse): the part is left as it was.
+    the bumps (its residual correlates between neighbours, core.mesh.collapse): the part is left as it was.
     Without that test it smooths them, but no vertex moves farther than QUIET_SHARE of the size."""
     vertices, faces = icosphere(4)
     vertices = vertices * (1.0 + 0.08 * np.prod(np.sin(12 * vertices), axis=1))[:, None]
     edges = edges_of(faces)
     amount = core.choose_amount(vertices, edges)
-    assert not amount.noise_found and 0.03 < amount.ratio < core.mesh_noise.NOISE_THRESHOLD
+    assert not amount.noise_found and 0.03 < amount.ratio < core.mesh.noise.NOISE_THRESHOLD
     result, report = core.smooth_mesh(vertices, edges, faces=faces, return_report=True)
     assert report.iterations > 0 and report.held_parts == 1 and np.array_equal(result, vertices)
-    monkeypatch.setattr(core.collapse, "SMOOTH_RESIDUAL", np.inf)
+    monkeypatch.setattr(core.mesh.collapse, "SMOOTH_RESIDUAL", np.inf)
     result, report = core.smooth_mesh(vertices, edges, faces=faces, return_report=True)
     diagonal = np.linalg.norm(np.ptp(vertices, axis=0))
     moved = np.linalg.norm(result - vertices, axis=1)
-    assert report.iterations > 0 and 0.0 < moved.max() <= core.mesh_noise.QUIET_SHARE * diagonal * (1 + 1e-9)
+    assert report.iterations > 0 and 0.0 < moved.max() <= core.mesh.noise.QUIET_SHARE * diagonal * (1 + 1e-9)
 
 
 def test_scale_position_and_orientation_do_not_change_the_choice():
@@ -304,7 +304,7 @@ def test_patches_estimate_the_trace_and_the_amount_of_the_whole_mesh(monkeypatch
 
 def test_sigma_is_capped_by_the_robust_estimate_on_coarse_meshes():
     """On Blender's cone (33 vertices) with light noise GCV reads the shape as noise (~4x the truth); the
-    amount's sigma is at most ROBUST_SIGMAS times core.mesh_noise's estimate, within 2x of the truth."""
+    amount's sigma is at most ROBUST_SIGMAS times core.mesh.noise's estimate, within 2x of the truth."""
     from bench.primitives import PRIMITIVES, with_noise
 
     cone, sigma = with_noise(PRIMITIVES["cone_ngon"](), 0.1, "isotropic")

@@ -1,5 +1,5 @@
 """The Automatic Amount never harms a mesh: nothing to smooth, nothing moves; never a blow-up, never a
-collapse (core.smooth_mesh at its defaults, core.choose_amount, core.volume.restore_volume)."""
+collapse (core.smooth_mesh at its defaults, core.choose_amount, core.mesh.volume.restore_volume)."""
 
 import warnings
 
@@ -60,11 +60,11 @@ def test_closed_cone_neither_smoothed_nor_blown_up():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)
         collapsed = core.hc_smooth(cone.positions, cone.edges, alpha=0.0, beta=0.6, iterations=198)
-    kept = core.metrics.enclosed_volume(collapsed, cone.triangles()) / core.metrics.enclosed_volume(
+    kept = core.mesh.metrics.enclosed_volume(collapsed, cone.triangles()) / core.mesh.metrics.enclosed_volume(
         cone.positions, cone.triangles()
     )
-    assert kept < core.volume.KEPT  # collapsed: no offset mends it
-    restored, offsets = core.volume.restore_volume(cone.positions, collapsed, cone.triangles())
+    assert kept < core.mesh.volume.KEPT  # collapsed: no offset mends it
+    restored, offsets = core.mesh.volume.restore_volume(cone.positions, collapsed, cone.triangles())
     assert np.array_equal(offsets, [0.0]) and np.array_equal(restored, collapsed)
     assert np.all(np.ptp(restored, axis=0) <= 1.01 * np.ptp(cone.positions, axis=0) + 1e-12)
 
@@ -93,7 +93,7 @@ def test_a_coarse_tube_is_left_as_it_was_where_smoothing_would_round_it():
     """The tube of bench/primitives.py (walls of single quads, every vertex on a rim) with noise of 0.1
     median edge lengths: one HC iteration rounds its rims by more than the noise it takes away (1.5 times
     the input's distance to the clean surface, bench_primitives.py). What it would take away correlates
-    between neighbours (core.collapse.smooth_residual): the tube stays as it was. With noise of 0.5 edge
+    between neighbours (core.mesh.collapse.smooth_residual): the tube stays as it was. With noise of 0.5 edge
     lengths the noise dominates: it is smoothed."""
     light, _ = with_noise(CAD["tube"](), 0.1, "isotropic")
     result, report = default_run(light)
@@ -108,7 +108,7 @@ def test_keep_sharp_edges_leaves_a_coarse_torus_it_would_flatten():
     """Blender's Torus (576 vertices, 30° between the faces of a ring) with noise of 0.1 median edge
     lengths: Keep Sharp Edges' filter flattens its rings, 1.8 times the input's distance to the clean
     surface (bench_primitives.py). It moves the torus by more than sqrt(2) noise estimates along the
-    normals (core.collapse.moved_beyond_noise): the torus stays as it was. A chamfered box with noise of 0.3
+    normals (core.mesh.collapse.moved_beyond_noise): the torus stays as it was. A chamfered box with noise of 0.3
     edge lengths, whose creases the option keeps, is smoothed."""
     torus, _ = with_noise(PRIMITIVES["torus"](), 0.1, "isotropic")
     result, report = core.smooth_mesh(
@@ -135,24 +135,24 @@ def test_moved_beyond_noise_holds_a_part_moved_by_more_than_its_noise():
     noisy = clean + normals * rng.normal(0.0, sigma, (len(clean), 1))
     one_part, found = np.zeros(len(clean), dtype=int), np.array([True])
     triangles = sphere.triangles()
-    assert not core.collapse.moved_beyond_noise(noisy, clean, triangles, one_part, np.array([sigma]), found)[0]
+    assert not core.mesh.collapse.moved_beyond_noise(noisy, clean, triangles, one_part, np.array([sigma]), found)[0]
     shrunk = clean * (1.0 - 1.2 * sigma)
-    assert core.collapse.moved_beyond_noise(noisy, shrunk, triangles, one_part, np.array([sigma]), found)[0]
-    assert not core.collapse.moved_beyond_noise(noisy, shrunk, triangles, one_part, np.array([sigma]), ~found)[0]
+    assert core.mesh.collapse.moved_beyond_noise(noisy, shrunk, triangles, one_part, np.array([sigma]), found)[0]
+    assert not core.mesh.collapse.moved_beyond_noise(noisy, shrunk, triangles, one_part, np.array([sigma]), ~found)[0]
 
 
 def test_parts_the_amount_takes_for_big_scans_are_not_asked_for_their_residual(monkeypatch):
-    """smooth_residual asks parts below core.mesh_amount.PATCH_FROM vertices only (a pass of normals over a
+    """smooth_residual asks parts below core.mesh.amount.PATCH_FROM vertices only (a pass of normals over a
     big scan costs a quarter of the default's time): with the bound below the tube's 192 vertices, the tube
     of the test above is smoothed."""
     light, _ = with_noise(CAD["tube"](), 0.1, "isotropic")
-    monkeypatch.setattr(core.collapse, "PATCH_FROM", 100)
+    monkeypatch.setattr(core.mesh.collapse, "PATCH_FROM", 100)
     result, report = default_run(light)
     assert report.held_parts == 0 and not np.array_equal(result, light.positions)
 
 
 def test_collapsed_tells_a_collapse_from_noise_taken_away():
-    """core.collapse: a sphere's noise taken away shrinks its radius as sqrt(r^2 - 3 sigma^2) says, within
+    """core.mesh.collapse: a sphere's noise taken away shrinks its radius as sqrt(r^2 - 3 sigma^2) says, within
     KEEP; the same sphere shrunk to half is a collapse; parts are judged each on its own."""
     rng = np.random.default_rng(5)
     clean = rng.normal(size=(2000, 3))
@@ -162,8 +162,8 @@ def test_collapsed_tells_a_collapse_from_noise_taken_away():
     both = np.r_[noisy, noisy + 5.0]
     parts = np.repeat([0, 1], len(clean))
     after = np.r_[clean, 0.5 * (clean + 5.0) + 2.5]  # part 0 denoised, part 1 shrunk about its centre
-    assert list(core.collapse.collapsed(both, after, parts, np.array([sigma, sigma]))) == [False, True]
-    assert not core.collapse.collapsed(noisy, 0.9 * clean, np.zeros(len(clean), int), np.array([sigma]))[0]
+    assert list(core.mesh.collapse.collapsed(both, after, parts, np.array([sigma, sigma]))) == [False, True]
+    assert not core.mesh.collapse.collapsed(noisy, 0.9 * clean, np.zeros(len(clean), int), np.array([sigma]))[0]
 
 
 @pytest.fixture(scope="module")
@@ -190,14 +190,14 @@ def test_small_clean_parts_beside_a_noisy_one_stay(sphere_cube_cone):
     parts = parts_of(mesh)
     assert np.all(part_boxes(result, parts) <= 1.01 * part_boxes(mesh.positions, parts))
     sphere = PRIMITIVES["uv_sphere"]().triangles()
-    before, after = core.metrics.enclosed_volumes(sphere, mesh.positions[:n], result[:n])
+    before, after = core.mesh.metrics.enclosed_volumes(sphere, mesh.positions[:n], result[:n])
     assert after == pytest.approx(before, rel=1e-6)
 
 
 def test_no_face_collapses(sphere_cube_cone):
     """No face larger than the noise (shortest edge over 1.5 times the noise, 0.5 median edge lengths)
     shrinks under 10 % of its area. Keep in Place leaves the faces' layout on the surface as the input has
-    it: a face ends at no less than 10 % of its input area (core.in_place.FLAT), or else as sliding leaves
+    it: a face ends at no less than 10 % of its input area (core.mesh.in_place.FLAT), or else as sliding leaves
     it. Sliding along the surface
     (the paper's moves), the UV sphere's small faces by its poles, which the noise inflated, come back to
     their clean size, and no face ends under half its clean area."""
@@ -215,7 +215,7 @@ def test_no_face_collapses(sphere_cube_cone):
     assert large.sum() > 0.4 * len(triangles)
     assert np.all(after[sphere_faces][large] >= 0.1 * before[sphere_faces][large])
     clean_areas = face_areas(clean, sphere)
-    least = np.minimum(core.in_place.FLAT * before[sphere_faces], 0.5 * clean_areas)
+    least = np.minimum(core.mesh.in_place.FLAT * before[sphere_faces], 0.5 * clean_areas)
     assert np.all(after[sphere_faces] >= least * (1 - 1e-9))
     assert np.array_equal(after[len(triangles) :], before[len(triangles) :])
     slid = face_areas(default_run(mesh, keep_in_place=False)[0], mesh)
@@ -240,13 +240,13 @@ def test_open_and_closed_parts_each_as_it_is(sphere_cube_cone):
     n = len(sphere.positions)
     result, report = default_run(mesh)
     assert report.volume_offset > 0.0
+    numbers = dict(alpha=0.0, beta=report.beta, iterations=report.iterations, max_deviation=report.max_deviation)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)
-        smoothed = core.hc_smooth(mesh.positions, mesh.edges, alpha=0.0, beta=report.beta, iterations=report.iterations)
-    smoothed = core.in_place.keep_in_place(mesh.positions, smoothed, mesh.triangles())
+        smoothed = core.smooth_mesh(mesh.positions, mesh.edges, faces=mesh.triangles(), keep_in_place=True, **numbers)
     assert np.array_equal(result[n:], smoothed[n:])
     triangles = PRIMITIVES["uv_sphere"]().triangles()
-    before, after = core.metrics.enclosed_volumes(triangles, mesh.positions[:n], result[:n])
+    before, after = core.mesh.metrics.enclosed_volumes(triangles, mesh.positions[:n], result[:n])
     assert after == pytest.approx(before, rel=1e-6)
 
 
@@ -260,7 +260,7 @@ def cube_distance(points):
 def test_a_coarse_noisy_box_never_ends_farther_from_its_shape(kind):
     """The reproducer (issue 32, item 7): Blender's Cube subdivided (9 cuts) and triangulated, noise of 0.25 %
     of its size: one HC iteration rounded its edges and corners, 1.5-1.7 times the input's distance to the
-    cube. The move rule (core.collapse.moved_beyond_noise) now gives such a part its input back; where HC
+    cube. The move rule (core.mesh.collapse.moved_beyond_noise) now gives such a part its input back; where HC
     does not round it, it is smoothed. Five seeds; never farther from the cube than the input."""
     box = subdivided_cube(9)
     for seed in range(5):

@@ -1,4 +1,4 @@
-"""core.mesh_noise: is there noise on a mesh? ~0 on clean modelled meshes, close to the noise on noisy ones."""
+"""core.mesh.noise: is there noise on a mesh? ~0 on clean modelled meshes, close to the noise on noisy ones."""
 
 import numpy as np
 import pytest
@@ -6,7 +6,7 @@ import pytest
 import core
 from bench.meshes import icosphere  # pure NumPy, no bench requirements
 from bench.primitives import CAD, PRIMITIVES, TINY, joined, median_edge, mesh, moved, with_noise
-from core.mesh_noise import LIGHT_FLOOR, NOISE_THRESHOLD, WHITE_SAMPLES, find_noise
+from core.mesh.noise import LIGHT_FLOOR, NOISE_THRESHOLD, WHITE_SAMPLES, find_noise
 
 
 def noise_of(part):

@@ -7,7 +7,7 @@ import pytest
 from test_mesh_amount import bumpy_sphere, edges_of, with_normal_noise
 
 import core
-from core import mesh_amount
+from core.mesh import amount as mesh_amount
 
 
 @pytest.fixture(scope="module")
@@ -25,17 +25,17 @@ def paper_hc(positions, edges, **numbers):
 
 def test_automatic_amount_is_choose_smooth_restore(noisy_sphere):
     """The default run is choose_amount, that HC run (alpha 0), its moves kept across the surface
-    (core.in_place) and the volume given back, bit for bit."""
+    (core.mesh.in_place) and the volume given back, bit for bit."""
     noisy, edges, faces = noisy_sphere
     result, report = core.smooth_mesh(noisy, edges, faces=faces, return_report=True)
     amount = core.choose_amount(noisy, edges, beta=core.DEFAULT_BETA)
     assert report.amount == amount and report.alpha == 0.0 and report.iterations == amount.iterations > 1
     smoothed = paper_hc(noisy, edges, alpha=0.0, beta=amount.beta, iterations=amount.iterations)
-    smoothed = core.in_place.keep_in_place(noisy, smoothed, faces)
-    restored, offsets = core.volume.restore_volume(noisy, smoothed, faces)
+    smoothed = core.mesh.in_place.keep_in_place(noisy, smoothed, faces)
+    restored, offsets = core.mesh.volume.restore_volume(noisy, smoothed, faces)
     assert np.array_equal(result, restored) and report.kept_in_place
     assert report.volume_offset == pytest.approx(np.abs(offsets).max()) and report.volume_offset > 0.0
-    volumes = core.metrics.enclosed_volumes(faces, noisy, result)
+    volumes = core.mesh.metrics.enclosed_volumes(faces, noisy, result)
     assert volumes[1] == pytest.approx(volumes[0], rel=1e-9)
 
 
@@ -49,8 +49,12 @@ def test_open_or_faceless_meshes_get_no_volume_restore(noisy_sphere):
     )
     # One face less: the part is open.
     opened, report = core.smooth_mesh(noisy, edges, faces=faces[1:], return_report=True)
-    kept = core.in_place.keep_in_place(noisy, without_faces, faces[1:])  # faces: Keep in Place, not restored
-    assert report.volume_offset == 0.0 and np.array_equal(opened, kept) and report.kept_in_place
+    kept = core.mesh.in_place.keep_in_place(noisy, without_faces, faces[1:])  # faces: Keep in Place, not restored
+    # Away from the hole's ring: the plain projection (the hole's outline is kept as a curve: core.mesh.in_place)
+    hole = np.isin(edges, faces[0]).any(axis=1)
+    ring = np.zeros(len(noisy), dtype=bool)
+    ring[edges[hole].ravel()] = True
+    assert report.volume_offset == 0.0 and np.array_equal(opened[~ring], kept[~ring]) and report.kept_in_place
 
 
 @pytest.mark.parametrize(
@@ -122,7 +126,7 @@ def test_every_stage_yields_and_a_cancel_anywhere_hands_nothing_back(noisy_spher
     slice, it hands nothing back and leaves the input as it was."""
     noisy, edges, faces = noisy_sphere
     before = noisy.copy()
-    monkeypatch.setattr(core.volume, "_BLOCK", 64)  # the restore in many rounds of triangles
+    monkeypatch.setattr(core.mesh.volume, "_BLOCK", 64)  # the restore in many rounds of triangles
     if patches:
         monkeypatch.setattr(mesh_amount, "PATCH_FROM", 100)
         monkeypatch.setattr(mesh_amount, "PATCH_RINGS", 8)
@@ -130,7 +134,7 @@ def test_every_stage_yields_and_a_cancel_anywhere_hands_nothing_back(noisy_spher
     options = dict(faces=faces, weld=True, border="curve")
     run = core.MeshSmoother(noisy, edges, **options)
     fractions = list(run.steps(chunk=1))
-    restoring = 1.0 - core.mesh_smoother.RESTORE_SHARE
+    restoring = 1.0 - core.mesh.smooth.RESTORE_SHARE
     assert run.report.volume_offset > 0.0 and fractions == sorted(fractions)
     assert fractions.count(0.0) >= 5  # welding, surface, noise test, choice's preparation
     assert sum(0.0 < f < restoring for f in fractions) > run.report.iterations  # choice and smoothing
@@ -170,3 +174,15 @@ def test_bad_settings_are_refused_before_any_work(noisy_sphere, options, message
     noisy, edges, _ = noisy_sphere
     with pytest.raises(ValueError, match=message):
         core.MeshSmoother(noisy, edges, **options)
+
+
+def test_report_splits_the_run_into_choosing_iterations_and_finishing(noisy_sphere):
+    """The Automatic Amount's run: its choice and its finishing rules take part of its time, the set numbers'
+    run chooses nothing (only the welding check and the border rule go before its iterations)."""
+    noisy, edges, faces = noisy_sphere
+    _, automatic = core.smooth_mesh(noisy, edges, faces=faces, return_report=True)
+    assert 0 < automatic.choosing_seconds and 0 < automatic.finishing_seconds
+    assert automatic.choosing_seconds + automatic.finishing_seconds <= automatic.seconds
+    _, given = core.smooth_mesh(noisy, edges, faces=faces, iterations=5, return_report=True)
+    assert given.choosing_seconds + given.finishing_seconds <= given.seconds
+    assert given.choosing_seconds < automatic.choosing_seconds

@@ -5,8 +5,8 @@ import pytest
 import small_meshes as sm
 
 import core
-from core.metrics import fan_triangles
-from core.topology import closed_from_triangles as is_closed
+from core.geometry import fan_triangles
+from core.mesh.topology import closed_from_triangles as is_closed
 
 
 def polygons(faces):
@@ -107,9 +107,9 @@ def test_volume_in_the_arrays_precision_far_from_the_origin(dtype, offset):
     """Single precision keeps its digits: the terms are measured from the box centre, not the origin."""
     positions, faces = sm.uv_sphere(40, 80)
     triangles = fan_triangles(np.array(faces))
-    exact = core.metrics.enclosed_volumes(triangles, positions)[0]
+    exact = core.mesh.metrics.enclosed_volumes(triangles, positions)[0]
     moved = (positions + offset).astype(dtype)
-    got, scaled = core.metrics.enclosed_volumes(triangles, moved, (positions * 1.1 + offset).astype(dtype))
+    got, scaled = core.mesh.metrics.enclosed_volumes(triangles, moved, (positions * 1.1 + offset).astype(dtype))
     assert got == pytest.approx(exact, rel=1e-5 if dtype == np.float32 else 1e-12)
     assert scaled == pytest.approx(exact * 1.1**3, rel=1e-5 if dtype == np.float32 else 1e-12)
 
@@ -117,9 +117,9 @@ def test_volume_in_the_arrays_precision_far_from_the_origin(dtype, offset):
 def test_volume_blocks_and_threads_add_up(monkeypatch):
     positions, faces = sm.uv_sphere(60, 120)
     triangles = fan_triangles(np.array(faces))
-    whole = core.metrics.enclosed_volumes(triangles, positions, positions * 2)
-    monkeypatch.setattr(core.metrics, "_VOLUME_BLOCK", 7)  # many blocks, and sets side by side on threads
-    blocks = core.metrics.enclosed_volumes(triangles, positions, positions * 2)
+    whole = core.mesh.metrics.enclosed_volumes(triangles, positions, positions * 2)
+    monkeypatch.setattr(core.mesh.metrics, "_VOLUME_BLOCK", 7)  # many blocks, and sets side by side on threads
+    blocks = core.mesh.metrics.enclosed_volumes(triangles, positions, positions * 2)
     np.testing.assert_allclose(blocks, whole, rtol=1e-12)
     assert whole[1] == pytest.approx(8 * whole[0], rel=1e-12)
 
@@ -154,14 +154,14 @@ def test_closed_from_corners_agrees_with_the_triangles():
     ]
     for faces, expected in cases:
         edges, corner_verts, corner_edges = blender_layout(faces, extra_edges=[(0, 1)])  # a loose edge
-        assert core.topology.closed_from_corners(edges, corner_verts, corner_edges) is expected, faces
+        assert core.mesh.topology.closed_from_corners(edges, corner_verts, corner_edges) is expected, faces
         assert is_closed(fan_triangles(polygons(faces))) is expected, faces
 
 
 def test_border_vertices_are_those_of_one_face_edges():
     _, faces = sm.grid(4, 3)
     boundary = np.zeros(12, dtype=bool)
-    boundary[core.borders.border_edges(fan_triangles(polygons(faces)), 12).ravel()] = True
+    boundary[core.mesh.borders.border_edges(fan_triangles(polygons(faces)), 12).ravel()] = True
     assert np.array_equal(np.flatnonzero(~boundary), [5, 6])  # the two inner vertices of a 4 x 3 grid
 
 
@@ -188,7 +188,7 @@ def test_a_measured_input_gives_the_same_change(shape):
         faces = faces[1:]
     moved = positions + np.random.default_rng(3).normal(0.0, 0.01, positions.shape)
     direct = core.measure_change(positions, moved, faces=faces)
-    measured = core.metrics.measure_input(positions, faces)
+    measured = core.mesh.metrics.measure_input(positions, faces)
     assert measured.closed is (shape == "closed")
     assert core.measure_change(positions, moved, measured=measured) == direct
     assert (direct.volume_change is not None) is (shape == "closed")
@@ -201,8 +201,8 @@ def test_volume_near_and_far_from_the_origin_agree(dtype):
     """Near the origin the positions are used in place, far away a centred copy: the same volume."""
     positions, faces = sm.uv_sphere(30, 60)
     triangles = fan_triangles(np.array(faces))
-    near = core.metrics.enclosed_volume(positions.astype(dtype), triangles)
-    far = core.metrics.enclosed_volume((positions + 50.0).astype(dtype), triangles)
+    near = core.mesh.metrics.enclosed_volume(positions.astype(dtype), triangles)
+    far = core.mesh.metrics.enclosed_volume((positions + 50.0).astype(dtype), triangles)
     assert near == pytest.approx(far, rel=1e-6 if dtype == np.float32 else 1e-12)
 
 
@@ -210,10 +210,10 @@ def test_the_report_is_the_same_on_any_number_of_threads(monkeypatch):
     """measure_change spreads a big mesh's volume over the threads: the same bits as on one."""
     positions, faces = sm.uv_sphere(60, 120)
     moved = positions * 1.01 + np.random.default_rng(2).normal(0.0, 1e-3, positions.shape)
-    monkeypatch.setattr(core.metrics, "_VOLUME_BLOCK", 64)  # many blocks: a big mesh in miniature
+    monkeypatch.setattr(core.mesh.metrics, "_VOLUME_BLOCK", 64)  # many blocks: a big mesh in miniature
     changes = []
     for threads in (1, 2, 3):
-        monkeypatch.setattr(core.metrics.parallel, "thread_count", lambda threads=threads: threads)
+        monkeypatch.setattr(core.mesh.metrics.parallel, "thread_count", lambda threads=threads: threads)
         changes.append(core.measure_change(positions, moved, faces=np.array(faces)))
     assert changes[0] == changes[1] == changes[2]
     assert changes[0].volume_change == pytest.approx(1.01**3 - 1, rel=1e-2)

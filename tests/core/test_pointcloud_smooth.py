@@ -57,9 +57,9 @@ def test_float32_cloud_smooths_in_float32_as_well_as_in_float64(monkeypatch):
     cloud given in float64, and its steps really ran in float32."""
     points = noisy_sphere(3000, 0.01, seed=4, dtype=np.float32)
     precisions = []
-    real_smooth = pointcloud_smooth.smooth
+    real_smoothing = pointcloud_smooth.Smoothing
     monkeypatch.setattr(
-        pointcloud_smooth, "smooth", lambda q, *a, **k: precisions.append(q.dtype) or real_smooth(q, *a, **k)
+        pointcloud_smooth, "Smoothing", lambda q, *a, **k: precisions.append(q.dtype) or real_smoothing(q, *a, **k)
     )
     single = core.smooth_point_cloud(points).astype(np.float64)
     assert set(precisions) == {np.dtype(np.float32)}
@@ -157,3 +157,29 @@ def test_stepwise_run_equals_one_call_and_reports_stages():
     assert np.array_equal(run.result, core.smooth_point_cloud(points, rounds=3))
     with pytest.raises(ValueError, match="alpha"):
         PointCloudSmoother(points, alpha=2)  # checked before any work
+
+
+def test_long_stages_yield_in_slices_with_the_same_result(monkeypatch):
+    """A large cloud's long stages (kNN query, Borůvka rounds, RFS pruning, HC steps) yield between
+    slices, so a caller's progress moves every second or so; slices small enough to show it on a small
+    cloud leave every stage's result, and the run's, bit for bit the same."""
+    from core.pointcloud import PointCloudSmoother, spanning_tree, stepwise
+
+    points = noisy_sphere(3000, 0.01, seed=5)
+    whole = core.smooth_point_cloud(points, rounds=3)
+    monkeypatch.setattr(stepwise, "SLICE", 2000)
+    monkeypatch.setattr(spanning_tree, "_QUERY_ENTRIES", 10_000)
+    monkeypatch.setattr(pointcloud_smooth, "_HC_SLICE", 20_000)
+    run = PointCloudSmoother(points, rounds=3)
+    seen = [(fraction, run.stage, run.rounds_done) for fraction in run.steps()]
+    fractions = [fraction for fraction, _, _ in seen]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0 and fractions[0] > 0
+    finished = [(stage, done) for fraction, stage, done in seen if fraction * 7 == round(fraction * 7)]
+    stages = [("neighbours", 0), ("emst", 0), ("sdg", 0), ("rfs", 0), ("round", 1), ("round", 2), ("round", 3)]
+    assert finished == stages
+    # Between the finished stages (``stage`` names the last one): slices of the kNN query (nothing finished
+    # yet), the EMST, the RFS stage and every round (the SDG is one slice).
+    in_between = {(stage, done) for fraction, stage, done in seen if fraction * 7 != round(fraction * 7)}
+    assert in_between == {(None, 0), ("neighbours", 0), ("sdg", 0), ("rfs", 0), ("round", 1), ("round", 2)}
+    assert len(seen) > 30
+    assert np.array_equal(run.result, whole)

@@ -5,6 +5,7 @@ tests/blender/test_ui.py and tests/blender/test_cli.py.
 """
 
 import dataclasses
+import itertools
 import types
 
 import pytest
@@ -214,6 +215,50 @@ def test_greyed_out_where_a_setting_does_not_apply():
     assert spec.ALPHA.text(modifier | {"method": "LAPLACIAN_CENTRAL"}) == "Alpha (keep current)"
 
 
+def test_alpha_or_iterations_given_switch_the_amount_off_in_every_rule():
+    """What the caller set (a script, an F9 edit, a command line's options) is read by one rule: Alpha or
+    Iterations (points: Steps per Round) given run every number as set, and the panels draw them live."""
+    mesh = {s.name: s.default for s in spec.MESH}
+    points = {s.name: s.default for s in spec.POINTS}
+    assert spec.automatic(mesh) and spec.automatic(points)
+    assert spec.automatic(mesh, {"beta", "max_deviation"})  # chosen unless given, and the rest still is
+    for values, switches, greyed in (
+        (mesh, ("alpha", "iterations"), (spec.ALPHA, spec.ITERATIONS)),
+        (points, ("alpha", "iterations_per_round"), (spec.POINT_ALPHA, spec.ITERATIONS_PER_ROUND)),
+    ):
+        for name in switches:
+            assert not spec.automatic(values, {name})
+            for setting in greyed:
+                assert not setting.active(values) and setting.active(values, {name}), (setting.name, name)
+    assert spec.KEEP_IN_PLACE.active(mesh) and not spec.KEEP_IN_PLACE.active(mesh, {"iterations"})
+    assert spec.chosen(mesh) == set(spec.CHOSEN)
+    assert spec.chosen(mesh, {"beta"}) == set(spec.CHOSEN) - {"beta"}
+    assert spec.chosen(mesh, {"alpha"}) == set() and spec.chosen(mesh | {"auto_amount": False}) == set()
+
+
+@pytest.mark.parametrize("method", [choice.identifier for choice in spec.METHOD.items])
+def test_a_panel_button_passes_what_its_panel_draws_live_and_nothing_greyed(method):
+    """The N-panel's button (ui/settings.copy_to) hands over every setting but those the Automatic Amount
+    chooses and the user left alone; Alpha and Iterations, greyed out while it runs, never (only its
+    checkbox switches it off), so the run is what the panel shows."""
+    for keep_sharp_edges, auto_amount in itertools.product((False, True), repeat=2):
+        values = {s.name: s.default for s in spec.MESH} | {
+            "method": method,
+            "keep_sharp_edges": keep_sharp_edges,
+            "auto_amount": auto_amount,
+        }
+        for changed in itertools.chain.from_iterable(
+            itertools.combinations(spec.CHOSEN, k) for k in range(len(spec.CHOSEN) + 1)
+        ):
+            passed = set(spec.passed_by_panel(values, changed))
+            assert passed <= {s.name for s in spec.MESH}
+            # The operator, given what was passed, runs the Automatic Amount exactly when the panel shows it.
+            assert spec.automatic(values, passed & set(spec.CHOSEN)) is spec.automatic(values)
+            for name in spec.CHOSEN:
+                expected = not spec.automatic(values) or (name in changed and name not in ("alpha", "iterations"))
+                assert (name in passed) is expected, (values, changed, name)
+
+
 def test_plain_settings_objects_hold_the_declarations():
     for made, settings in ((spec.MeshSettings, spec.MESH), (spec.PointSettings, spec.POINTS)):
         assert [f.name for f in dataclasses.fields(made)] == [s.name for s in settings]
@@ -231,7 +276,7 @@ def test_every_core_argument_is_an_argument_of_the_mesh_pipeline():
     assert {s.argument for s in arguments} >= {"method", "alpha", "beta", "iterations", "mode", "tolerance"}
     for setting in arguments:
         assert setting.argument in parameters, setting.name
-        # Keep in Place is "auto" in core as well: the add-on's checkbox, on, passes that (operators/jobs.py).
+        # Keep in Place is "auto" in core as well: the add-on's checkbox, on, passes that (jobs/mesh.py).
         automatic = setting.chosen or setting is spec.KEEP_IN_PLACE
         assert (parameters[setting.argument].default == core.AUTO) == automatic, setting.name
         for choice in setting.items:
@@ -240,7 +285,7 @@ def test_every_core_argument_is_an_argument_of_the_mesh_pipeline():
 
 def test_keep_sharp_edges_defaults_are_cores():
     """The add-on's Sharpness starts where core's does (settings_spec cannot import core)."""
-    from core import sharp_edges
+    from core.mesh import sharp_edges
 
     assert spec.SHARPNESS_ANGLE.default == sharp_edges.DEFAULT_SHARPNESS_ANGLE
     assert spec.KEEP_SHARP_EDGES.default is False

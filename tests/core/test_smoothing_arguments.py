@@ -15,14 +15,21 @@ EDGES = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]
 REQUIRED = inspect.Parameter.empty
 ARRAYS = {"positions": REQUIRED, "edges": REQUIRED}
 OWN = {  # each entry point's own arguments and their defaults; the rest comes through **options
-    core.smooth: ARRAYS | {"method": "hc", "alpha": 0.0, "beta": 0.5, "iterations": REQUIRED, "progress": None},
+    core.smooth: ARRAYS
+    | {
+        "method": "hc",
+        "alpha": core.DEFAULT_ALPHA,
+        "beta": core.DEFAULT_BETA,
+        "iterations": REQUIRED,
+        "progress": None,
+    },
     core.hc_smooth: ARRAYS | {"alpha": REQUIRED, "beta": REQUIRED, "iterations": REQUIRED},
     core.laplacian_smooth: ARRAYS | {"variant": "plain", "alpha": 0.0, "iterations": REQUIRED},
 }
 SMOOTHING = ARRAYS | {  # core.Smoothing's, the one declaration of the options
     "method": "hc",
-    "alpha": 0.0,
-    "beta": 0.5,
+    "alpha": core.DEFAULT_ALPHA,
+    "beta": core.DEFAULT_BETA,
     "iterations": REQUIRED,
     "mode": "simultaneous",
     "fixed": None,

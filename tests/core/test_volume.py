@@ -1,15 +1,16 @@
-"""core.volume.restore_volume: each closed part back to its volume by a uniform offset along the normals."""
+"""core.mesh.volume.restore_volume: each closed part back to its volume by a uniform offset along the normals."""
 
 import numpy as np
 import pytest
 from test_mesh_amount import icosphere
 
 import core
-from core.volume import restore_volume, vertex_normals
+from core.geometry import vertex_normals
+from core.mesh.volume import restore_volume
 
 
 def volume(points, triangles):
-    return core.metrics.enclosed_volume(points, triangles)
+    return core.mesh.metrics.enclosed_volume(points, triangles)
 
 
 def test_shrunk_sphere_gets_its_volume_and_radius_back():

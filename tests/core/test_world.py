@@ -1,11 +1,11 @@
-"""core.world: an object's coordinates taken through its stretch, so that lengths are the world's."""
+"""core.mesh.world: an object's coordinates taken through its stretch, so that lengths are the world's."""
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 import core
-from core import world
+from core.mesh import world
 
 
 def matrix(scale=(1.0, 1.0, 1.0), rotation=(0.0, 0.0, 0.0), location=(0.0, 0.0, 0.0)):

@@ -7,19 +7,19 @@ run the same numbers.
 
 Numbers a caller gives are used exactly. The Automatic Amount (HC only) chooses what is left at
 ``"auto"``: with ``iterations="auto"`` and ``alpha="auto"`` it chooses the iterations from the mesh's
-own noise (core.mesh_amount) with alpha 0, holding parts without noise, gives every closed part
-its volume back within bounds (core.volume), and gives a part whose shape it changed its input back
-(core.collapse); with ``beta="auto"`` it may take gentler steps on light noise. Either number given
+own noise (core.mesh.amount) with alpha 0, holding parts without noise, gives every closed part
+its volume back within bounds (core.mesh.volume), and gives a part whose shape it changed its input back
+(core.mesh.collapse); with ``beta="auto"`` it may take gentler steps on light noise. Either number given
 switches it off: the other then takes its default (``DEFAULT_ALPHA``, ``DEFAULT_ITERATIONS``) and the run
 is the paper's algorithm, bit for bit what ``core.hc_smooth`` gives.
 
-``keep_in_place`` (core.in_place) keeps only the part of each vertex's move across the surface, along its
+``keep_in_place`` (core.mesh.in_place) keeps only the part of each vertex's move across the surface, along its
 normal: textures, UVs and open outlines stay where they were. ``"auto"`` (the default) turns it on with
 the Automatic Amount and off when numbers are given, so that given numbers run the paper's algorithm.
 
 Two options change the mesh the run sees, both off by default: ``weld`` runs coincident vertices as
-one (core.welding), ``border`` chooses what open borders do (core.borders). ``keep_sharp_edges`` (off by
-default) smooths with core.sharp_edges instead of HC's umbrella: the creases of hard-surface parts stay.
+one (core.mesh.welding), ``border`` chooses what open borders do (core.mesh.borders). ``keep_sharp_edges`` (off by
+default) smooths with core.mesh.sharp_edges instead of HC's umbrella: the creases of hard-surface parts stay.
 """
 
 import time
@@ -30,18 +30,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import collapse, parallel, sharp_edges, topology, volume, welding
-from .adjacency import Umbrella, umbrella_operator
-from .borders import BORDERS, apply_border
-from .convergence import ConvergenceWarning
-from .in_place import keep_in_place as project_in_place
-from .mesh_amount import PATCH_FROM, AmountChooser, MeshAmount
-from .mesh_noise import noise_steps
-from .metrics import fan_triangles
-from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
-from .slices import as_fraction, to_end
-from .smoothing import METHODS, MODES, Cancelled, Smoothing
-from .validation import (
+from .. import parallel
+from ..adjacency import Umbrella, umbrella_operator
+from ..convergence import ConvergenceWarning
+from ..geometry import fan_triangles, median_edge_length, project_rows_within
+from ..slices import as_fraction, to_end
+from ..smoothing import DEFAULT_ALPHA, DEFAULT_BETA, METHODS, MODES, Cancelled, Smoothing
+from ..validation import (
     check_choice,
     check_fixed,
     check_influence,
@@ -51,21 +46,25 @@ from .validation import (
     check_tolerance,
     check_unit_interval,
 )
+from . import collapse, sharp_amount, sharp_edges, topology, volume, welding
+from .amount import PATCH_FROM, AmountChooser, MeshAmount
+from .borders import BORDERS, apply_border, border_edges
+from .in_place import Outline, curve_labels, inward_directions, outline_curves
+from .in_place import keep_in_place as project_in_place
+from .noise import noise_steps
+from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
 
 AUTO = "auto"
-DEFAULT_ALPHA = 0.1
-DEFAULT_BETA = 0.6
 DEFAULT_ITERATIONS = 10
 # The Automatic Amount's deviation limit, in estimated noise (standard deviations along the normals): the
 # farthest a vertex may move when the caller set no limit.
 DEVIATION_IN_NOISE = 4.0
 # Of a run with the Automatic Amount, the part of its progress the choice takes: its runs (the data and
 # the probes) go about twice as far as the smoothing that follows; on big meshes they go on patches
-# (core.mesh_amount), which cost a few iterations of the whole mesh.
+# (core.mesh.amount), which cost a few iterations of the whole mesh.
 CHOOSING_SHARE = 2 / 3
 PATCH_CHOOSING_SHARE = 1 / 5
 RESTORE_SHARE = 1 / 10  # ... and the volume restore, at the end
-_ROWS = 1 << 17  # vertices per block of the final projection onto the deviation limit
 
 
 @dataclass(frozen=True)
@@ -86,15 +85,19 @@ class MeshReport:
     seconds : float
         Wall time of the whole run.
     keep_sharp_edges : bool
-        The run smoothed with core.sharp_edges (then ``iterations`` counts its steps, alpha and beta are
+        The run smoothed with core.mesh.sharp_edges (then ``iterations`` counts its steps, alpha and beta are
         its push-back's weights, and ``sharpness_angle`` the angle it kept).
     sharpness_angle : float or None
         Radians; None when ``keep_sharp_edges`` is off.
     held_parts : int
         Parts whose shape the Automatic Amount would have changed (collapsed, or smoothed away with the
-        noise), given their input positions back (core.collapse).
+        noise), given their input positions back (core.mesh.collapse).
     kept_in_place : bool
-        Each vertex's move was kept to its part across the surface (core.in_place).
+        Each vertex's move was kept to its part across the surface (core.mesh.in_place).
+    choosing_seconds, finishing_seconds : float
+        Of ``seconds``: what went before the iterations (welding, the noise test, the Automatic Amount's
+        choice; on meshes below core.mesh.amount.PATCH_FROM the choice runs the chosen iterations itself)
+        and what came after them (Keep in Place, the volume restore, the parts given back).
 
     Examples
     --------
@@ -118,6 +121,8 @@ class MeshReport:
     sharpness_angle: float | None = None
     held_parts: int = 0
     kept_in_place: bool = False
+    choosing_seconds: float = 0.0
+    finishing_seconds: float = 0.0
 
 
 def _auto_or(value, name):
@@ -238,7 +243,7 @@ class MeshSmoother:
         return bool(keep_in_place)
 
     def _prepare(self):
-        """Weld coincident vertices (core.welding: the result is scattered back), find what the faces
+        """Weld coincident vertices (core.mesh.welding: the result is scattered back), find what the faces
         make (parts, closed ones, border edges: for the border rule and the volume restore) and apply the
         border rule, yielding 0.0 between these passes."""
         operator = self.operator
@@ -328,6 +333,7 @@ class MeshSmoother:
                 done = chooser.result()  # the choice ran exactly these iterations on its way: not again
             del chooser  # its runs' buffers go before the smoothing's come
         end = 1.0 - RESTORE_SHARE if restoring else 1.0  # where the smoothing's share of the progress ends
+        chosen = time.perf_counter()
         if done is not None:
             result, ran = done, iterations
         else:
@@ -339,41 +345,59 @@ class MeshSmoother:
             del smoothing
             result, ran = smoothed.positions, smoothed.iterations
         measured = measuring if restoring else None
-        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise, "correlation")
+        run, smoothed_at = (alpha, beta, ran), time.perf_counter()
+        offset, held = yield from self._finish(result, run, amount, fixed, limit, measured, end, noise, "correlation")
         largest = float(np.max(limit)) if np.size(limit) else 0.0
-        seconds = time.perf_counter() - start
+        now = time.perf_counter()
         self.report = MeshReport(
-            self.method, alpha, beta, ran, amount, offset, largest, seconds, False, None, held, self.in_place
+            self.method,
+            alpha,
+            beta,
+            ran,
+            amount,
+            offset,
+            largest,
+            now - start,
+            False,
+            None,
+            held,
+            self.in_place,
+            chosen - start,
+            now - smoothed_at,
         )
         yield 1.0
 
     def _noise_limit(self, noise, sigma):
         """The Automatic Amount's deviation limit: DEVIATION_IN_NOISE times the noise, and on the parts
-        core.mesh_noise limits (quiet ones, light noise) their own radius."""
+        core.mesh.noise limits (quiet ones, light noise) their own radius."""
         limit = DEVIATION_IN_NOISE * sigma
         if noise.limited.any():
             limit = np.where(noise.limited, noise.quiet_radius(self.positions, DEVIATION_IN_NOISE), limit)
         return limit
 
-    def _finish(self, result, ran, amount, fixed, limit, measuring, progress, noise=None, residual=None):
+    def _finish(self, result, run, amount, fixed, limit, measuring, progress, noise=None, residual=None):
         """Keep each move across the surface (Keep in Place), give closed parts their volume back (when
         ``measuring`` holds the input's measure: the Automatic Amount) within the deviation limit, give the
-        parts the run collapsed their input back (with the ``noise`` core.mesh_noise found: the Automatic
-        Amount; core.collapse), and the parts whose shape it took away too, read from the residual as
+        parts the run collapsed their input back (with the ``noise`` core.mesh.noise found: the Automatic
+        Amount; core.mesh.collapse), and the parts whose shape it took away too, read from the residual as
         ``residual`` says ("correlation": HC's rules, "move": Keep Sharp Edges'), and set ``result`` in the
         caller's numbering; returns (the largest offset, the parts given back), yielding ``progress``
         between the restore's slices and the rules. With Keep in Place the parts are judged on the run's own
-        moves, before they are kept across the surface (and before the volume restore)."""
-        offset, parts = 0.0, None
+        moves, before they are kept across the surface (and before the volume restore); ``run``: the
+        (alpha, beta, iterations) that ran, which smooth the open borders as curves for Keep in Place."""
+        offset, parts, ran = 0.0, None, run[2]
         if self.in_place and ran > 0:
             if noise is not None and self.hold_parts:
                 parts = yield from self._held_parts(result, noise, residual, progress)
-            result = project_in_place(self.positions, result, self.faces)
+            outline = self._outline(result, run, fixed, limit) if self.border == "free" else None
+            result = project_in_place(self.positions, result, self.faces, outline)
+            if outline is not None and np.any(limit):  # across the surface and the curve at once: both limited
+                project_rows_within(result, self.positions, limit)
         if measuring is not None and ran > 0:
             limited = volume.NOISE_OFFSETS * amount.sigma
             result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), progress)
             if np.any(limit):  # the offset keeps to the limit too
-                _within(result, self.positions, limit)
+                project_rows_within(result, self.positions, limit)
         if parts is None and noise is not None and ran > 0 and self.hold_parts:
             parts = yield from self._held_parts(result, noise, residual, progress)
         held = 0 if parts is None else int(np.count_nonzero(parts))
@@ -383,8 +407,40 @@ class MeshSmoother:
         self.result = result if self.welding is None else self.welding.scatter(result)
         return offset, held
 
+    def _outline(self, result, run, fixed, limit):
+        """The open borders smoothed as curves (core.mesh.in_place.Outline) with the run's (alpha, beta,
+        iterations), fixed vertices, influence and limit: the same smoother on the border edges alone, a
+        vertex where more or fewer than two meet held; the side the surface lies on read on the run's
+        ``result`` (smoothed: noise cannot turn it). None without such vertices."""
+        n = self.operator.n_vertices
+        edges = self.surface.border if self.surface is not None else border_edges(self.faces, n)
+        vertices, before, after = outline_curves(edges, n)
+        if vertices.size == 0:
+            return None
+        border = np.unique(edges)
+        held = fixed[border] | ~np.isin(border, vertices, assume_unique=True)
+        alpha, beta, iterations = run
+        with warnings.catch_warnings():  # the run itself was judged against the convergence region
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            curves = Smoothing(
+                self.positions[border],
+                np.searchsorted(border, edges),
+                method=self.method,
+                alpha=alpha,
+                beta=beta,
+                iterations=iterations,
+                mode=self.mode,
+                fixed=held,
+                influence=None if self.influence is None else self.influence[border],
+                max_deviation=limit[border] if isinstance(limit, np.ndarray) else limit,
+            )
+            to_end(curves.steps())
+        inward = inward_directions(result, self.surface_operator, vertices)
+        loop = curve_labels(edges, vertices)
+        return Outline(vertices, before, after, inward, loop, border, curves.result().positions)
+
     def _held_parts(self, result, noise, residual, progress):
-        """(parts,) bool: the parts core.collapse gives their input back: collapsed, moved by more than
+        """(parts,) bool: the parts core.mesh.collapse gives their input back: collapsed, moved by more than
         their noise, or (``residual`` "correlation": HC's) their shape taken away with the noise, as the
         residual's neighbour correlation reads it; yields ``progress`` between the rules."""
         parts = collapse.collapsed(self.positions, result, noise.part_of_vertex, noise.sigma)
@@ -403,27 +459,27 @@ class MeshSmoother:
         return parts
 
     def _sharp_steps(self, chunk, start):
-        """``steps`` with Keep Sharp Edges (core.sharp_edges): with the Automatic Amount the steps, and an
-        angle no narrower than the noise's, come from the noise core.mesh_noise finds (parts without noise
+        """``steps`` with Keep Sharp Edges (core.mesh.sharp_edges): with the Automatic Amount the steps, and an
+        angle no narrower than the noise's, come from the noise core.mesh.noise finds (parts without noise
         held or kept within a small radius, as HC's default does), and closed parts get their volume back.
         Where it finds noise the filter is guided, steps set or not (a clean coarse model keeps Sun et al.'s)."""
         iterations, amount, fixed, angle, noise = self.iterations, None, self.fixed, self.sharpness_angle, None
-        guided = False  # the guidance where core.mesh_noise finds noise (core.sharp_edges), steps set or not
+        guided = False  # the guidance where core.mesh.noise finds noise (core.mesh.sharp_edges), steps set or not
         limit = 0.0 if self.max_deviation == AUTO else self.max_deviation
         restoring, share = self.automatic and self.faces is not None, 0.0
         if restoring:
             measuring = parallel.in_background(lambda: volume.measure_before(self.positions, self.faces, self.surface))
         if self.automatic:
-            share = sharp_edges.CHOOSING_SHARE
+            share = sharp_amount.CHOOSING_SHARE
             noise = yield from as_fraction(noise_steps(self.positions, self.surface_operator), 0.0)
-            edge = welding.median_edge_length(self.positions, self.surface_operator)
+            edge = median_edge_length(self.positions, self.surface_operator)
             sigma = noise.level()
             ratio = sigma / edge if edge > 0 else 0.0
             if not noise.found:  # light noise at most: smoothed within a small radius (below)
-                ratio = min(ratio, sharp_edges.QUIET_RATIO)
+                ratio = min(ratio, sharp_amount.QUIET_RATIO)
             guided = noise.found
-            iterations = sharp_edges.steps_for_noise(ratio, self.faces.shape[0])
-            angle = sharp_edges.angle_for_noise(angle, ratio)
+            iterations = sharp_amount.steps_for_noise(ratio, self.faces.shape[0])
+            angle = sharp_amount.angle_for_noise(angle, ratio)
             fixed = fixed | noise.held()
             if fixed.all():  # nothing to smooth (clean parts only)
                 iterations = 0
@@ -432,10 +488,11 @@ class MeshSmoother:
                 limit = self._noise_limit(noise, sigma)
             yield share
         elif self.iterations > 0:  # set steps: the noise test only chooses the filter
-            share = sharp_edges.CHOOSING_SHARE
+            share = sharp_amount.CHOOSING_SHARE
             guided = (yield from as_fraction(noise_steps(self.positions, self.surface_operator), 0.0)).found
             yield share
         end = 1.0 - RESTORE_SHARE if restoring else 1.0
+        chosen = time.perf_counter()
         run = SharpSmoothing(
             self.positions,
             self.faces,
@@ -456,17 +513,19 @@ class MeshSmoother:
         result, ran = run.result(), run.done
         del run
         measured = measuring if restoring else None
-        offset, held = yield from self._finish(result, ran, amount, fixed, limit, measured, end, noise, "move")
+        run, smoothed_at = (self.alpha, self.beta, ran), time.perf_counter()
+        offset, held = yield from self._finish(result, run, amount, fixed, limit, measured, end, noise, "move")
         largest = float(np.max(limit)) if np.size(limit) else 0.0
-        seconds = time.perf_counter() - start
+        now = time.perf_counter()
         self.report = MeshReport(
-            self.method, self.alpha, self.beta, ran, amount, offset, largest, seconds, True, angle, held, self.in_place
+            *(self.method, self.alpha, self.beta, ran, amount, offset, largest, now - start, True, angle, held),
+            *(self.in_place, chosen - start, now - smoothed_at),
         )
         yield 1.0
 
     def _keep_volume(self, result, fixed, limit, measured, progress):
         """Each closed part's volume given back by a bounded uniform offset of its moving vertices along
-        their normals (core.volume), in slices (yielding ``progress``); returns (positions, largest offset).
+        their normals (core.mesh.volume), in slices (yielding ``progress``); returns (positions, largest offset).
         Fixed vertices and those of influence 0 stay bit for bit."""
         movable = ~fixed if self.influence is None else ~fixed & (self.influence > 0.0)
         restored, offsets = yield from as_fraction(
@@ -485,20 +544,6 @@ class MeshSmoother:
             if progress is not None and fraction < 1.0 and progress(fraction) is False:
                 raise Cancelled(f"cancelled at {fraction:.0%}")
         return self.result
-
-
-def _within(points, start, radius):
-    """``points`` projected, in place, onto the balls of ``radius`` (a distance, or one per row) around
-    ``start`` (rows beyond it only)."""
-    for low in range(0, len(points), _ROWS):
-        rows = slice(low, low + _ROWS)
-        away = points[rows] - start[rows]
-        lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
-        bound = radius[rows] if isinstance(radius, np.ndarray) else radius
-        over = np.flatnonzero(lengths > bound)
-        if over.size:
-            reach = bound[over] if isinstance(bound, np.ndarray) else bound
-            points[rows][over] = start[rows][over] + away[over] * (reach / lengths[over])[:, None].astype(points.dtype)
 
 
 def smooth_mesh(
@@ -539,30 +584,30 @@ def smooth_mesh(
         Amount ``DEVIATION_IN_NOISE`` times the noise it estimated, else no limit.
     weld : bool
         Smooth coincident vertices (equal, or within 1e-6 of the median edge length apart: UV seams,
-        triangle soups, STL) as one vertex (core.welding): they move alike, a soup like its welded mesh.
+        triangle soups, STL) as one vertex (core.mesh.welding): they move alike, a soup like its welded mesh.
         The result still has every vertex. A welded vertex is fixed if any of its copies is, and takes
         the least influence of its copies; the faces (and whether they are closed) are taken as welded.
     border : {"free", "curve", "fixed"}
         Open-border vertices (on an edge of one face) average all their neighbours (the paper's
-        algorithm), follow their border as a curve, or stay (core.borders). "curve" and "fixed" need faces.
+        algorithm), follow their border as a curve, or stay (core.mesh.borders). "curve" and "fixed" need faces.
     keep_sharp_edges : bool
-        Smooth with core.sharp_edges (face normals filtered without averaging across creases, vertices
+        Smooth with core.mesh.sharp_edges (face normals filtered without averaging across creases, vertices
         fitted to them, HC's push-back) instead of HC's umbrella: for hard-surface scans. Needs faces.
-        ``iterations`` then counts its steps (default ``core.sharp_edges.DEFAULT_ITERATIONS``), alpha and
-        beta weight its push-back (defaults 0 and ``core.sharp_edges.DEFAULT_BETA``); ``method`` and
-        ``mode`` are not used. The Automatic Amount chooses the steps from the noise core.mesh_noise finds.
+        ``iterations`` then counts its steps (default ``core.mesh.sharp_edges.DEFAULT_ITERATIONS``), alpha and
+        beta weight its push-back (defaults 0 and ``core.mesh.sharp_edges.DEFAULT_BETA``); ``method`` and
+        ``mode`` are not used. The Automatic Amount chooses the steps from the noise core.mesh.noise finds.
     sharpness_angle : float
         Radians in (0, pi): faces meeting at more than this angle keep their crease (as Blender's Auto
-        Smooth angle). Default ``core.sharp_edges.DEFAULT_SHARPNESS_ANGLE``.
+        Smooth angle). Default ``core.mesh.sharp_edges.DEFAULT_SHARPNESS_ANGLE``.
     keep_in_place : bool or "auto"
         Keep only the part of each vertex's move across the surface (along the result's vertex normal,
-        core.in_place): textures, UVs and open outlines stay where they were. Needs faces. ``"auto"``: on
+        core.mesh.in_place): textures, UVs and open outlines stay where they were. Needs faces. ``"auto"``: on
         with the Automatic Amount (HC's, where faces are given), off when numbers are given (the paper's
         algorithm, bit for bit).
     work_budget : float, optional
-        The Automatic Amount's most vertex-iterations (None: ``core.mesh_amount.WORK_BUDGET``; ``math.inf``: no cut).
+        The Automatic Amount's most vertex-iterations (None: ``core.mesh.amount.WORK_BUDGET``; ``math.inf``: no cut).
     hold_parts : bool
-        The Automatic Amount gives parts whose shape the run took away their input back (core.collapse);
+        The Automatic Amount gives parts whose shape the run took away their input back (core.mesh.collapse);
         False: never (for measuring what that rule holds).
     return_report : bool
         Also return a MeshReport (what ran, what was chosen).

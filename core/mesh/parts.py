@@ -5,7 +5,7 @@ connected components, adds its transpose: about 150 bytes a vertex on a triangle
 connected components of a pattern with float64 values read the pattern as it is: the values here are
 one broadcast number (no array), so the labels are all it allocates. Where every edge lies on a cycle
 (a symmetric pattern; the half-edges of triangles, each triangle a cycle) strong components are the
-parts. A directed pattern (core.borders' curves) has strong components within its parts; the edges
+parts. A directed pattern (core.mesh.borders' curves) has strong components within its parts; the edges
 between them are collected block by block and the parts found on those few (the condensation).
 
 Parts are numbered in the order of their lowest vertex, as ``connected_components(directed=False)``
@@ -16,7 +16,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse import csgraph
 
-_BLOCK = 1 << 20  # pattern entries per block of the condensation pass
+from ..parallel import PATTERN_BLOCK
+
+_BLOCK = PATTERN_BLOCK  # pattern entries per block of the condensation pass
 
 
 def parts(indptr, indices, n, cyclic=True):
@@ -28,7 +30,7 @@ def parts(indptr, indices, n, cyclic=True):
     Examples
     --------
     >>> import numpy as np
-    >>> from core import parts
+    >>> from core.mesh import parts
     >>> count, labels = parts.parts(np.array([0, 1, 2, 2, 3, 4]), np.array([1, 0, 4, 2]), 5, cyclic=False)
     >>> count, labels.tolist()  # 0 <-> 1; 3 -> 4 -> 2 (directed: one part)
     (2, [0, 0, 1, 1, 1])

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..validation import check_positions
 from .metrics import measure_input
-from .validation import check_positions
 
 # The ramp's anchors in sRGB, from -extent to +extent: ColorBrewer RdBu (7 classes), blue first.
 RAMP_ANCHORS = np.array(
@@ -123,10 +123,10 @@ def normal_deviation(before: ArrayLike, after: ArrayLike, faces=None, *, normals
     before, after : (n, 3) array_like of float32 or float64
         The input and the result, vertex for vertex.
     faces : optional
-        As for ``core.metrics.fan_triangles``: the faces whose area-weighted normals (of ``before``) are
+        As for ``core.geometry.fan_triangles``: the faces whose area-weighted normals (of ``before``) are
         the vertex normals. None (and no ``normals``): every vertex gets 0.
     normals : (n, 3) array_like, optional
-        The input's unit vertex normals, if the caller has them (``core.metrics.measure_input`` makes
+        The input's unit vertex normals, if the caller has them (``core.mesh.metrics.measure_input`` makes
         them); zero rows for vertices without one. Then ``faces`` is not looked at.
 
     Returns

@@ -20,7 +20,7 @@ frame s I (exact for a power of two).
 Examples
 --------
 >>> import numpy as np
->>> from core import world
+>>> from core.mesh import world
 >>> world.frame(np.diag([2.0, 2.0, 2.0, 1.0])).tolist()
 [[2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]]
 >>> world.frame(np.eye(4)) is None
@@ -59,6 +59,12 @@ def frame(matrix: ArrayLike) -> np.ndarray | None:
     ValueError
         A matrix that is not finite, or that flattens space along an axis (a scale of zero, or below
         SMALLEST_SCALE of the largest).
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> core.world_frame(np.diag([1.0, 1.0, 10.0, 1.0])).tolist()
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 10.0]]
     """
     linear = np.asarray(matrix, dtype=np.float64)[:3, :3]
     if linear.shape != (3, 3) or not np.all(np.isfinite(linear)):
@@ -79,14 +85,30 @@ def frame(matrix: ArrayLike) -> np.ndarray | None:
 
 
 def to_frame(positions: np.ndarray, stretch: np.ndarray) -> np.ndarray:
-    """Object-space ``positions`` (n, 3) in the frame ``stretch`` (``frame``'s), in their own dtype."""
+    """Object-space ``positions`` (n, 3) in the frame ``stretch`` (``frame``'s), in their own dtype.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> core.to_frame(np.array([[0, 0, 1]], dtype=np.float32), np.diag([1.0, 1.0, 10.0])).tolist()
+    [[0.0, 0.0, 10.0]]
+    """
     return (positions.astype(np.float64) @ stretch.T).astype(positions.dtype)
 
 
 def from_frame(local: np.ndarray, start: np.ndarray, result: np.ndarray, stretch: np.ndarray) -> np.ndarray:
     """A run's ``result`` in the frame (from ``start``, the frame's copy of ``local``) back in object space:
     each vertex's ``local`` position plus its move taken back through ``stretch``. A vertex that did not move
-    keeps ``local``'s bits."""
+    keeps ``local``'s bits.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> stretch, local = np.diag([1.0, 1.0, 10.0]), np.array([[0, 0, 1]], dtype=np.float32)
+    >>> start = core.to_frame(local, stretch)
+    >>> core.from_frame(local, start, start * 0.5, stretch).tolist()
+    [[0.0, 0.0, 0.5]]
+    """
     moved = np.any(result != start, axis=1)
     back = local.copy()
     moves = (result[moved].astype(np.float64) - start[moved]) @ np.linalg.inv(stretch).T

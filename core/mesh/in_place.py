@@ -11,15 +11,29 @@ the smoother took it to, over its input. It runs once, after the iterations: pro
 iteration's move instead leaves the mesh as irregular as the noise made it, and the umbrella's normal
 component on an irregular mesh brings bumps back (bench/bench_keep_in_place.py, docs/keep_in_place.md).
 
+An open border's vertex has its surface on one side only: its slide is the pull into the surface that
+shrinks outlines and holes. Kept in place it does not slide; where keeping folds the layout (noise along
+the surface larger than the edges) and its corners take their slide back, an outline vertex (on exactly
+two border edges) takes back only the move across its border curve that smoothing the border as a curve
+makes (the same smoother on the border edges alone, core.mesh.borders' ``"curve"`` rows): the outline loses
+its jaggies there and keeps its place and size. Where nothing folds, an outline keeps its jaggies across
+the curve: a scan's outline is ragged in its own right, and smoothing it as a curve would take that away.
+
 Where the input's own layout on the surface is folded (noise along the surface larger than the edges),
 or large moves along turning normals would fold it, a triangle kept in place would overlap its
 neighbours; its corners take back part of the smoother's slide, as much as unfolds it.
 """
 
-import numpy as np
+from dataclasses import dataclass
 
-from . import parallel
-from .volume import vertex_normals
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from .. import parallel
+from ..geometry import vertex_normals
+from ..parallel import BLOCK
+from .noise import neighbours
 
 # A kept triangle is flattened where its shadow on the smoothed surface is under FOLDED times its input's
 # shadow, or under FLAT times its input's area (folded where the shadow is not positive).
@@ -32,20 +46,21 @@ _ROUNDS = 2
 _HALVED = 0.1
 _FOLDED_LAYOUT = 0.25
 _LAST = 8
-_BLOCK = 1 << 16  # triangles per block of the first check: bounds the temporaries
+_BLOCK = BLOCK  # triangles per block of the first check: bounds the temporaries
 
 
-def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray, outline=None) -> np.ndarray:
     """``result`` with each vertex's move from ``start`` reduced to its part along ``result``'s vertex
-    normal (area-weighted, core.volume.vertex_normals). Vertices in no triangle (no normal) keep their
+    normal (area-weighted, core.geometry.vertex_normals). Vertices in no triangle (no normal) keep their
     result, and the corners of a triangle that keeping would fold or flatten take back part of the slide
-    (see ``unfold``); a vertex that did not move stays bit for bit. Returns a new array in ``result``'s
-    dtype.
+    (see ``unfold``); a vertex that did not move stays bit for bit. ``outline``: an ``Outline`` (the border
+    curves smoothed as curves, see ``outline_curves``) whose vertices also take the move across their
+    curve. Returns a new array in ``result``'s dtype.
 
     Examples
     --------
     >>> import numpy as np
-    >>> from core.in_place import keep_in_place
+    >>> from core.mesh.in_place import keep_in_place
     >>> start = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.1]])
     >>> result = start + [[0, 0, 0], [0, 0, 0], [0, 0, 0], [-0.2, -0.2, -0.1]]  # slid and lowered
     >>> keep_in_place(start, result, np.array([[0, 1, 3], [0, 3, 2]])).round(3).tolist()[3]
@@ -58,11 +73,97 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray) 
     kept = start + along[:, None] * normals
     bare = ~normals.any(axis=1)  # in no triangle: no surface to keep to
     kept[bare] = result[bare]
+    if outline is not None and outline.vertices.size:
+        result = outline.across(start, result, normals)  # what an outline vertex takes back: no pull-in
     unfold(kept, start, result, triangles)
     out = kept.astype(result.dtype)
     still = ~move.any(axis=1)
     out[still] = result[still]
     return out
+
+
+@dataclass(frozen=True)
+class Outline:
+    """Open borders smoothed as curves: ``vertices``, those on exactly two border edges (sorted), with
+    their two neighbours along the border (``before``, ``after``), the direction into the surface at each
+    (``inward``: towards the mean of its neighbours) and the curve each lies on (``loop``: a label per
+    vertex); ``border``, every border vertex (sorted), and ``curve``, their (k, 3) positions after the 1-D
+    smoothing."""
+
+    vertices: np.ndarray
+    before: np.ndarray
+    after: np.ndarray
+    inward: np.ndarray
+    loop: np.ndarray
+    border: np.ndarray
+    curve: np.ndarray
+
+    def curve_at(self, vertices):
+        return self.curve[np.searchsorted(self.border, vertices)]
+
+    def across(self, start, result, normals):
+        """``result`` (as float64) with each outline vertex at its start plus its move in ``result`` along
+        its normal plus its curve move across the curve within the surface (along n x t, t the curve's
+        direction there), less that move's median over its curve: the slide an outline vertex takes back
+        where keeping folds the layout. Smoothing a curve shrinks it (a hole most); noise moves it across
+        by nothing in the middle, so a curve keeps its place and its size (the median: the few corners
+        a smoothing rounds off do not move the rest)."""
+        v = self.vertices
+        n = normals[v]
+        side = np.cross(n, self.curve_at(self.after) - self.curve_at(self.before))
+        side *= np.where(np.einsum("ij,ij->i", side, self.inward) < 0, -1.0, 1.0)[:, None]  # into the surface
+        length = np.sqrt(np.einsum("ij,ij->i", side, side))
+        side /= np.where(length > 0, length, 1.0)[:, None]
+        origin = start[v].astype(np.float64)
+        inwards = np.einsum("ij,ij->i", self.curve_at(v) - origin, side)
+        inwards -= _group_medians(inwards, self.loop)[self.loop]
+        target = result.astype(np.float64)
+        target[v] = origin + _along(result[v] - origin, n) + inwards[:, None] * side
+        return target
+
+
+def outline_curves(border_edges, n_vertices):
+    """(vertices, before, after): the vertices on exactly two of the (m, 2) ``border_edges``, sorted, with
+    their two neighbours along the border (a vertex where more or fewer border edges meet ends a curve).
+    ``curve_labels`` and ``inward_directions`` give an Outline the rest."""
+    on_curve = np.bincount(np.ravel(border_edges), minlength=n_vertices) == 2
+    heads = np.concatenate((border_edges[:, 0], border_edges[:, 1]))
+    tails = np.concatenate((border_edges[:, 1], border_edges[:, 0]))
+    order = np.argsort(heads, kind="stable")
+    heads, tails = heads[order], tails[order]
+    vertices = np.flatnonzero(on_curve)
+    first = np.searchsorted(heads, vertices)
+    return vertices, tails[first], tails[first + 1]
+
+
+def curve_labels(border_edges, vertices):
+    """(k,) the curve each of the outline ``vertices`` lies on: the components of the border edges between
+    them (a vertex where more or fewer than two border edges meet cuts a curve)."""
+    on = np.isin(border_edges, vertices).all(axis=1)
+    local = np.searchsorted(vertices, border_edges[on])
+    graph = sp.coo_matrix((np.ones(len(local)), (local[:, 0], local[:, 1])), shape=(vertices.size,) * 2)
+    return connected_components(graph, directed=False)[1]
+
+
+def inward_directions(positions, operator, vertices):
+    """(k, 3): from each of ``vertices`` to the mean of its neighbours (core.adjacency.Umbrella) in
+    ``positions``: into the surface, at a border vertex."""
+    owner, neighbour = neighbours(vertices, operator)
+    points = np.asarray(positions, dtype=np.float64)
+    mean = np.stack([np.bincount(owner, weights=points[neighbour, k], minlength=vertices.size) for k in range(3)], 1)
+    return mean / np.maximum(operator.degree[vertices], 1)[:, None] - points[vertices]
+
+
+def _group_medians(values, labels):
+    """The median of ``values`` per label 0..max (the upper middle of an even count)."""
+    order = np.lexsort((values, labels))
+    counts = np.bincount(labels)
+    return values[order][np.cumsum(counts) - counts + counts // 2]
+
+
+def _along(move, direction):
+    """Each row of ``move``'s component along the unit rows of ``direction``."""
+    return np.einsum("ij,ij->i", move, direction)[:, None] * direction
 
 
 def unfold(kept, start, result, triangles):

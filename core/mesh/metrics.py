@@ -16,10 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from . import parallel
+from .. import parallel
+from ..geometry import fan_triangles, vertex_normals
+from ..parallel import VECTOR_BLOCK
+from ..validation import bbox_diagonal, check_positions, row_lengths
 from .topology import closed_from_triangles
-from .validation import bbox_diagonal, check_positions, row_lengths
-from .volume import vertex_normals
 
 
 @dataclass(frozen=True)
@@ -97,76 +98,6 @@ def _rms(lengths):
     return scale * math.sqrt(float(np.einsum("i,i->", scaled, scaled, dtype=np.float64)) / lengths.size)
 
 
-def fan_triangles(faces):
-    """Triangles (t, 3) of a fan from each face's first corner (triangles come back as they are, no copy).
-
-    Parameters
-    ----------
-    faces : (f, k) array_like of int, list of sequences, or (offsets, corner_verts)
-        An (f, k) integer array, a list of faces (vertex index sequences, of any sizes), or a pair
-        (offsets, corner_verts) as Blender stores polygons (offsets of length f + 1: face i has
-        corners corner_verts[offsets[i]:offsets[i + 1]]).
-
-    Returns
-    -------
-    (t, 3) int ndarray
-
-    Raises
-    ------
-    ValueError
-        Faces of fewer than three corners, or offsets that do not fit ``corner_verts``.
-
-    Examples
-    --------
-    >>> from core import metrics
-    >>> metrics.fan_triangles([[0, 1, 2, 3]]).tolist()
-    [[0, 1, 2], [0, 2, 3]]
-    >>> metrics.fan_triangles(([0, 3, 7], [0, 1, 2, 0, 2, 3, 4])).tolist()
-    [[0, 1, 2], [0, 2, 3], [0, 3, 4]]
-    """
-    if isinstance(faces, list) and len({len(face) for face in faces}) > 1:  # a list of faces of mixed sizes
-        faces = (np.cumsum([0] + [len(face) for face in faces]), np.concatenate(faces))
-    if isinstance(faces, tuple):
-        offsets, corners = (_indices(a) for a in faces)
-        if (
-            offsets.ndim != 1
-            or offsets.size == 0
-            or offsets[0] != 0
-            or offsets[-1] != corners.size
-            or np.any(np.diff(offsets) < 3)
-        ):
-            raise ValueError(
-                "faces as (offsets, corner_verts) need offsets from 0 to len(corner_verts), at least 3 corners per face"
-            )
-        if corners.size == 3 * (offsets.size - 1):  # no face has fewer than three corners: all are triangles
-            return corners.reshape(-1, 3)
-    else:
-        array = _indices(faces)
-        if array.ndim != 2 or array.shape[1] < 3:
-            raise ValueError(f"faces must have shape (f, k) with k >= 3, got {array.shape}")
-        if array.shape[1] == 3:
-            return array
-        corners = array.ravel()
-        offsets = np.arange(array.shape[0] + 1, dtype=np.int64) * array.shape[1]
-    sizes = np.diff(offsets)
-    if sizes.size and corners.size == sizes[0] * sizes.size and np.all(sizes == sizes[0]):
-        # All faces alike (all quads...): the fans are column picks of an (f, k) view.
-        k = int(sizes[0])
-        grid = corners.reshape(-1, k)
-        return np.stack([grid[:, [0, j + 1, j + 2]] for j in range(k - 2)], axis=1).reshape(-1, 3)
-    face_of_triangle = np.repeat(np.arange(sizes.size), sizes - 2)
-    # Triangle k of face f: corners (0, k+1, k+2) counted from the face's first corner.
-    k = np.arange(face_of_triangle.size) - np.repeat(np.cumsum(sizes - 2) - (sizes - 2), sizes - 2)
-    first = offsets[face_of_triangle]
-    return np.stack([corners[first], corners[first + k + 1], corners[first + k + 2]], axis=1)
-
-
-def _indices(array):
-    """An integer array as given (int32 stays int32), anything else as int64."""
-    array = np.asarray(array)
-    return array if np.issubdtype(array.dtype, np.integer) else array.astype(np.int64)
-
-
 def enclosed_volume(positions, triangles):
     """Signed volume by the divergence theorem (positive for outward-facing normals).
 
@@ -183,7 +114,7 @@ def enclosed_volume(positions, triangles):
     Examples
     --------
     >>> import numpy as np
-    >>> from core import metrics
+    >>> from core.mesh import metrics
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     >>> round(float(metrics.enclosed_volume(positions, triangles)), 4)
@@ -199,7 +130,7 @@ def enclosed_volumes(triangles, *position_sets):
     Examples
     --------
     >>> import numpy as np
-    >>> from core import metrics
+    >>> from core.mesh import metrics
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     >>> [round(float(v), 4) for v in metrics.enclosed_volumes(triangles, positions, 2 * positions)]
@@ -260,7 +191,7 @@ def _volume_tasks(points, corners, frame, parts):
     return tasks, total
 
 
-_VOLUME_BLOCK = 1 << 17  # triangles per block: few NumPy calls, each on data that stays in cache
+_VOLUME_BLOCK = VECTOR_BLOCK  # triangles per block: few NumPy calls, each on data that stays in cache
 
 
 def _block_sums(points, corners, blocks):
@@ -307,7 +238,16 @@ def _cubes_are_safe(length, dtype):
 class InputMeasure:
     """What a report needs of a run's input, measured once (``measure_input``): ``measure_change`` takes
     it so that a caller can measure the input while the run starts (on another thread) and only the
-    result afterwards."""
+    result afterwards.
+
+    Examples
+    --------
+    >>> import numpy as np, core
+    >>> tetrahedron = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> measured = core.measure_input(tetrahedron, [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> measured.n_vertices, measured.closed
+    (4, True)
+    """
 
     n_vertices: int
     diagonal: float
@@ -324,7 +264,7 @@ def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> 
     Examples
     --------
     >>> import numpy as np, core
-    >>> from core import metrics
+    >>> from core.mesh import metrics
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     >>> faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
     >>> measured = metrics.measure_input(positions, faces)

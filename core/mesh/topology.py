@@ -11,11 +11,12 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .adjacency import grouped_pairs
+from ..adjacency import grouped_pairs
+from ..parallel import BLOCK
+from ..slices import to_end
 from .parts import parts as connected_parts
-from .slices import to_end
 
-_ROW_BLOCK = 1 << 16  # vertices per block where each of their half-edges is compared (several int64 each)
+_ROW_BLOCK = BLOCK  # vertices per block where each of their half-edges is compared (several int64 each)
 
 
 def closed_from_corners(edges, corner_verts, corner_edges):
@@ -35,7 +36,7 @@ def closed_from_corners(edges, corner_verts, corner_edges):
     Examples
     --------
     >>> import numpy as np
-    >>> from core import topology
+    >>> from core.mesh import topology
     >>> edges = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]])
     >>> corner_verts = np.array([0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3])  # a tetrahedron, 4 triangles
     >>> corner_edges = np.array([1, 3, 0, 0, 4, 2, 2, 5, 1, 3, 5, 4])  # each corner's edge to the next
@@ -57,13 +58,29 @@ def closed_from_corners(edges, corner_verts, corner_edges):
     return bool(np.count_nonzero(seen) == keys.size and np.array_equal(seen[0::2], seen[1::2]))
 
 
+def every_edge_shared(corner_edges, n_edges):
+    """Whether no edge of a face lies on that face alone (Blender's layout: per face corner, the edge to
+    the next corner). Such a mesh has no seam that a file or an exporter split into copies of its
+    vertices, so there is nothing to weld.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import core
+    >>> corner_edges = np.array([1, 3, 0, 0, 4, 2, 2, 5, 1, 3, 5, 4])  # a tetrahedron, 4 triangles
+    >>> core.every_edge_shared(corner_edges, 6), core.every_edge_shared(corner_edges[:9], 6)
+    (True, False)
+    """
+    return not np.any(np.bincount(corner_edges, minlength=n_edges) == 1)
+
+
 def closed_from_triangles(triangles):
     """Every directed edge of the (t, 3) triangles is matched by exactly one in the opposite direction.
 
     Examples
     --------
     >>> import numpy as np
-    >>> from core import topology
+    >>> from core.mesh import topology
     >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     >>> topology.closed_from_triangles(triangles), topology.closed_from_triangles(triangles[:3])
     (True, False)
@@ -124,7 +141,7 @@ def surface_steps(triangles, n_vertices):
     Examples
     --------
     >>> import numpy as np
-    >>> from core import topology
+    >>> from core.mesh import topology
     >>> tetrahedron = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     >>> whole = topology.surface(tetrahedron, 5)  # and vertex 4 on no triangle
     >>> whole.parts, whole.part_of_vertex.tolist(), whole.closed.tolist(), whole.border.tolist()

@@ -14,7 +14,7 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    within each side is averaged away. The guidance (Zhang, Deng, Zhang, Bouaziz and Liu 2015, "Guided
    Mesh Normal Filtering"; ``guidance_normals``), computed once per step, is the mean normal of the most
    consistent patch each face lies in: steady where a single face is not, it tells a crease from noise
-   that tilts faces by nearly as much as the crease turns. It runs where core.mesh_noise finds noise
+   that tilts faces by nearly as much as the crease turns. It runs where core.mesh.noise finds noise
    (``guided``; core.MeshSmoother asks, steps set or not): it needs patches on one side of each crease,
    which scans have and a coarse model (every face at a corner) does not. Elsewhere Sun et al.'s filter
    compares the faces' own normals, g = n, recomputed every pass. On bench_sharp_edges.py's tuning parts
@@ -46,10 +46,11 @@ One step of it, with the triangles' unit normals n_f and centroids c_f:
    too).
 
 Everything runs on all faces or vertices at once: the face rings are one sparse pattern (the faces
-sharing a vertex with each face: incidence times its transpose), built once per run; the filtering
-computes the weight of each pair of faces in it once (about 6 per triangle; once per step with the
-guidance, every pass without) and sums it both ways, a fitting pass is three sparse products on the
-flattened coordinates.
+sharing a vertex with each face, about 13: the corners' pattern times the incidence), built once per run
+in blocks of rows, and every pass over it works a chunk of rows at a time (its gathers in cache), the
+chunks shared out over the threads (core.parallel). The guided filter keeps one single-precision weight
+a pair for its passes; the plain one weighs each chunk as it sums it. A fitting pass gathers each
+triangle's corners and sums around each vertex (one product with the incidence).
 Fixed vertices never move (their positions still place their faces' planes); ``influence`` scales each
 step's move, as core.smoothing scales an iteration's.
 """
@@ -61,25 +62,24 @@ from collections.abc import Iterator
 import numpy as np
 import scipy.sparse as sp
 
-try:  # the kernels behind ``csr_matrix @ x`` (y += A x) and the CSC's; private: a public fallback
-    from scipy.sparse._sparsetools import csc_matvecs as _csc_matvecs
+try:  # the kernel behind ``csr_matrix @ x`` (y += A x); private: a public fallback
     from scipy.sparse._sparsetools import csr_matvec as _csr_matvec
-    from scipy.sparse._sparsetools import csr_matvecs as _csr_matvecs
 
     _probe = (np.array([0, 1], dtype=np.int32), np.zeros(1, dtype=np.int32), np.ones(1), np.ones(1), np.zeros(1))
     _csr_matvec(1, 1, *_probe)
-    _csr_matvecs(1, 1, 1, *_probe)
-    _csc_matvecs(1, 1, 1, *_probe)
-    if _probe[-1][0] != 3.0:
+    _csr_matvec(1, 1, *_probe)
+    if _probe[-1][0] != 2.0:
         raise ValueError("y += A x expected")
-except (ImportError, TypeError, ValueError):  # SciPy without these kernels, or with other signatures
-    _csr_matvec = _csr_matvecs = _csc_matvecs = None
+except (ImportError, TypeError, ValueError):  # SciPy without this kernel, or with another signature
+    _csr_matvec = None
 from numpy.typing import ArrayLike
 
-from .adjacency import Umbrella, umbrella_operator
-from .metrics import fan_triangles
-from .slices import to_end
-from .validation import (
+from .. import parallel
+from ..adjacency import Umbrella, umbrella_operator
+from ..geometry import face_normals, fan_triangles, project_rows_within
+from ..parallel import BLOCK
+from ..slices import to_end
+from ..validation import (
     bbox_diagonal,
     check_fixed,
     check_influence,
@@ -102,22 +102,6 @@ REFIT_ITERATIONS = 5
 DEFAULT_ALPHA = 0.0  # the push-back's weights (paper section 4): beta 0 takes back each step's
 DEFAULT_BETA = 0.0  # neighbourhood mean (the drift), keeps all of the vertex-by-vertex part (the noise)
 DEFAULT_ITERATIONS = 5  # steps when the caller gives no amount and no Automatic Amount runs
-# The Automatic Amount (for a noise of ``ratio`` median edge lengths, core.mesh_noise's estimate):
-# * steps: FIRST_STEPS + STEPS_PER_RATIO x ratio, at most MAX_STEPS, and at most WORK_BUDGET / triangles
-#   (each step costs NORMAL_ITERATIONS passes over ~6 face pairs per triangle): the error on the tuning
-#   parts falls with the steps up to 10 where the noise is heavy, and is flat from 4 to 6 where it is light;
-# * angle: at least NOISE_ANGLE_GAIN x atan(ratio): noise tilts neighbouring faces by about that much,
-#   and a filter that sees noisy faces as creases leaves the noise (at 1 % noise along the normals on the
-#   tuning parts, 50°-60° leave 20-50 % less error than 30°). A crease gentler than the noise is noise.
-# * QUIET_RATIO for meshes where no part has noise above core.mesh_noise's threshold (they move within
-#   its small radius).
-FIRST_STEPS = 4
-STEPS_PER_RATIO = 20.0
-MAX_STEPS = 10
-WORK_BUDGET = 12_000_000  # triangle-steps
-NOISE_ANGLE_GAIN = 2.5
-QUIET_RATIO = 0.05
-CHOOSING_SHARE = 1 / 10  # of a run with the Automatic Amount, the share of its progress the noise estimate takes
 TANGENTIAL = 0.5  # share of the tangential umbrella move per step on vertices off the creases (step 3)
 FOLD_ROUNDS = 4  # rounds of halving the move of the corners of triangles a step turned over
 PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between the passes of a step
@@ -129,19 +113,8 @@ STEP_SLICES = GUIDED_SLICES + NORMAL_ITERATIONS + FIT_SLICES + REFIT_SLICES + FO
 # The guidance's vertex rings (about 6 faces) count their consistency this many times against the face
 # rings' (about 13): on the tuning parts at 0.5 % noise 1.5-3 leave the same dihedral error, 1 more.
 VERTEX_RING_WEIGHT = 2.0
-_BLOCK = 1 << 16  # face pairs per block of the filtering's dot products: its temporaries stay in cache
-
-
-def steps_for_noise(ratio, triangles):
-    """The Automatic Amount's steps for noise of ``ratio`` median edge lengths on ``triangles`` triangles."""
-    wanted = min(MAX_STEPS, round(FIRST_STEPS + STEPS_PER_RATIO * ratio))
-    return int(max(1, min(wanted, WORK_BUDGET // max(1, triangles))))
-
-
-def angle_for_noise(angle, ratio):
-    """The Automatic Amount's sharpness angle: ``angle``, or wider where noise of ``ratio`` median edge
-    lengths tilts neighbouring faces by more (at most 80°)."""
-    return max(angle, min(math.radians(80.0), NOISE_ANGLE_GAIN * math.atan(ratio)))
+_BLOCK = BLOCK  # face pairs per chunk of the passes over the rings: their temporaries stay in cache
+FILTER_DTYPE = np.float32  # the normal filtering's precision (filter_steps)
 
 
 def check_sharpness_angle(value):
@@ -177,16 +150,16 @@ class FaceRings:
 
     Attributes
     ----------
+    triangles : (t, 3) the triangles; corners : (3, t) the same, a corner at a time (intp).
     incidence : (n, t) CSR, 1 where vertex i is a corner of triangle f.
-    indptr, indices, counts : the faces sharing a vertex with each face, itself included (CSR, (t, t)).
-    ring : that pattern as a (t, t) CSR of ones.
-    upper_rows, upper_indptr, upper_indices : the pairs i < j of that pattern (CSR, (t, t), and each
-        entry's row): the filtering's weights are symmetric, so a pass computes each pair once.
-    corner_columns : (9 t,) the columns k n + v of each triangle's corners v and coordinates k.
+    indptr, indices, counts : the faces sharing a vertex with each face, itself included: a CSR pattern
+        of (t, t), columns increasing, without values (each pass reads it with weights of its own).
+    chunks : (first, end) row ranges of that pattern with about ``_BLOCK`` entries each: a pass works a
+        chunk at a time, so its gathers stay in cache, and the chunks are shared out over the threads.
     faces_at : (n,) the number of triangles around each vertex, |F_i|.
     border : (n,) bool, the vertices on an edge of one triangle.
     across : (t, 3) the triangle across each triangle's edge from corner k to corner k + 1 (itself on an
-        open border; one of them where more than two triangles share the edge).
+        open border; one of them where more than two triangles share the edge), intp.
     """
 
     def __init__(self, triangles, n_vertices):
@@ -194,7 +167,7 @@ class FaceRings:
 
     @classmethod
     def in_slices(cls, triangles, n_vertices):
-        """The rings built in slices: a generator yielding after each stage (each a second or so at a
+        """The rings built in slices: a generator yielding after each stage (a fraction of a second at a
         million triangles), returning the rings."""
         rings = cls.__new__(cls)
         yield from rings._build(triangles, n_vertices)
@@ -202,55 +175,120 @@ class FaceRings:
 
     def _build(self, triangles, n_vertices):
         t = triangles.shape[0]
-        index = np.int32 if max(t, n_vertices) < np.iinfo(np.int32).max // 9 else np.int64
-        rows = triangles.ravel().astype(index)
-        columns = np.repeat(np.arange(t, dtype=index), 3)
-        self.incidence = sp.csr_matrix((np.ones(rows.size), (rows, columns)), shape=(n_vertices, t))
+        self.triangles = triangles
+        self.corners = np.ascontiguousarray(triangles.T, dtype=np.intp)  # NumPy's gathers take intp as it is
+        columns = np.repeat(np.arange(t, dtype=np.int32 if t < 2**31 else np.int64), 3)
+        self.incidence = sp.csr_matrix((np.ones(3 * t), (triangles.ravel(), columns)), shape=(n_vertices, t))
         self.incidence.sum_duplicates()
         self.incidence.data[:] = 1.0  # a triangle with a repeated corner counts once at that vertex
-        pattern = (self.incidence.T @ self.incidence).tocsr()
-        pattern.sort_indices()
-        yield
-        self.indptr, self.indices = pattern.indptr, pattern.indices
-        self.counts = np.diff(self.indptr)
-        self.ring = sp.csr_matrix((np.ones(self.indices.size), self.indices, self.indptr), shape=(t, t))
-        self.upper_rows = np.repeat(np.arange(t, dtype=self.indices.dtype), self.counts)
-        above = self.indices > self.upper_rows
-        self.upper_rows, self.upper_indices = self.upper_rows[above], self.indices[above]
-        self.upper_indptr = np.zeros(t + 1, dtype=self.indices.dtype)  # one index type, as SciPy's kernels need
-        np.cumsum(np.bincount(self.upper_rows, minlength=t), out=self.upper_indptr[1:])
-        self.corner_columns = (triangles.astype(index)[:, :, None] + n_vertices * np.arange(3, dtype=index)).ravel()
-        yield
-        # Each triangle's edges (its corners k, k + 1) as sorted vertex pairs, sorted by pair: a pair met twice
-        # is an edge between two triangles, a pair met once an open border (its umbrella leans inwards).
-        pairs = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
-        keys = pairs[:, 0] * n_vertices + pairs[:, 1]
-        order = np.argsort(keys, kind="stable")
-        ordered = keys[order]
-        same = ordered[1:] == ordered[:-1]
-        first, second = order[:-1][same], order[1:][same]
-        self.across = np.repeat(np.arange(t, dtype=index), 3)  # a border edge's other triangle: itself
-        self.across[first], self.across[second] = second // 3, first // 3
-        self.across = self.across.reshape(t, 3)
-        alone = ~(np.r_[same, False] | np.r_[False, same])
-        self.border = np.zeros(n_vertices, dtype=bool)
-        self.border[pairs[order[alone]].ravel()] = True
         self.faces_at = np.diff(self.incidence.indptr)
-        self.triangles = triangles
+        self.vertex_blocks = parallel.RowBlocks(self.incidence.indptr, self.incidence.indices, t)
+        yield
+        self.indptr, self.indices = yield from _ring_pattern(self.corners, self.incidence)
+        self.counts = np.diff(self.indptr)
+        self.chunks = _row_blocks(self.indptr, t)
+        self.blocks = parallel.RowBlocks(self.indptr, self.indices, t)
+        self.threads = parallel.thread_count() if self.indices.size >= parallel.MIN_WORK else 1
+        yield
+        self.across, self.border = _edge_neighbours(triangles, n_vertices)
         yield
 
+    @property
+    def ring(self):
+        """The pattern as a (t, t) CSR of ones (made on each call: its values take as much memory as it)."""
+        t = self.counts.size
+        return sp.csr_matrix((np.ones(self.indices.size), self.indices, self.indptr), shape=(t, t))
 
-def face_normals(points, triangles):
-    """(t, 3) unit normals (right-hand rule over the corners); (0, 0, 0) for a degenerate triangle."""
-    coordinates = np.ascontiguousarray(points.T)  # coordinate rows: 1-D gathers and element-wise work
-    first, second, third = (np.ascontiguousarray(triangles[:, k]) for k in range(3))
-    u = [row.take(second) - row.take(first) for row in coordinates]
-    v = [row.take(third) - row.take(first) for row in coordinates]
-    normals = np.empty((triangles.shape[0], 3), dtype=u[0].dtype)
-    for k in range(3):  # u x v, as np.cross computes it
-        i, j = (k + 1) % 3, (k + 2) % 3
-        normals[:, k] = u[i] * v[j] - u[j] * v[i]
-    return _unit(normals)
+    def each_chunk(self, task):
+        """``task(first, end)`` for every chunk of rows, the chunks shared out over the threads in runs."""
+        runs = np.array_split(np.arange(len(self.chunks)), self.threads)
+        parallel.run_all([lambda run=run: [task(*self.chunks[i]) for i in run] for run in runs if run.size])
+
+    def ring_sums(self, values):
+        """(k, t) sums over each face's ring of planar ``values`` (k, t) (or (t,) to (t,))."""
+        out = np.empty_like(values)
+        rows = out.reshape(-1, out.shape[-1])
+
+        def combine(chunk_rows, sums):
+            rows[:, chunk_rows] = sums
+
+        self.blocks.run(lambda block: block.neighbour_sums(values, combine))
+        return out
+
+    def padded(self, first, end):
+        """Rows first:end of the pattern as a (K, rows) intp array, K the longest row: entry (k, r) is row r's
+        k-th column, its last column repeated past its end (the same face again: no new candidate for a
+        smallest or largest value, and the first of a tie stays first); and the (K, rows) mask of the real
+        entries. Row-side values then broadcast, and a reduction over the first axis is element-wise."""
+        counts = self.counts[first:end]
+        reach = np.arange(int(counts.max()) if counts.size else 0)[:, None]
+        positions = self.indptr[first:end] + np.minimum(reach, counts - 1)
+        return self.indices.take(positions).astype(np.intp), reach < counts
+
+    def rows_of(self, rows):
+        """The pattern's ``rows`` (an index array): (their columns, each row's count, each row's start)."""
+        counts = self.counts[rows]
+        starts = np.zeros(rows.size, dtype=np.int64)
+        np.cumsum(counts[:-1], out=starts[1:])
+        positions = np.repeat(self.indptr[rows] - starts, counts) + np.arange(int(counts.sum()))
+        return self.indices[positions], counts, starts
+
+
+RING_ROWS = 1 << 17  # faces per block of the rings' product: a block takes a fraction of a second
+
+
+def _ring_pattern(corners, incidence):
+    """The face rings' CSR pattern (indptr, indices), columns increasing: the (t, n) pattern of each
+    triangle's corners times the (n, t) incidence, in blocks of rows (on the threads); a generator
+    yielding after each round of blocks."""
+    t, n = corners.shape[1], incidence.shape[0]
+    ones = np.ones(3 * t, dtype=np.int8)  # the product's values are not used: the smallest type
+    faces = sp.csr_matrix((ones, corners.T.ravel(), np.arange(0, 3 * t + 1, 3)), shape=(t, n))
+    vertices = sp.csr_matrix((ones[: incidence.nnz], incidence.indices, incidence.indptr), shape=incidence.shape)
+
+    def rows(first, end):
+        product = faces[first:end] @ vertices
+        product.sort_indices()
+        return product.indptr, product.indices
+
+    bounds = list(range(0, t, RING_ROWS)) + [t]
+    blocks = list(zip(bounds[:-1], bounds[1:]))
+    threads = parallel.thread_count()
+    parts = []
+    for round_ in range(0, len(blocks), threads):
+        parts += parallel.run_all([lambda b=b: rows(*b) for b in blocks[round_ : round_ + threads]])
+        if round_ + threads < len(blocks):
+            yield
+    sizes = [part[1].size for part in parts]
+    index = np.int32 if sum(sizes) < 2**31 else np.int64  # one type for both, as SciPy's kernels need
+    indptr = np.zeros(t + 1, dtype=index)
+    np.cumsum(np.concatenate([np.diff(part[0]) for part in parts]), out=indptr[1:])
+    indices = np.empty(indptr[-1], dtype=index)
+    offset = 0
+    for (_, part), size in zip(parts, sizes):
+        indices[offset : offset + size] = part
+        offset += size
+    return indptr, indices
+
+
+def _edge_neighbours(triangles, n_vertices):
+    """(across, border) of FaceRings: each triangle's neighbour across each edge, the open border's vertices.
+
+    Each triangle's edges (its corners k, k + 1) as sorted vertex pairs, sorted by pair: a pair met twice
+    is an edge between two triangles, a pair met once an open border (its umbrella leans inwards)."""
+    t = triangles.shape[0]
+    pairs = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
+    keys = pairs[:, 0] * n_vertices + pairs[:, 1]
+    order = np.argsort(keys, kind="stable")
+    ordered = keys[order]
+    same = ordered[1:] == ordered[:-1]
+    first, second = order[:-1][same], order[1:][same]
+    across = np.repeat(np.arange(t), 3)  # on a border: itself
+    across[first], across[second] = second // 3, first // 3
+    alone = ~(np.r_[same, False] | np.r_[False, same])
+    border = np.zeros(n_vertices, dtype=bool)
+    border[pairs[order[alone]].ravel()] = True
+    return across.reshape(t, 3), border
 
 
 def _unit(vectors, good=None):
@@ -261,6 +299,16 @@ def _unit(vectors, good=None):
     if not good.all():  # zero, or not a number
         lengths[~good] = 0.0
     return vectors * lengths[:, None]
+
+
+def _unit_planar(vectors):
+    """Planar (3, t) vectors scaled, in place, to unit length; a zero one stays zero."""
+    lengths = np.sqrt(np.einsum("kt,kt->t", vectors, vectors))
+    good = lengths > 0.0
+    np.divide(1.0, lengths, out=lengths, where=good)
+    lengths[~good] = 0.0
+    vectors *= lengths
+    return vectors
 
 
 def guidance_normals(normals, rings):
@@ -279,12 +327,10 @@ def guidance_normals(normals, rings):
     as much as a crease turns, but the mean of a patch on one side is steady: the filter's weights
     compare these. At a corner every patch is mixed, and the guidance is a blend of the sides.
 
-    Blocked over rows of the ring pattern (about 13 entries per face): its gathers stay in cache."""
+    A chunk of the ring pattern's rows at a time (FaceRings.each_chunk)."""
     t = normals.shape[0]
-    indptr, indices = rings.indptr, rings.indices
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
-    means = _unit(rings.ring @ normals)
-    mean_planar = np.ascontiguousarray(means.T)
+    means = _unit_planar(rings.ring_sums(planar))
     steep, summed = np.zeros(t), np.zeros(t)
     for k in range(3):
         other = rings.across[:, k]
@@ -295,25 +341,27 @@ def guidance_normals(normals, rings):
         np.maximum(steep, step, out=steep)
         summed += step
     spread, steepest = np.empty(t), np.empty(t)
-    blocks = _row_blocks(indptr, t)
-    for a, b in blocks:
-        columns, starts = indices[indptr[a] : indptr[b]], indptr[a:b] - indptr[a]
-        rows = np.repeat(np.arange(a, b), rings.counts[a:b])
-        cosine = planar[0].take(columns) * mean_planar[0].take(rows)
+
+    def patches(first, end):  # max (1 - n_a . m) = 1 - min n_a . m
+        columns, _ = rings.padded(first, end)
+        cosine = means[0, first:end] * planar[0].take(columns)
         for c in (1, 2):
-            cosine += planar[c].take(columns) * mean_planar[c].take(rows)
-        spread[a:b] = np.maximum.reduceat(1.0 - cosine, starts)
-        steepest[a:b] = np.maximum.reduceat(steep.take(columns), starts)
-    consistency = spread * steepest / (1e-9 + rings.ring @ summed)
-    chosen, best = np.empty(t, dtype=indices.dtype), np.empty(t)
-    for a, b in blocks:
-        columns, starts = indices[indptr[a] : indptr[b]], indptr[a:b] - indptr[a]
-        counts = rings.counts[a:b]
+            cosine += means[c, first:end] * planar[c].take(columns)
+        spread[first:end] = 1.0 - cosine.min(axis=0)
+        steepest[first:end] = steep.take(columns).max(axis=0)
+
+    rings.each_chunk(patches)
+    consistency = spread * steepest / (1e-9 + rings.ring_sums(summed))
+    chosen, best = np.empty(t, dtype=np.intp), np.empty(t)
+
+    def most_consistent(first, end):
+        columns, _ = rings.padded(first, end)
         candidates = consistency.take(columns)
-        best[a:b] = np.minimum.reduceat(candidates, starts)
-        place = np.where(candidates <= np.repeat(best[a:b], counts), np.arange(columns.size), columns.size)
-        chosen[a:b] = columns[np.minimum.reduceat(place, starts)]
-    guidance = means[chosen]
+        place = (candidates.argmin(axis=0), np.arange(end - first))  # the first on a tie
+        best[first:end], chosen[first:end] = candidates[place], columns[place]
+
+    rings.each_chunk(most_consistent)
+    guidance = means.T[chosen]
     vertex_means, vertex_consistency = _vertex_ring_consistency(normals, rings, steep, summed)
     corner_consistency = VERTEX_RING_WEIGHT * vertex_consistency[rings.triangles]
     corner = np.argmin(corner_consistency, axis=1)
@@ -331,7 +379,7 @@ def _vertex_ring_consistency(normals, rings, steep, summed):
     starts = incidence.indptr[:-1]
     around = np.flatnonzero(rings.faces_at > 0)
     rows = np.repeat(np.arange(n), rings.faces_at)
-    columns = incidence.indices
+    columns = incidence.indices.astype(np.intp)
     cosine = normals[:, 0].take(columns) * means[:, 0].take(rows)
     for c in (1, 2):
         cosine += normals[:, c].take(columns) * means[:, c].take(rows)
@@ -348,29 +396,56 @@ def nearest_plane_normals(points, normals, rings):
     on a tie). Where filtering leaves a row of faces along a crease between the two sides' normals,
     these faces take the side their corners lie on: the crease stays one edge, not a rounded strip.
 
-    Blocked over rows of the ring pattern, as ``guidance_normals``."""
+    With face i's centroid c_i and the second moment C_i = sum_k (x_k - c_i)(x_k - c_i)^T of its corners
+    about it, that sum is n_j^T C_i n_j + 3 (n_j . c_i - n_j . c_j)^2: per pair the candidate's normal and
+    offset, the rest is face i's. Positions about their mean: the offsets stay of the mesh's size. A chunk
+    of the ring pattern's rows at a time (``FaceRings.padded``)."""
     t = normals.shape[0]
-    indptr, indices = rings.indptr, rings.indices
-    corners = np.ascontiguousarray(points[rings.triangles].transpose(1, 2, 0), dtype=np.float64)  # (3, 3, t)
+    x = np.ascontiguousarray(points.T, dtype=np.float64)
+    x = x - x.mean(axis=1, keepdims=True)
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
-    centroids = corners.mean(axis=0)
+    centroids = np.empty((3, t))
+    parallel.run_chunks(lambda a, b: _centroids(x, rings.corners[:, a:b], centroids[:, a:b]), t, _FACE_CHUNK)
     offsets = np.einsum("kt,kt->t", planar, centroids)  # n_j . c_j
-    chosen = np.empty(t, dtype=indices.dtype)
-    for a, b in _row_blocks(indptr, t):
-        columns, starts = indices[indptr[a] : indptr[b]], indptr[a:b] - indptr[a]
-        rows = np.repeat(np.arange(a, b), rings.counts[a:b])
+    chosen = np.empty(t, dtype=np.intp)
+
+    def nearest(first, end):
+        columns, _ = rings.padded(first, end)
+        moments = _corner_moments(x, rings.corners[:, first:end], centroids[:, first:end])
         candidate = [row.take(columns) for row in planar]
-        shift = offsets.take(columns)
-        cost = np.zeros(columns.size)
-        for corner in corners:
-            distance = candidate[0] * corner[0].take(rows) - shift
-            for c in (1, 2):
-                distance += candidate[c] * corner[c].take(rows)
-            cost += distance * distance
-        best = np.repeat(np.minimum.reduceat(cost, starts), rings.counts[a:b])
-        place = np.where(cost <= best, np.arange(columns.size), columns.size)
-        chosen[a:b] = columns[np.minimum.reduceat(place, starts)]
+        distance = candidate[0] * centroids[0, first:end] - offsets.take(columns)
+        for c in (1, 2):
+            distance += candidate[c] * centroids[c, first:end]
+        cost = 3.0 * distance * distance
+        for moment, (a, b) in zip(moments, _MOMENT_PAIRS):
+            cost += (moment if a == b else 2.0 * moment) * candidate[a] * candidate[b]
+        chosen[first:end] = columns[cost.argmin(axis=0), np.arange(end - first)]  # the first on a tie
+
+    rings.each_chunk(nearest)
     return normals[chosen]
+
+
+_FACE_CHUNK = 1 << 15  # triangles per chunk of the per-triangle work: its temporaries stay in cache
+_MOMENT_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the coordinates of C's six entries
+
+
+def _centroids(x, corners, out):
+    """``out`` (3, k) = the centroids of the triangles of ``corners`` (3, k) on planar positions ``x``."""
+    for c in range(3):
+        np.add(x[c].take(corners[0]), x[c].take(corners[1]), out=out[c])
+        out[c] += x[c].take(corners[2])
+        out[c] /= 3.0
+    return out
+
+
+def _corner_moments(x, corners, centroids):
+    """(6, k): the entries ``_MOMENT_PAIRS`` of sum_k (x_k - c)(x_k - c)^T over each triangle's corners."""
+    moments = np.zeros((6, corners.shape[1]))
+    for corner in corners:
+        away = [x[c].take(corner) - centroids[c] for c in range(3)]
+        for moment, (a, b) in zip(moments, _MOMENT_PAIRS):
+            moment += away[a] * away[b]
+    return moments
 
 
 def _row_blocks(indptr, t):
@@ -388,129 +463,95 @@ def filter_normals(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS, 
 def filter_steps(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS, guidance=None):
     """Sun et al.'s normal filtering, ``iterations`` passes: n_i <- normalize(sum_j w_ij n_j) over the faces j
     sharing a vertex with i (i included), w_ij = (n_i . n_j - T)^2 where n_i . n_j > T, else 0. A face with
-    no other face of its ring within the angle (noise tilted it away from all of them) takes the plain mean
-    of its ring's normals instead, where that mean is at least a tenth of a unit long (the ring is no corner
-    of its own, as a tetrahedron's is): kept as it is, it would be a crease of one face, and the fitting would
-    turn it over. A face whose sum vanishes keeps its normal. A generator: yields after each pass, returns
-    the normals.
+    at most one face of its ring (itself included) within the angle (noise tilted it away from all of them)
+    takes the plain mean of its ring's normals instead, where that mean is at least a tenth of a unit long
+    (the ring is no corner of its own, as a tetrahedron's is): kept as it is, it would be a crease of one
+    face, and the fitting would turn it over. A face whose sum vanishes keeps its normal. A generator:
+    yields after each pass, returns the normals.
 
     ``guidance``: (t, 3) unit normals (``guidance_normals``) whose cosines give the weights and the lonely
     faces instead of the filtered normals' own, w_ij = (g_i . g_j - T)^2: the weights are then fixed for
-    all the passes, and computed once.
+    all the passes, computed once and kept (one number a pair); without it each pass computes its weights
+    chunk by chunk and uses them while they are in cache.
 
-    w_ij = w_ji: a pass computes the weights of the pairs i < j only, in blocks of rows that stay in cache,
-    and sums each block both ways at once (its rows of the upper triangle's CSR, and the same arrays read
-    as columns of the lower's CSC). A fourth
-    column of ones gives each face's sum of the weights of the others: 0 exactly when none is within
-    the angle."""
-    t = normals.shape[0]
-    rows, columns, indptr = rings.upper_rows, rings.upper_indices, rings.upper_indptr
-    m = columns.size
-    weights = np.empty(m)
-    stacked = np.empty((t, 4))  # the normals and a column of ones
-    stacked[:, :3] = normals
-    stacked[:, 3] = 1.0
-    planar = np.ascontiguousarray(normals.T, dtype=np.float64)  # a coordinate at a time: 1-D gathers are fast
-    guided = guidance is not None
-    judged = np.ascontiguousarray(guidance.T, dtype=np.float64) if guided else planar  # the weights' cosines
-    # Every face-sized array of a pass is allocated once: fresh ones of millions of entries cost page faults.
-    summed, total = np.empty((t, 4)), np.empty((3, t))
-    near, product = np.empty(t), np.empty(t)
-    similar, good = np.empty(t, dtype=bool), np.empty(t, dtype=bool)
-    # Blocks of whole rows (faces) with about _BLOCK pairs each: a block's weights are summed both ways
-    # while they are in cache.
-    cuts = np.searchsorted(indptr, np.arange(_BLOCK, m, _BLOCK))
-    bounds = np.unique(np.concatenate([[0], cuts, [t]]))
-    blocks = [(int(a), int(b), slice(int(indptr[a]), int(indptr[b]))) for a, b in zip(bounds[:-1], bounds[1:])]
-    local = [indptr[a : b + 1] - indptr[a] for a, b, _ in blocks]
-    widest = max((block.stop - block.start for _, _, block in blocks), default=0)
-    buffer = np.empty((4, widest))
-
-    def weigh(block):  # the weights of a block of pairs
-        r, c = rows[block], columns[block]
-        cosine, product, mine, theirs = buffer[:, : r.size]
-        # mode="clip" (the indices are in range) lets take fill ``out`` without a copy of its own
-        np.multiply(judged[0].take(r, out=mine, mode="clip"), judged[0].take(c, out=theirs, mode="clip"), out=cosine)
-        for k in (1, 2):
-            np.multiply(
-                judged[k].take(r, out=mine, mode="clip"), judged[k].take(c, out=theirs, mode="clip"), out=product
-            )
-            cosine += product
-        cosine -= cos_threshold
-        np.maximum(cosine, 0.0, out=cosine)
-        np.multiply(cosine, cosine, out=weights[block])
-
-    def pair_sums(weighing):  # summed = (W + W^T) @ stacked, W the weights of the pairs i < j
-        summed[...] = 0.0
-        if _csr_matvecs is None:  # the public products, on the whole matrices
-            for _, _, block in blocks if weighing else ():
-                weigh(block)
-            summed[...] += sp.csr_matrix((weights, columns, indptr), shape=(t, t)) @ stacked
-            summed[...] += sp.csc_matrix((weights, columns, indptr), shape=(t, t)) @ stacked
-            return
-        into, read = summed.reshape(-1), stacked.reshape(-1)
-        for (a, b, block), block_indptr in zip(blocks, local):
-            if weighing:
-                weigh(block)
-            # y += A x for the block's rows of W, and for its columns of W^T (the same arrays read as CSC)
-            _csr_matvecs(b - a, t, 4, block_indptr, columns[block], weights[block], read, summed[a:b].reshape(-1))
-            _csc_matvecs(t, b - a, 4, block_indptr, columns[block], weights[block], stacked[a:b].reshape(-1), into)
-
-    def squares(vectors, out):  # x^2 + y^2 + z^2 of coordinate rows, in the order of the pairs' cosines
-        np.multiply(vectors[0], vectors[0], out=out)
-        for k in (1, 2):
-            out += np.multiply(vectors[k], vectors[k], out=product)
-        return out
-
-    own = lonely = None  # guided: each face's own weight and the lonely faces, fixed for all the passes
+    The normals are filtered in single precision (``FILTER_DTYPE``): a pass averages a dozen unit vectors,
+    and the fitting needs their directions to far fewer digits than positions."""
+    planar = np.ascontiguousarray(normals.T, dtype=FILTER_DTYPE)
+    total = np.empty_like(planar)
+    weights = lonely = None
+    if guidance is not None:
+        weights = np.empty(rings.indices.size, dtype=FILTER_DTYPE)
+        judged = np.ascontiguousarray(guidance.T, dtype=FILTER_DTYPE)
+        lonely = _filter_pass(rings, cos_threshold, judged=judged, keep=weights)
     for _ in range(iterations):
-        pair_sums(own is None)
-        if own is None:
-            squares(judged, near)  # each face's cosine with itself
-            near -= cos_threshold
-            np.maximum(near, 0.0, out=near)
-            np.greater(near, 0.0, out=similar)
-            lonely = _lonely(judged, rings, cos_threshold, similar, summed[:, 3])
-            near *= near
-            if guided:
-                own = near.copy()
-        total[:] = summed[:, :3].T  # coordinate rows: element-wise work on (t, 3) columns is slow
-        for k in range(3):
-            total[k] += np.multiply(near if own is None else own, planar[k], out=product)
-        if lonely.size:
-            ring = rings.ring[lonely] @ stacked  # the sums of the ring's normals, and its size
-            mean = ring[:, :3] / ring[:, 3:]
-            agree = np.einsum("ij,ij->i", mean, mean) >= 0.01  # a ring that is no corner of its own
-            total[:, lonely[agree]] = mean[agree].T
-        lengths = np.sqrt(squares(total, near), out=near)
-        np.greater(lengths, 0.0, out=good)  # else the face keeps its normal
-        if good.all():
-            np.divide(1.0, lengths, out=lengths)
-            np.multiply(total, lengths, out=planar)
+        if guidance is None:
+            lonely = _filter_pass(rings, cos_threshold, planar, total, judged=planar)
         else:
-            np.divide(1.0, lengths, out=lengths, where=good)
-            np.multiply(total, lengths, out=planar, where=good)
-        stacked[:, :3] = planar.T
+            _filter_pass(rings, cos_threshold, planar, total, weights=weights)
+        if lonely.size:
+            _ring_means(total, planar, rings, lonely)
+        lengths = np.sqrt(np.einsum("kt,kt->t", total, total))
+        good = lengths > 0.0  # else the face keeps its normal
+        np.divide(1.0, lengths, out=lengths, where=good)
+        total *= lengths
+        if not good.all():
+            total[:, ~good] = planar[:, ~good]
+        planar, total = total, planar
         yield
-    return planar.T.copy()
+    return np.ascontiguousarray(planar.T, dtype=np.float64)
 
 
-def _lonely(planar, rings, cos_threshold, similar_self, others):
-    """The faces with at most one face of their ring (itself included) within the angle: those within it
-    of themselves with a zero sum of the others' weights, and those that are not (a zero normal, or an
-    angle so small that its cosine rounds to 1) with at most one other face within it. Overwrites
-    ``similar_self``."""
-    odd = np.flatnonzero(~similar_self)
-    lonely = np.logical_and(similar_self, others == 0.0, out=similar_self)
-    if odd.size:
-        ring = rings.ring[odd]
-        mine, theirs = np.repeat(odd, np.diff(ring.indptr)), ring.indices
-        cosine = planar[0, mine] * planar[0, theirs]  # in the order of the pairs' cosines
+def _filter_pass(rings, cos_threshold, planar=None, total=None, judged=None, weights=None, keep=None):
+    """``total`` (3, t) = W ``planar`` over the face rings (if given), W's weights read from ``weights`` or
+    computed from the cosines of ``judged`` (3, t) and kept in ``keep`` (if given). With ``judged``, returns
+    the lonely faces: at most one positive weight in their row (``filter_steps``)."""
+    t = rings.counts.size
+    positive = None if judged is None else np.empty(t, dtype=np.intp)
+
+    def chunk(first, end):
+        if judged is None:
+            pairs = slice(rings.indptr[first], rings.indptr[end])
+            _weighted_rows(weights[pairs], rings.indices[pairs], rings.counts[first:end], planar, total[:, first:end])
+            return
+        columns, real = rings.padded(first, end)
+        gathered = [row.take(columns) for row in judged]
+        chunk_weights = judged[0, first:end] * gathered[0]
         for k in (1, 2):
-            cosine += planar[k, mine] * planar[k, theirs]
-        similar = np.add.reduceat((cosine > cos_threshold).astype(np.int64), ring.indptr[:-1])
-        lonely[odd] = similar <= 1
-    return np.flatnonzero(lonely)
+            chunk_weights += judged[k, first:end] * gathered[k]
+        chunk_weights -= cos_threshold
+        np.maximum(chunk_weights, 0.0, out=chunk_weights)
+        chunk_weights *= chunk_weights
+        chunk_weights *= real  # the repeated columns past each row's end weigh nothing
+        positive[first:end] = np.count_nonzero(chunk_weights, axis=0)
+        if keep is not None:
+            keep[rings.indptr[first] : rings.indptr[end]] = chunk_weights.T[real.T]
+        if total is not None:  # the weights of the normals themselves: their gathers serve twice
+            for k, values in enumerate(gathered if planar is judged else (row.take(columns) for row in planar)):
+                np.sum(chunk_weights * values, axis=0, out=total[k, first:end])
+
+    rings.each_chunk(chunk)
+    return None if judged is None else np.flatnonzero(positive <= 1)
+
+
+def _weighted_rows(weights, columns, counts, planar, out):
+    """``out`` (3, rows) = the rows' weighted sums of planar (3, t) ``planar`` (a CSR chunk of the rings)."""
+    local = np.zeros(counts.size + 1, dtype=columns.dtype)
+    np.cumsum(counts, out=local[1:])
+    if _csr_matvec is None:  # the public product
+        out[...] = (sp.csr_matrix((weights, columns, local), shape=(counts.size, planar.shape[1])) @ planar.T).T
+        return
+    out[...] = 0.0
+    for k in range(3):
+        _csr_matvec(counts.size, planar.shape[1], local, columns, weights, planar[k], out[k])
+
+
+def _ring_means(total, planar, rings, lonely):
+    """Set, in place, the ``lonely`` faces' columns of ``total`` to the mean of their ring's ``planar``
+    normals where that mean is at least a tenth of a unit long."""
+    columns, counts, starts = rings.rows_of(lonely)
+    mean = np.add.reduceat(planar[:, columns], starts, axis=1) / counts
+    agree = np.einsum("kt,kt->t", mean, mean) >= 0.01  # a ring that is no corner of its own
+    total[:, lonely[agree]] = mean[:, agree]
 
 
 def fit_vertices(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
@@ -522,56 +563,38 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     """Sun et al.'s vertex update, ``iterations`` passes: x_i += share_i / |F_i| sum_f n_f n_f^T (c_f - x_i)
     over the triangles f around i (``step_share``: (n,) 0 for vertices that stay, else the influence).
 
-    On the coordinates as one (3n,) vector (x's, then y's, then z's) a pass is five products with matrices
-    fixed for the step: the (t, 3n) one of each triangle's normal at its corners' coordinates (3 n_f . c_f),
-    per coordinate k the (n, t) one of n_f[k] share_i / (3 |F_i|) at each vertex's triangles, and the
-    (3n, 3n) one of -share_i / |F_i| sum_f n_f n_f^T at each vertex's coordinates. A generator: yields once
-    the matrices are built and after every ``FIT_SLICE`` passes but the last, returns the positions."""
-    triangles, incidence = rings.triangles, rings.incidence
-    t, n = triangles.shape[0], points.shape[0]
-    scale = np.divide(step_share, rings.faces_at, out=np.zeros(step_share.size), where=rings.faces_at > 0)
-    outer = (normals[:, :, None] * normals[:, None, :]).reshape(-1, 9)
-    tensor = (incidence @ outer).reshape(-1, 3, 3)  # sum_f n_f n_f^T per vertex
-    dots = sp.csr_matrix(
-        (np.tile(normals, (1, 3)).ravel(), rings.corner_columns, np.arange(0, 9 * t + 1, 9)), shape=(t, 3 * n)
-    )
-    share = np.repeat(scale / 3.0, rings.faces_at)  # at each of the incidence's entries
-    pulls = [
-        sp.csr_matrix((row.take(incidence.indices) * share, incidence.indices, incidence.indptr), shape=(n, t))
-        for row in np.ascontiguousarray(normals.T)
-    ]
-    columns = np.arange(n)[None, :, None] + n * np.arange(3)[None, None, :]  # vertex i's x, y, z
-    own = sp.csr_matrix(
-        (
-            (-scale[None, :, None] * tensor.transpose(1, 0, 2)).ravel(),
-            np.broadcast_to(columns, (3, n, 3)).ravel(),
-            np.arange(0, 9 * n + 1, 3),
-        ),
-        shape=(3 * n, 3 * n),
-    )
-    flat = np.array(points.T, dtype=np.float64).reshape(-1)
-    moved, offsets = np.empty_like(flat), np.empty(t)  # allocated once, as the filtering's
-    yield  # building the matrices takes as long as a few passes
+    That is share_i / |F_i| (sum_f n_f (n_f . c_f) - M_i x_i) with M_i = sum_f n_f n_f^T, fixed for the
+    step: a pass gathers each triangle's corners for its offset n_f . c_f, sums n_f times it around each
+    vertex (one product with the incidence) and subtracts M_i x_i, on the threads. A generator: yields once
+    the M_i are made and after every ``FIT_SLICE`` passes but the last, returns the positions."""
+    n, t = points.shape[0], normals.shape[0]
+    scale = np.divide(step_share, rings.faces_at, out=np.zeros(n), where=rings.faces_at > 0)
+    planar = np.ascontiguousarray(normals.T, dtype=np.float64)
+    outer = np.stack([planar[a] * planar[b] for a, b in _MOMENT_PAIRS], axis=1)
+    tensor = np.ascontiguousarray((rings.incidence @ outer).T)  # (6, n): M_i's entries _MOMENT_PAIRS
+    x = np.array(points.T, dtype=np.float64, order="C")  # coordinate rows: 1-D gathers
+    moved, pulled = np.empty_like(x), np.empty((3, t))
+    yield  # making the M_i takes as long as a few passes
+
+    def offsets(first, end):  # pulled = n_f (n_f . c_f) for triangles first:end
+        centroid = _centroids(x, rings.corners[:, first:end], pulled[:, first:end])
+        offset = np.einsum("kt,kt->t", planar[:, first:end], centroid)
+        np.multiply(planar[:, first:end], offset, out=pulled[:, first:end])
+
+    def update(rows, sums):  # moved = x + share / |F| (sums - M x) on a chunk of vertices
+        here, m = x[:, rows], tensor[:, rows]
+        sums[0] -= m[0] * here[0] + m[3] * here[1] + m[4] * here[2]
+        sums[1] -= m[3] * here[0] + m[1] * here[1] + m[5] * here[2]
+        sums[2] -= m[4] * here[0] + m[5] * here[1] + m[2] * here[2]
+        np.add(here, scale[rows] * sums, out=moved[:, rows])
+
     for done in range(1, iterations + 1):
-        offsets[:] = 0.0
-        _add_product(dots, flat, offsets)
-        moved[:] = flat
-        for k, pull in enumerate(pulls):
-            _add_product(pull, offsets, moved[k * n : (k + 1) * n])
-        _add_product(own, flat, moved)
-        flat, moved = moved, flat
+        parallel.run_chunks(offsets, t, _FACE_CHUNK)
+        rings.vertex_blocks.run(lambda block: block.neighbour_sums(pulled, update))
+        x, moved = moved, x
         if done % FIT_SLICE == 0 and done < iterations:
             yield
-    return np.ascontiguousarray(flat.reshape(3, n).T)
-
-
-def _add_product(matrix, x, y):
-    """y += matrix @ x for a CSR matrix and vectors: by SciPy's private kernel (no fresh array), or the
-    public product where it is missing."""
-    if _csr_matvec is None:
-        y += matrix @ x
-    else:
-        _csr_matvec(*matrix.shape, matrix.indptr, matrix.indices, matrix.data, x, y)
+    return np.ascontiguousarray(x.T)
 
 
 def _mean_of_neighbours(values, operator):
@@ -615,14 +638,14 @@ class SharpSmoothing:
         False: Sun et al.'s two steps alone, without HC's push-back.
     guided : bool
         True: the filter's weights compare guidance normals, and the faces take their nearest planes (what
-        core.MeshSmoother runs where core.mesh_noise finds noise). False: Sun et al.'s filter alone.
+        core.MeshSmoother runs where core.mesh.noise finds noise). False: Sun et al.'s filter alone.
         The guidance is for meshes fine enough that most faces lie in a patch on one side of every crease
         (scans): on a coarse model (a cube of 12 triangles) every face is at a corner and it blends the sides.
 
     Examples
     --------
     >>> import numpy as np, core
-    >>> from core.sharp_edges import SharpSmoothing
+    >>> from core.mesh.sharp_edges import SharpSmoothing
     >>> positions = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
     >>> faces = [[0, 1, 3, 2], [2, 3, 7, 6], [6, 7, 5, 4], [4, 5, 1, 0], [2, 6, 4, 0], [7, 3, 1, 5]]
     >>> run = SharpSmoothing(positions, faces, iterations=2)
@@ -737,10 +760,11 @@ class SharpSmoothing:
         if self.influence is not None:  # vertex i ends the step at q_i + w_i (p_i - q_i), as in core.smoothing
             moved = start + self.share[:, None] * (moved - start)
         moved[self.still] = start[self.still]
-        unfolding = _unfold(moved, start, before, self.triangles, normals, _unit(self.rings.ring @ normals))
+        around = _unit(self.rings.ring_sums(np.ascontiguousarray(normals.T)).T)
+        unfolding = _unfold(moved, start, before, self.triangles, normals, around)
         yield from _counted(unfolding, slices)
         if np.any(self.max_deviation):
-            _within(moved, self.original, self.max_deviation)
+            project_rows_within(moved, self.original, self.max_deviation)
         self.done += 1
         if self.tolerance:
             largest = float(np.sqrt(np.max(np.einsum("ij,ij->i", moved - start, moved - start), initial=0.0)))
@@ -812,23 +836,13 @@ def _turned(now, normals, around):
     return (np.einsum("ij,ij->i", now, normals) < 0.0) | (np.einsum("ij,ij->i", now, around) < 0.0)
 
 
-def _within(points, start, radius):
-    """``points`` projected, in place, onto the balls of ``radius`` (one distance, or one per row) around ``start``."""
-    away = points - start
-    lengths = np.sqrt(np.einsum("ij,ij->i", away, away))
-    bound = np.broadcast_to(radius, lengths.shape)
-    over = np.flatnonzero(lengths > bound)
-    if over.size:
-        points[over] = start[over] + away[over] * (bound[over] / lengths[over])[:, None]
-
-
 def sharp_smooth(positions: ArrayLike, faces, **options) -> np.ndarray:
     """Keep Sharp Edges run to the end: ``SharpSmoothing(positions, faces, **options)``'s result.
 
     Examples
     --------
     >>> import numpy as np
-    >>> from core.sharp_edges import sharp_smooth
+    >>> from core.mesh.sharp_edges import sharp_smooth
     >>> u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 12))
     >>> grid = np.arange(144).reshape(12, 12)
     >>> quads = np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:], grid[1:, :-1]], -1).reshape(-1, 4)

@@ -37,16 +37,17 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from . import parallel
-from .adjacency import Umbrella, umbrella_from_pairs
-from .slices import to_end
+from .. import parallel
+from ..adjacency import Umbrella, umbrella_from_pairs
+from ..geometry import median_edge_length
+from ..parallel import BLOCK
+from ..slices import to_end
 
 TOLERANCE = 1e-6  # vertices closer than this times the median edge length are one (equal ones always)
 CELL_EDGES = 1 / 8  # cell side in median edge lengths: distinct vertices rarely share a cell
-_EDGE_SAMPLE = 65_536  # edges the median edge length is measured on (evenly spaced)
 _FINEST_CELL = 2.0**-40  # cell side at least this times the bounding-box diagonal (keys fit in int64)
 _PACKED_BITS = 21  # cell coordinates below 2**21 per axis are packed into a key exactly
-_ROWS = 1 << 16  # vertices per block of the cell keys (float64 and int64 temporaries: a few MB a thread)
+_ROWS = BLOCK  # vertices per block of the cell keys (float64 and int64 temporaries: a few MB a thread)
 
 
 @dataclass(frozen=True)
@@ -126,27 +127,6 @@ def weld_steps(positions, operator: Umbrella, tolerance: float = TOLERANCE):
     label, first = rank[labels], first[order]
     near = np.flatnonzero(np.any(points != points[first[label]], axis=1))
     return Welding(label=label, first=first, near=near, start=points)
-
-
-def median_edge_length(points, operator):
-    """The median length of (an even sample of) the operator's edges, 0 without edges."""
-    # Row i's edges (i, j), j > i, are the last entries of its (increasing) row: ``above`` counts them,
-    # so the k-th such entry of the mesh is found without listing them all.
-    above = np.zeros(operator.n_vertices + 1, dtype=np.int64)
-    for low in range(0, operator.n_vertices, _ROWS):
-        high = min(low + _ROWS, operator.n_vertices)
-        first, last = operator.indptr[low], operator.indptr[high]
-        rows = np.repeat(np.arange(low, high, dtype=operator.indices.dtype), operator.degree[low:high])
-        above[low + 1 : high + 1] = np.bincount(rows[operator.indices[first:last] > rows] - low, minlength=high - low)
-    np.cumsum(above, out=above)
-    total = int(above[-1])
-    if total == 0:
-        return 0.0
-    pick = np.unique(np.linspace(0, total - 1, min(total, _EDGE_SAMPLE)).astype(np.int64))
-    rows = np.searchsorted(above, pick, side="right") - 1
-    entries = operator.indptr[rows + 1] - (above[rows + 1] - pick)
-    difference = np.asarray(points[rows], np.float64) - points[operator.indices[entries]]
-    return float(np.median(np.sqrt(np.einsum("ij,ij->i", difference, difference))))
 
 
 def _coincident(points, edge, tolerance):

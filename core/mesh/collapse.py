@@ -2,12 +2,12 @@
 those whose shape it takes away with the noise.
 
 On a coarse part the shape itself can read as noise. Blender's Cone (33 vertices) with noise of 0.1 median
-edge lengths: GCV (core.mesh_amount) sees its apex and rim as noise, chooses 198 iterations, and the cone
+edge lengths: GCV (core.mesh.amount) sees its apex and rim as noise, chooses 198 iterations, and the cone
 shrinks to a point (Keep Sharp Edges: by a third); its noise estimate is as large as the part, so the
 deviation limit does not hold it. No amount chosen for noise should do that: taking noise of standard
 deviation sigma away from a part shrinks its RMS radius r (about its centroid) to sqrt(r^2 - 3 sigma^2) at
 the least (isotropic noise; noise along the normals takes less). A part that ends below ``KEEP`` times that
-gets its input positions back: left noisy, not harmed. sigma is core.mesh_noise's robust estimate of the
+gets its input positions back: left noisy, not harmed. sigma is core.mesh.noise's robust estimate of the
 part, which a coarse shape does not inflate as it does GCV's.
 
 A part can also lose its shape without shrinking. On a coarse CAD part (a tube whose walls are single
@@ -16,7 +16,7 @@ the smoothing removed then moves alike from vertex to vertex: the residual along
 r_i = (y_i - x_i) . n_i (y the input, x the result, n its vertex normals), correlates positively between
 neighbours (rims moved inwards together), where noise taken away is white or alternating (negative). A
 part of at least ``SMOOTH_FROM`` vertices whose residual's neighbour correlation exceeds ``SMOOTH_RESIDUAL``
-gets its input back too (``smooth_residual``; HC's default only). Parts of core.mesh_amount.PATCH_FROM
+gets its input back too (``smooth_residual``; HC's default only). Parts of core.mesh.amount.PATCH_FROM
 vertices or more, which the Automatic Amount treats as big scans, are not asked: the test takes a pass of
 normals over them (about 1.3 s on 5M vertices, a quarter of the default's own time there).
 
@@ -36,9 +36,9 @@ import math
 
 import numpy as np
 
-from . import parallel
-from .mesh_amount import PATCH_FROM
-from .volume import vertex_normals
+from .. import parallel
+from ..geometry import vertex_normals
+from .amount import PATCH_FROM
 
 # Of the radius noise removal can leave: a collapsing cone ends near 0 (HC) or at 0.4-0.66 (Keep Sharp Edges),
 # a smoothing that keeps the shape near 1. An 8-vertex cube with noise of half its edge can end below it (its
@@ -53,7 +53,7 @@ def collapsed(before, after, part_of_vertex, sigma):
     Examples
     --------
     >>> import numpy as np
-    >>> from core.collapse import collapsed
+    >>> from core.mesh.collapse import collapsed
     >>> square = np.array([[1, 1, 0], [1, -1, 0], [-1, -1, 0], [-1, 1, 0]], dtype=float)
     >>> before = np.r_[square, square + 5.0]  # two parts of radius sqrt(2)
     >>> after = np.r_[0.95 * square, 0.1 * square + 5.0]  # the first noise taken away, the second shrunk
@@ -97,7 +97,7 @@ def smooth_residual(before, after, triangles, operator, part_of_vertex, parts):
     Examples
     --------
     >>> import numpy as np, core
-    >>> from core.collapse import smooth_residual
+    >>> from core.mesh.collapse import smooth_residual
     >>> u, v = np.meshgrid(np.linspace(0, 1, 8), np.linspace(0, 1, 8))
     >>> grid = np.arange(64).reshape(8, 8)
     >>> triangles = np.r_[np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:]], -1).reshape(-1, 3),
@@ -165,7 +165,7 @@ def moved_beyond_noise(before, after, triangles, part_of_vertex, sigma, noisy):
     Examples
     --------
     >>> import numpy as np
-    >>> from core.collapse import moved_beyond_noise
+    >>> from core.mesh.collapse import moved_beyond_noise
     >>> around = np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)
     >>> disc = np.c_[np.r_[0.0, np.cos(around)], np.r_[0.0, np.sin(around)], np.zeros(25)]
     >>> fan = np.c_[np.zeros(24, dtype=int), np.arange(1, 25), np.r_[np.arange(2, 25), 1]]

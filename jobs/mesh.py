@@ -1,9 +1,10 @@
-"""One smoothing job per mesh: what to read, what stays fixed, where the result goes.
+"""One smoothing job per mesh: its arrays, the core options of the settings, the core run and the report.
 
-Shared by the Object-mode and Edit-mode operators (and the command line): every job is read and
-validated before any mesh is written, so a failure leaves every mesh as it was.
+Without Blender: the mesh operators read a Blender mesh into a Job and write its result back
+(operators/mesh_objects.py); the command line makes one of a scan file's arrays (cli/file_route.py). Every
+job is read and validated before any mesh or file is written, so a failure leaves everything as it was.
 
-A scaled object is smoothed as it stands in the world (core.world): its positions are taken through its
+A scaled object is smoothed as it stands in the world (core.mesh.world): its positions are taken through its
 stretch, so the Deviation Limit, the Automatic Amount's noise and limit, Keep Sharp Edges' angles, the report
 and the deviation map measure world-space lengths in scene units; the result is mapped back to object space
 on writing. An object without scale (identity, rotation, mirror) runs in object space, bit for bit as before.
@@ -16,16 +17,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .. import core, settings_spec
-from ..core import parallel
-from . import mesh_io, objects
 
 # The method's enum identifier -> the short name reports and shape keys use.
 METHOD_LABEL = {choice.identifier: choice.short for choice in settings_spec.METHOD.items}
+DEVIATION_ATTRIBUTE = "hc_deviation"  # the deviation map: float, on points (a mesh's attribute, a PLY's property)
+DEVIATION_COLOR_ATTRIBUTE = "hc_deviation_color"  # its colours: float colour, on points
 
 
 @dataclass
 class Job:
-    obj: object
+    obj: object  # the Blender object and mesh it was read from; None for a file's arrays
     mesh: object
     positions: np.ndarray  # (n, 3): the mesh's or its active shape key's (float32) in ``frame``, or a file's
     edges: np.ndarray
@@ -33,15 +34,16 @@ class Job:
     fixed: np.ndarray  # bool (n,)
     closed: bool | None = False  # the faces enclose a volume; None: not checked yet (see input_measure)
     corners: tuple = None  # (corner_verts, corner_edges) while ``closed`` is None, if Blender gave them
+    seams: bool = True  # copies of a vertex may stand on a seam: some edge has one face, or there are no faces
     influence: np.ndarray = None  # float32 (n,) weights of the influence group, if any
     key_block: object = None  # the active shape key that holds ``positions``, if any
     result: np.ndarray = None
     report: object = None  # the core.MeshReport of the run: what ran, what the Automatic Amount chose
     change: object = None  # core.Change of the result, measured once for every report
-    measured_input: object = None  # Future of the core.metrics.InputMeasure the report compares with
+    measured_input: object = None  # Future of the core.InputMeasure the report compares with
     deviation: object = None  # the core.DeviationMap of the result (Deviation Map on), made before any write
-    map_names: object = None  # mesh_io.DeviationNames: where the map goes (Deviation Map on), chosen on reading
-    # The object's stretch (core.world.frame): ``positions`` and ``result`` are in world-space lengths, the
+    map_names: object = None  # where the map goes (operators: mesh_io.DeviationNames), chosen on reading
+    # The object's stretch (core.mesh.world.frame): ``positions`` and ``result`` are in world-space lengths, the
     # object-space positions read are ``local``. None: object space measures as world space does.
     frame: np.ndarray = None
     local: np.ndarray = None
@@ -56,7 +58,7 @@ def core_options(props, given=frozenset()):
     Numbers are taken in single precision, as Blender's float properties hold them, so every route runs
     the same numbers."""
     values = settings_spec.values_of(props, settings_spec.MESH)
-    automatic = settings_spec.automatic(values, given)
+    chosen = settings_spec.chosen(values, given)
     options = {}
     for setting in settings_spec.MESH:
         if setting.argument is None:
@@ -64,7 +66,7 @@ def core_options(props, given=frozenset()):
         value = values[setting.name]
         if setting is settings_spec.KEEP_IN_PLACE:  # on where it applies (core then decides as "auto"), else off
             value = core.AUTO if value and settings_spec.keeps_in_place(values, given) else False
-        elif automatic and setting.chosen and setting.name not in given:
+        elif setting.name in chosen:
             value = core.AUTO
         elif setting.kind == "enum":
             value = next(choice.core for choice in setting.items if choice.identifier == value)
@@ -73,7 +75,7 @@ def core_options(props, given=frozenset()):
         options[setting.argument] = value
     # The add-on smooths split vertices (UV seams, soups) as one, on the welded mesh, where a seam is no
     # border. Open borders: the paper's rule unless Pin Boundary holds them or Keep Outline smooths them as
-    # curves (core.borders); the curve rule keeps outlines in place but measures more error to ragged scan
+    # curves (core.mesh.borders); the curve rule keeps outlines in place but measures more error to ragged scan
     # outlines (bench/README.md, "Open borders"): not the default.
     border = "fixed" if props.pin_boundary else "curve" if props.keep_outline else "free"
     options.update(weld=True, border=border)
@@ -93,69 +95,6 @@ def as_property(value):
     return float(np.float32(value))
 
 
-def make_job(obj, props, extra_fixed=None):
-    """Read ``obj``'s mesh into a Job, or raise InputError saying what is wrong. Reads only."""
-    if obj.type != "MESH":
-        raise objects.InputError(f"'{obj.name}' is a {obj.type.lower().replace('_', ' ')} object, not a mesh")
-    objects.check_editable(obj)
-    mesh = obj.data
-    n = len(mesh.vertices)
-    if n == 0:
-        raise objects.InputError(f"Mesh '{mesh.name}' has no vertices: nothing to smooth")
-    if len(mesh.edges) == 0:
-        raise objects.InputError(
-            f"Mesh '{mesh.name}' has no edges: it is a point cloud. "
-            "Use Object > HC Smooth Points (object.hc_smooth_points) instead"
-        )
-    positions, key_block = objects.read_positions(obj)
-    frame = objects.world_frame(obj)
-    edges = mesh_io.read_edges(mesh)
-    corner_verts, corner_edges = mesh_io.read_corners(mesh)
-    corners = None
-    if corner_verts.size and corner_verts.size == 3 * len(mesh.polygons):
-        # All triangles (scans): the faces come free; whether they close is checked with the report, off
-        # this thread (input_measure).
-        faces, closed, corners = corner_verts.reshape(-1, 3), None, (corner_verts, corner_edges)
-    else:
-        closed = core.topology.closed_from_corners(edges, corner_verts, corner_edges)
-        # Triangulated once per mesh, for the volume and the normals in the report (only the positions change).
-        faces = mesh_io.read_faces(mesh, corner_verts)
-        faces = core.metrics.fan_triangles(faces) if faces is not None else None
-    fixed = np.zeros(n, dtype=bool) if extra_fixed is None else extra_fixed.copy()
-    if props.vertex_group:
-        group = obj.vertex_groups.get(props.vertex_group)
-        if group is None:
-            raise objects.InputError(f"Object '{obj.name}' has no vertex group '{props.vertex_group}'")
-        members = mesh_io.vertex_group_members(obj, group.index)
-        fixed |= ~members if props.invert_vertex_group else members
-    influence = None
-    if props.influence_group:
-        group = obj.vertex_groups.get(props.influence_group)
-        if group is None:
-            raise objects.InputError(
-                f"Object '{obj.name}' has no vertex group '{props.influence_group}' (the influence group)"
-            )
-        influence = mesh_io.vertex_group_weights(obj, group.index)
-        if props.invert_influence_group:
-            influence = 1.0 - influence
-        np.clip(influence, 0.0, 1.0, out=influence)  # Blender keeps weights in [0, 1]; rounding may not
-    return Job(
-        obj=obj,
-        mesh=mesh,
-        positions=positions if frame is None else core.world.to_frame(positions, frame),
-        edges=edges,
-        faces=faces,
-        fixed=fixed,
-        closed=closed,
-        corners=corners,
-        key_block=key_block,
-        influence=influence,
-        map_names=mesh_io.deviation_names(obj) if props.deviation_map else None,
-        frame=frame,
-        local=None if frame is None else positions,
-    )
-
-
 def run(jobs, props, chunk=None, given=frozenset()):
     """Smooth every job with core.MeshSmoother; a generator yielding the fraction done after each chunk of
     iterations (chunk=None: each job in one slice; the result is the same bit for bit)."""
@@ -172,9 +111,11 @@ def run(jobs, props, chunk=None, given=frozenset()):
 
 def make_smoother(job, options):
     """The core.MeshSmoother of a job with ``core_options``' options (checks them: ValueError). A mesh
-    without faces (loose edges) has no border to follow or hold."""
+    without faces (loose edges) has no border to follow or hold; one without seams nothing to weld."""
     if job.faces is None:
         options = {**options, "border": "free"}
+    if not job.seams:
+        options = {**options, "weld": False}
     return core.MeshSmoother(
         job.positions,
         job.edges,
@@ -185,37 +126,11 @@ def make_smoother(job, options):
     )
 
 
-def write_all(jobs, props):
-    """Write every job's result (``write``); with Deviation Map on, every map is made (and where it goes was
-    chosen when the job was read) before anything is written, so a failure leaves every mesh as it was."""
-    if props.deviation_map:
-        for job in jobs:
-            deviation_map(job)
-    for job in jobs:
-        write(job, props)
-
-
-def write(job, props):
-    """Write a job's result: into the mesh (and the active shape key) or into a new shape key; with Deviation
-    Map on, also its map as point attributes of the mesh."""
-    if props.deviation_map:
-        deviation = deviation_map(job)
-        mesh_io.write_deviation(job.mesh, job.map_names, deviation.deviation, deviation.colors)
-    before, result = local_result(job)
-    if props.output == "SHAPE_KEY":
-        if job.mesh.shape_keys is None:
-            job.obj.shape_key_add(name="Basis", from_mix=False)
-        key = job.obj.shape_key_add(name=METHOD_LABEL[props.method] + " Smooth", from_mix=False)
-        mesh_io.write_shape_key(key, result)
-        return
-    objects.write_positions(job.obj, job.key_block, before, result)
-
-
 def local_result(job):
     """(the positions read, the result) of a job in object space."""
     if job.frame is None:
         return job.positions, job.result
-    return job.local, core.world.from_frame(job.local, job.positions, job.result, job.frame)
+    return job.local, core.from_frame(job.local, job.positions, job.result, job.frame)
 
 
 def deviation_map(job):
@@ -229,12 +144,15 @@ def deviation_map(job):
 
 
 def map_legend(job, length=None):
-    """The deviation map's legend (core.DeviationMap.legend), and where the map went when a name of the user's
-    kept it from hc_deviation and hc_deviation_color."""
+    """The deviation map's legend (core.DeviationMap.legend), where the map went when a name of the user's
+    kept it from hc_deviation and hc_deviation_color, and where to pick its colours when the mesh's own stay
+    the active ones."""
     text = deviation_map(job).legend(length)
     names = job.map_names
     if names is not None and not names.usual:
         text += f", stored in '{names.value}' and '{names.color}'"
+    if names is not None and not names.shown:
+        text += f"; the mesh's own colours stay active: '{names.color}' is under Color Attributes"
     return text
 
 
@@ -242,15 +160,15 @@ def input_measure(job):
     """The Future of what the report needs of the job's input (closedness, size, volume), started once
     on a background thread: the single-threaded start of a run leaves a core free for it."""
     if job.measured_input is None:
-        job.measured_input = parallel.in_background(lambda: _measure_input(job))
+        job.measured_input = core.in_background(lambda: _measure_input(job))
     return job.measured_input
 
 
 def _measure_input(job):
     closed = job.closed
     if closed is None and job.corners is not None:  # else measure_input finds it from the triangles
-        closed = core.topology.closed_from_corners(job.edges, *job.corners)
-    return core.metrics.measure_input(job.positions, job.faces, closed=closed)
+        closed = core.closed_from_corners(job.edges, *job.corners)
+    return core.measure_input(job.positions, job.faces, closed=closed)
 
 
 def measure(job):
@@ -296,7 +214,7 @@ def summary(jobs, props, length=None):
 def amount_words(reports):
     """What ran: '12 iterations' or, chosen, 'automatic amount: noise 0.45x edge length, 12 iterations,
     alpha 0, beta 0.6, volume kept, moves at most 0.0123' (and '1 part left as it was (smoothing would
-    change its shape)' where core.collapse gave a part back); with Keep Sharp Edges, 'sharpness 30°, ' first,
+    change its shape)' where core.mesh.collapse gave a part back); with Keep Sharp Edges, 'sharpness 30°, ' first,
     and steps for iterations."""
     angles = sorted({round(math.degrees(r.sharpness_angle)) for r in reports if r.keep_sharp_edges})
     if not angles:
@@ -332,7 +250,7 @@ def _amount_words(reports, unit):
 
 
 def held_words(count):
-    """'1 part left as it was (smoothing would change its shape)': the parts core.collapse gave their input
+    """'1 part left as it was (smoothing would change its shape)': the parts core.mesh.collapse gave their input
     back (the run collapsed them, or took their shape away with the noise)."""
     if count == 1:
         return "1 part left as it was (smoothing would change its shape)"

@@ -5,13 +5,13 @@ same matrix S_k, a polynomial in the umbrella operator T (paper section 5). Too 
 noise, too many flatten the shape; the best k depends on the noise, the edge lengths and the shape's
 detail. It is chosen here from the mesh alone, by generalized cross-validation (GCV) along one HC run.
 
-First, which parts have noise at all (core.mesh_noise): GCV cannot tell a clean mesh's curvature from
+First, which parts have noise at all (core.mesh.noise): GCV cannot tell a clean mesh's curvature from
 noise and would smooth a Blender primitive's shape away. Clean parts (an estimate of at most
-core.mesh_noise.CLEAN edge lengths: analytic shapes) and parts of at most four vertices (nothing tells
+core.mesh.noise.CLEAN edge lengths: analytic shapes) and parts of at most four vertices (nothing tells
 their noise from their shape) are held fixed; a mesh with nothing else gets 0 iterations. Quiet parts
-(an estimate below the threshold that core.mesh_noise cannot tell from a coarse shape's detail) and
+(an estimate below the threshold that core.mesh.noise cannot tell from a coarse shape's detail) and
 light-noise parts (below the threshold, but white) are smoothed with the others, and core.MeshSmoother
-keeps their vertices within a radius of their own (core.mesh_noise.Noise.quiet_radius);
+keeps their vertices within a radius of their own (core.mesh.noise.Noise.quiet_radius);
 ``noise_found`` says whether any part has noise (above the threshold, or light). On the parts that move:
 
 * **Residual**: R(k) = mean over sample vertices of ((y_i - x_i(k)) . n_i)^2, the part of what the
@@ -28,7 +28,7 @@ keeps their vertices within a radius of their own (core.mesh_noise.Noise.quiet_r
   noisy meshes with sharp edges): the amount chosen is the largest k whose GCV is within
   ``TOLERANCE`` of the minimum, i.e. the most smoothing the estimate cannot tell from the best.
 * The square root of the minimum GCV is the noise estimate (standard deviation along the normals),
-  at most ROBUST_SIGMAS times core.mesh_noise's robust one.
+  at most ROBUST_SIGMAS times core.mesh.noise's robust one.
 * **Light noise on coarse meshes**: where that picks at most ``FINE_MAX`` iterations, whole steps at
   the given beta are too coarse to say how much smoothing is wanted: k steps smooth a low frequency
   as much as k (1 - beta) steps of the gentlest kind, and below beta 0.75 a step also overshoots the
@@ -39,7 +39,7 @@ keeps their vertices within a radius of their own (core.mesh_noise.Noise.quiet_r
   amount says so in its beta.
 
 Where the noise is large against a thin part (a tube a few edges around), the amount with the least
-error also shrinks that part by a few per cent; core.volume.restore_volume gives the volume back.
+error also shrinks that part by a few per cent; core.mesh.volume.restore_volume gives the volume back.
 
 Big meshes:
 
@@ -71,22 +71,19 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
-from .convergence import ConvergenceWarning, DivergenceError
-from .mesh_noise import neighbours, noise_steps
-from .slices import as_fraction
-from .smoothing import Smoothing
-from .validation import check_fixed, check_positions, check_unit_interval
+from ..adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
+from ..convergence import ConvergenceWarning, DivergenceError
+from ..geometry import median_edge_length
+from ..slices import as_fraction
+from ..smoothing import Smoothing
+from ..validation import check_fixed, check_positions, check_unit_interval
+from .noise import neighbours, noise_steps
 
 TOLERANCE = 0.005  # GCV within this fraction of its minimum counts as the minimum (see above)
 MAX_ITERATIONS = 200  # the most the automatic amount chooses: bounds the cost on heavy noise and fine meshes
 SAMPLE_VERTICES = 4096  # vertices the residual and normals are measured on
 PROBE_ENTRIES = 60_000  # +-1 probe entries (vertices x probes) for the trace: at least 3 probes, at most 24
 _MIN_NEIGHBOURS = 3  # a 1-ring needs three points to define a plane
-# The median edge length of a mesh with more than EDGE_SAMPLE_FROM row entries: of an even sample of EDGE_SAMPLE.
-EDGE_SAMPLE_FROM = 1 << 21
-EDGE_SAMPLE = 1 << 16
-_EDGE_ROWS = 1 << 16  # rows per block where every edge is measured
 # The runs go on patches from this many movable vertices up: PATCH_SEEDS balls of PATCH_RINGS rings, the
 # trace and the residual read on vertices at least PATCH_MARGIN rings inside (where S_k sees no cut).
 PATCH_FROM = 250_000
@@ -97,7 +94,7 @@ PATCH_PROBE_ENTRIES = 180_000  # more probe entries on the patches' fewer vertic
 _SEED = 20_161_999  # the probes' seed: fixed, so the choice is reproducible
 FINE_MAX = 3  # choices of at most this many iterations are made again on gentler steps (see above) ...
 FINE_BETA = 0.75  # ... of this beta
-# The noise estimate is GCV's, at most this many times core.mesh_noise's: on coarse meshes GCV reads the
+# The noise estimate is GCV's, at most this many times core.mesh.noise's: on coarse meshes GCV reads the
 # shape as noise (up to ~5x the truth at light noise), the robust estimate never does (it reads heavy
 # noise along the normals low, 0.65x at a noise of 3 edge lengths).
 ROBUST_SIGMAS = 2.0
@@ -142,12 +139,12 @@ class MeshAmount:
     beta: float
     iterations: int
     # Estimated noise, standard deviation along the normals (the positions' units): GCV's where noise was
-    # found (at most ROBUST_SIGMAS times the robust one), else core.mesh_noise's robust estimate (~0 on a
+    # found (at most ROBUST_SIGMAS times the robust one), else core.mesh.noise's robust estimate (~0 on a
     # clean mesh).
     sigma: float
     edge_length: float  # median edge length of the input
     explored: int  # iterations the estimate ran
-    noise_found: bool  # False: no part has noise core.mesh_noise can tell from shape (quiet parts at most)
+    noise_found: bool  # False: no part has noise core.mesh.noise can tell from shape (quiet parts at most)
     capped: bool = False  # the work budget cut the iterations: GCV wanted more
 
     @property
@@ -461,7 +458,7 @@ class _Ground:
         ground.fixed = fixed_mask = given | operator.isolated | ground.noise.held()
         movable = np.flatnonzero(~fixed_mask)
         ground.movable = movable.size
-        ground.edge_length = _median_edge_length(start, operator)
+        ground.edge_length = median_edge_length(start, operator)
         ground.whole = movable.size < patch_from
         if movable.size == 0:
             return ground
@@ -521,7 +518,7 @@ def _patches(operator, fixed_mask, movable):
     owner, neighbour = neighbours(chosen, operator)
     keep = number[neighbour] >= 0
     inner = np.sort(number[np.concatenate(levels[: PATCH_RINGS - PATCH_MARGIN + 1])])
-    # The operator's own pairs (a directed pattern stays directed: core.borders' curves).
+    # The operator's own pairs (a directed pattern stays directed: core.mesh.borders' curves).
     patches = umbrella_from_pairs(
         owner[keep], number[neighbour[keep]], chosen.size, symmetric=operator.symmetric or None
     )
@@ -563,28 +560,3 @@ def _chosen(steps, score):
     """The largest step whose score is within TOLERANCE of the minimum."""
     within = np.flatnonzero(score <= (1.0 + TOLERANCE) * score.min())
     return steps[int(within.max())]
-
-
-def _median_edge_length(points, operator):
-    """The median length of the edges (i, j), i < j, of the operator's rows; on big meshes of an even
-    sample of EDGE_SAMPLE of the rows' entries. The lengths are measured in blocks of rows."""
-    entries = operator.indices.size
-    if entries > EDGE_SAMPLE_FROM:
-        picked = np.linspace(0, entries - 1, EDGE_SAMPLE).astype(np.int64)
-        rows = np.searchsorted(operator.indptr, picked, side="right") - 1
-        lengths = _lengths(points, rows, operator.indices[picked])
-    else:
-        lengths = []
-        for low in range(0, operator.n_vertices, _EDGE_ROWS):
-            high = min(low + _EDGE_ROWS, operator.n_vertices)
-            rows = np.repeat(np.arange(low, high), operator.degree[low:high])
-            lengths.append(_lengths(points, rows, operator.indices[operator.indptr[low] : operator.indptr[high]]))
-        lengths = np.concatenate(lengths) if lengths else np.zeros(0)
-    return float(np.median(lengths)) if lengths.size else 0.0
-
-
-def _lengths(points, rows, columns):
-    """The lengths of the pairs (row, column) with row < column."""
-    upper = columns > rows
-    difference = np.asarray(points[rows[upper]], np.float64) - np.asarray(points[columns[upper]], np.float64)
-    return np.sqrt(np.einsum("ij,ij->i", difference, difference))

@@ -25,8 +25,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import parallel, topology
-from .slices import to_end
+from ..geometry import corner_rows, cross, dot, in_rounds, index_dtype, normals_and_measures, part_sums
+from ..parallel import TRIANGLE_BLOCK, VECTOR_BLOCK
+from ..slices import to_end
+from . import topology
 
 _NEWTON_STEPS = 6  # at most; the volume is a cubic in the offset, Newton from 0 needs two or three
 _RELATIVE_ACCURACY = 1e-12
@@ -41,58 +43,8 @@ NOISE_OFFSETS = 1.0
 # A part whose volume changed so little that the offset giving it back would stay under this share of
 # ``limit`` keeps its smoothed shape: the offset would not matter, and finding it takes a pass.
 NEGLIGIBLE = 1e-3
-_BLOCK = 1 << 15  # triangles per block: bounds the temporaries (a few MB a block, one block per thread)
-_VERTEX_BLOCK = 1 << 17  # vertices per block
-
-
-def vertex_normals(positions, triangles):
-    """Area-weighted unit vertex normals of a triangle mesh (zero where no face touches a vertex).
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from core import volume
-    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
-    >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
-    >>> volume.vertex_normals(positions, triangles).round(3).tolist()
-    [[-0.577, -0.577, -0.577], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-    """
-    return to_end(_normal_steps(_planar(np.asarray(positions)), np.asarray(triangles))).T.copy()
-
-
-def _normal_steps(planar, triangles):
-    """vertex_normals in slices (yields between rounds of blocks), of (3, n) ``planar`` positions: the
-    unit normals as float64 (3, n)."""
-    return (yield from _first_pass(planar, triangles, None, 1, np.zeros(3)))[0]
-
-
-def _first_pass(after, triangles, part_of_vertex, parts, centre):
-    """(normals, measures) in slices, of (3, n) planar positions: the unit vertex normals (area-weighted,
-    float64 (3, n)) and per part, (2, parts), its volume less the ``centre`` (times 6) and its area
-    (times 2). Each block's triangles are measured on the threads, then their normals added at their
-    corners block by block: the same numbers whatever the thread count."""
-    normals = np.zeros((3, after.shape[1]))
-
-    def measured(start, stop):
-        block = np.ascontiguousarray(triangles[start:stop].T, dtype=_index(after.shape[1]))
-        a, b, c = _corners(after, block, centre)
-        volume = _dot(a, _cross(b, c))
-        b -= a
-        c -= a
-        faces = _cross(b, c)
-        return block, faces, _part_sums([volume, np.sqrt(_dot(faces, faces))], part_of_vertex, block, parts)
-
-    measures = np.zeros((2, parts))
-    for blocks in _in_rounds(measured, len(triangles)):
-        for block, faces, sums in blocks:
-            _add_at_corners(normals, block, faces)
-            measures += sums
-        yield
-    for start in range(0, normals.shape[1], _VERTEX_BLOCK):
-        rows = normals[:, start : start + _VERTEX_BLOCK]
-        length = np.sqrt(_dot(rows, rows))
-        rows /= np.where(length > 0.0, length, 1.0)
-    return normals, measures
+_BLOCK = TRIANGLE_BLOCK  # triangles per block: bounds the temporaries (a few MB a block, one block per thread)
+_VERTEX_BLOCK = VECTOR_BLOCK  # vertices per block
 
 
 @dataclass(frozen=True)
@@ -106,7 +58,7 @@ class Before:
 
 
 def measure_before(before, triangles, surface):
-    """The Before of (n, 3) positions with the (t, 3) ``triangles`` and their core.topology.surface: one
+    """The Before of (n, 3) positions with the (t, 3) ``triangles`` and their core.mesh.topology.surface: one
     thread's work, which the mesh pipeline does in the background while it chooses the amount."""
     return to_end(_before_steps(np.asarray(before), np.asarray(triangles), surface))
 
@@ -118,38 +70,11 @@ def _before_steps(before, triangles, surface):
     centre = _centre(before)
     volumes = np.zeros(surface.parts)
     for start in range(0, len(triangles), _BLOCK):
-        block = np.ascontiguousarray(triangles[start : start + _BLOCK].T, dtype=_index(planar.shape[1]))
-        a, b, c = _corners(planar, block, centre)
-        volumes += _part_sums([_dot(a, _cross(b, c))], surface.part_of_vertex, block, surface.parts)[0]
+        block = np.ascontiguousarray(triangles[start : start + _BLOCK].T, dtype=index_dtype(planar.shape[1]))
+        a, b, c = corner_rows(planar, block, centre)
+        volumes += part_sums([dot(a, cross(b, c))], surface.part_of_vertex, block, surface.parts)[0]
         yield
     return Before(centre, volumes, low, high)
-
-
-def _part_sums(terms, part_of_vertex, block, parts):
-    """(len(terms), parts): each per-triangle term summed over each part's triangles."""
-    if parts == 1:
-        return np.array([[term.sum()] for term in terms])
-    owner = part_of_vertex[block[0]]
-    return np.array([np.bincount(owner, weights=term, minlength=parts) for term in terms])
-
-
-def _index(n):
-    return np.int32 if n < np.iinfo(np.int32).max else np.int64
-
-
-def _add_at_corners(sums, corners, values):
-    """sums[:, v] += values[:, i] for each corner v of triangle i (``corners``: (3, t) columns): by a
-    count over the block's span of vertices where it is short (meshes numbered with some locality),
-    else one at a time."""
-    low, high = int(corners.min()), int(corners.max()) + 1
-    for at in corners:
-        if high - low <= 4 * corners.shape[1]:
-            at = at - low
-            for j in range(3):
-                sums[j, low:high] += np.bincount(at, weights=values[j], minlength=high - low)
-        else:
-            for j in range(3):
-                np.add.at(sums[j], at, values[j])
 
 
 def _planar(points):
@@ -157,60 +82,25 @@ def _planar(points):
     return np.ascontiguousarray(points.T)
 
 
-def _corners(planar, columns, centre=None):
-    """(a, b, c): the corners of the triangles (``columns``: their (3, t) corner columns) in (3, n)
-    ``planar`` points, as float64 (3, t) rows (less ``centre``)."""
-    corners = np.empty((3, 3, columns.shape[1]))
-    for k, at in enumerate(columns):
-        for j in range(3):
-            corners[k, j] = planar[j].take(at)
-            if centre is not None:
-                corners[k, j] -= centre[j]
-    return corners
-
-
-def _cross(b, c):
-    """Column-wise b x c of (3, t) rows, (3, t)."""
-    return np.stack((b[1] * c[2] - b[2] * c[1], b[2] * c[0] - b[0] * c[2], b[0] * c[1] - b[1] * c[0]))
-
-
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _in_rounds(function, size):
-    """Generator of rounds: function(start, stop) for consecutive blocks of _BLOCK elements of
-    range(size), one block per thread at a time; yields each round's results in block order. The
-    blocks are the same whatever the thread count."""
-    starts = range(0, size, _BLOCK)
-    per_round = parallel.thread_count()
-    for first in range(0, len(starts), per_round):
-        tasks = [
-            lambda start=start: function(start, min(start + _BLOCK, size))
-            for start in starts[first : first + per_round]
-        ]
-        yield parallel.run_all(tasks)
-
-
 def _cubic_steps(after, normals, triangles, part_of_vertex, parts, centre):
     """(c1, c2, c3) in slices, of (3, n) planar positions and normals: per part, (3, parts), the
-    coefficients beyond c0 (the volume, from _first_pass) of its volume after an offset d along
+    coefficients beyond c0 (the volume, from normals_and_measures) of its volume after an offset d along
     ``normals``: V(d) = c0 + c1 d + c2 d^2 + c3 d^3 (times 6). Each triangle's signed tetrahedron volume
     det(a, b, c) / 6 is a cubic in d: with b x c, n_b x c + b x n_c and n_b x n_c, its coefficients
     are a . (b x c), n_a . (b x c) + a . (n_b x c + b x n_c), n_a . (n_b x c + b x n_c) + a . (n_b x n_c)
     and n_a . (n_b x n_c)."""
 
     def block_sums(start, stop):
-        block = np.ascontiguousarray(triangles[start:stop].T, dtype=_index(after.shape[1]))
-        a, b, c = _corners(after, block, centre)
-        na, nb, nc = _corners(normals, block)
-        first, second, third = _cross(b, c), _cross(nb, c), _cross(nb, nc)
-        second += _cross(b, nc)
-        terms = [_dot(na, first) + _dot(a, second), _dot(na, second) + _dot(a, third), _dot(na, third)]
-        return _part_sums(terms, part_of_vertex, block, parts)
+        block = np.ascontiguousarray(triangles[start:stop].T, dtype=index_dtype(after.shape[1]))
+        a, b, c = corner_rows(after, block, centre)
+        na, nb, nc = corner_rows(normals, block)
+        first, second, third = cross(b, c), cross(nb, c), cross(nb, nc)
+        second += cross(b, nc)
+        terms = [dot(na, first) + dot(a, second), dot(na, second) + dot(a, third), dot(na, third)]
+        return part_sums(terms, part_of_vertex, block, parts)
 
     total = np.zeros((3, parts))
-    for sums in _in_rounds(block_sums, len(triangles)):
+    for sums in in_rounds(block_sums, len(triangles), _BLOCK):
         for block in sums:
             total += block
         yield
@@ -237,7 +127,7 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     Examples
     --------
     >>> import numpy as np
-    >>> from core import metrics, volume
+    >>> from core.mesh import metrics, volume
     >>> positions = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
     >>> triangles = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
     >>> shrunk = 0.95 * positions  # an octahedron
@@ -253,7 +143,7 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
 def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.float64, surface=None, measured=None):
     """``restore_volume`` in slices, for callers that let the user cancel: a generator that yields (None)
     between its passes and returns (positions in ``dtype``, offsets); the same numbers (float64 math,
-    cast to ``dtype`` at the end). ``surface``: the triangles' core.topology.surface, and ``measured``:
+    cast to ``dtype`` at the end). ``surface``: the triangles' core.mesh.topology.surface, and ``measured``:
     ``measure_before(before, triangles, surface)``, if the caller has them. Beside its result it holds
     the float64 normals, a planar copy of the positions after (in their dtype) and a few bytes a vertex;
     the rest works in blocks of triangles."""
@@ -273,7 +163,8 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
     low_after, high_after = _boxes(planar_after, part_of_vertex, used, parts)
     extent, centre, target = measured.high - measured.low, measured.centre, measured.volumes
     yield
-    normals, (c0, area) = yield from _first_pass(planar_after, triangles, part_of_vertex, parts, centre)
+    measuring = normals_and_measures(planar_after, triangles, part_of_vertex, parts, centre, _BLOCK)
+    normals, (c0, area) = yield from measuring
     normals *= movable
     # An offset d moves every vertex by at most |d|: outwards, each side of the box grows by at most 2 d.
     # Inwards the box does not grow; there half the part's thinnest side bounds d (it would turn inside out).

@@ -18,13 +18,13 @@ Examples
 --------
 >>> import core
 >>> strip = [[0, 1, 3], [0, 3, 2], [2, 3, 5], [2, 5, 4]]  # a strip of two quads: every vertex on the border
->>> core.borders.border_edges(strip, 6).tolist()
+>>> core.mesh.borders.border_edges(strip, 6).tolist()
 [[0, 1], [0, 2], [1, 3], [2, 4], [3, 5], [4, 5]]
 """
 
 import numpy as np
 
-from .adjacency import grouped_pairs
+from ..adjacency import grouped_pairs
 
 BORDERS = ("free", "curve", "fixed")
 

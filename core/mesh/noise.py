@@ -1,7 +1,7 @@
 """Is there noise on a mesh? A robust estimate that is ~0 on clean modelled meshes and close to the noise
 on scans, per connected part.
 
-GCV (core.mesh_amount) cannot tell a clean mesh's curvature from noise: on a Blender primitive it finds
+GCV (core.mesh.amount) cannot tell a clean mesh's curvature from noise: on a Blender primitive it finds
 "noise" and smooths the shape away. This test looks at what noise does and a modelled shape does not:
 
 * s_i = L_i . n_i, the umbrella vector L_i = mean(adj(i)) - x_i along the normal n_i of the plane
@@ -44,8 +44,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..slices import to_end
 from .parts import parts as connected_parts
-from .slices import to_end
 
 GAIN = 1.6  # r's standard deviation over the noise's, on the tuning set's dense meshes (valence 4 to 6)
 # On a curve, r = L_i - (L_{i-1} + L_{i+1}) / 2 = (4 e_{i-1} + 4 e_{i+1} - 6 e_i - e_{i-2} - e_{i+2}) / 4 of

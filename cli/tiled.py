@@ -1,0 +1,397 @@
+"""Scans larger than memory: a binary PLY file smoothed in spatial tiles (core.tile_boxes), read and written
+in blocks (cli/formats/ply_blocks.py). No Blender here: NumPy, SciPy and core.
+
+The route, for a file whose whole run would not fit in the memory limit (``needs_tiles``):
+
+1. One pass over the vertices (bounds, an even sample, finite coordinates) and one over the faces (their
+   corners checked, the longest edge).
+2. With the Automatic Amount, the amount is chosen once, on a region of about REGION_VERTICES vertices
+   around REGION_PLACES places spread over the file (core.region_amount), and every tile runs the
+   numbers it chose.
+3. The boxes (core.tile_boxes), each tile holding what the run reads (core.tile_rings rings of
+   halo), at most as many vertices as the limit leaves room for.
+4. The input is copied to a hidden temporary file beside the target; each tile is read (a pass over the
+   vertices, one over the faces), smoothed with its vertices in the file's order, and its own vertices'
+   positions (and the normals the file stores) written into the copy in place; the copy replaces the
+   target only once every tile is written (cli/files.py), so an interrupt or a failure leaves no output.
+
+Memory: a tile's run, plus one index per vertex (4 bytes; 8 beyond 2**31 vertices) to number a tile's
+vertices and a sample of at most SAMPLE_POINTS positions. Reading goes through the page cache, not
+through arrays of the whole file.
+"""
+
+import os
+import shutil
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import core
+from . import files
+from .formats import normals as normal_maths
+from .formats.ply import NORMALS
+from .formats.ply_blocks import PlyBlocks, write_columns
+from .formats.tokens import FormatError
+
+# What a whole (in-core) run of the command line takes per vertex, file included, at most (measured:
+# bench/bench_tiled.py): a file whose vertices need more than the limit goes in tiles.
+IN_CORE_BYTES_PER_VERTEX = 800
+# What a tile's run takes per vertex of the tile, its faces and buffers included (measured, as above).
+TILE_BYTES_PER_VERTEX = 600
+BASE_BYTES = 320 << 20  # the interpreter, NumPy, SciPy (and Blender's module) and the blocks being read
+MEMORY_SHARE = 0.75  # the default limit: this share of the machine's memory
+BLOCK = 1 << 20  # records per block read
+SAMPLE_POINTS = 1 << 20  # vertices sampled for the boxes
+REGION_VERTICES = 1_000_000  # about this many vertices for the Automatic Amount's choice ...
+REGION_PLACES = 8  # ... in boxes around this many places spread over the file's vertices
+SMALLEST_TILE = 10_000  # a limit leaving room for fewer vertices per tile is refused
+
+
+def default_memory_limit():
+    """MEMORY_SHARE of the machine's physical memory (bytes); 8 GB where it cannot be read."""
+    try:
+        return int(MEMORY_SHARE * os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 8 << 30
+
+
+def size_words(count):
+    """'4.0 GB', '512 MB'."""
+    return f"{count / (1 << 30):.1f} GB" if count >= 1 << 30 else f"{count / (1 << 20):.0f} MB"
+
+
+def in_core_bytes(vertices):
+    return BASE_BYTES + IN_CORE_BYTES_PER_VERTEX * vertices
+
+
+def estimated_vertices(path):
+    """The vertices of the mesh file ``path`` as far as can be told before reading it: a PLY header's count,
+    else (OBJ, STL, a PLY header that cannot be read) one per 12 bytes of the file (its least), 0 when
+    there is no file."""
+    if not os.path.isfile(path):
+        return 0
+    if os.path.splitext(path)[1].lower() == ".ply":
+        try:
+            from .formats.ply import parse_header
+            from .formats.ply_blocks import read_header
+
+            _, elements, _ = parse_header(read_header(path))
+            return next((element.count for element in elements if element.name == "vertex"), 0)
+        except (FormatError, OSError):
+            pass
+    return os.path.getsize(path) // 12
+
+
+def needs_tiles(path, limit):
+    """Whether smoothing the mesh file ``path`` whole would take more than ``limit`` bytes."""
+    return in_core_bytes(estimated_vertices(path)) > limit
+
+
+def surface_arrays(corners, sizes):
+    """(edges, triangles) of faces given as ``corners`` (vertex indices, face after face) with ``sizes``: the
+    sides and fan triangles of the faces Blender would keep (at least three corners, none repeating the one
+    before it), face after face. The one rule of the file routes (command.mesh_job uses it too)."""
+    if len(sizes) and sizes[0] >= 3 and corners.size == sizes[0] * len(sizes) and np.all(sizes == sizes[0]):
+        return _alike_surface(corners.reshape(len(sizes), -1))
+    starts = np.cumsum(sizes) - sizes
+    following, _ = normal_maths.corner_neighbours(starts, sizes)
+    degenerate = np.repeat(np.arange(len(sizes)), sizes)[corners == corners[following]]
+    keep = sizes >= 3
+    keep[degenerate] = False
+    mask = np.repeat(keep, sizes)
+    edges = np.stack([corners[mask], corners[following][mask]], axis=1)
+    kept = sizes[keep]
+    triangles = core.fan_triangles((np.concatenate([[0], np.cumsum(kept)]), corners[mask]))
+    return edges, triangles
+
+
+def _alike_surface(grid):
+    """``surface_arrays`` of (f, k) faces all of k >= 3 corners, column by column."""
+    k = grid.shape[1]
+    degenerate = np.zeros(len(grid), dtype=bool)
+    for column in range(k):
+        degenerate |= grid[:, column] == grid[:, (column + 1) % k]
+    kept = grid[~degenerate] if degenerate.any() else grid
+    edges = np.empty((kept.size, 2), dtype=kept.dtype)
+    edges[:, 0] = kept.ravel()
+    edges[:, 1] = np.roll(kept, -1, axis=1).ravel()
+    return edges, core.fan_triangles(kept)
+
+
+@dataclass
+class Scan:
+    """The first passes' findings: bounds, the longest edge, an even sample of the vertices."""
+
+    low: np.ndarray
+    high: np.ndarray
+    longest_edge: float
+    sample: np.ndarray
+    sample_indices: np.ndarray
+
+    @property
+    def diagonal(self):
+        return float(np.linalg.norm(self.high - self.low))
+
+
+@dataclass
+class TiledRun:
+    """What a tiled run did: the counts the command line reports and the sentences it says."""
+
+    vertices: int = 0
+    tiles: int = 0
+    iterations: int = 0
+    largest_tile: int = 0
+    margin: float = 0.0
+    rings: int = 0
+    amount: object = None  # core.MeshAmount chosen on a region (Automatic Amount), else None
+    change: object = None  # core.Change from the tiles' sums (no volume: see docs/large_scans.md)
+    notes: list = field(default_factory=list)
+    kept_in_place: bool = False
+
+
+def blocks(count, size=BLOCK):
+    return ((start, min(start + size, count)) for start in range(0, count, size))
+
+
+def scan(ply):
+    """One pass over the vertices and one over the faces (``Scan``); raises FormatError for a coordinate that
+    is not finite or a face that names a vertex the file does not have."""
+    n = ply.vertex_count
+    stride = max(1, -(-n // SAMPLE_POINTS))
+    low, high = np.full(3, np.inf), np.full(3, -np.inf)
+    sample, picked = [], []
+    for start, stop in blocks(n):
+        points = ply.positions(start, stop)
+        bad = ~np.isfinite(points).all(axis=1)
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            raise FormatError(
+                f"vertex {start + row} has a coordinate that is not a finite number ({points[row]}); nothing was "
+                "written"
+            )
+        low, high = np.minimum(low, points.min(axis=0)), np.maximum(high, points.max(axis=0))
+        first = -start % stride
+        sample.append(points[first::stride].astype(np.float64))
+        picked.append(np.arange(start + first, stop, stride))
+    records = ply.memmap_vertices()
+    columns = [records[axis] for axis in "xyz"]  # strided views: a gather reads only the coordinates
+    longest = 0.0
+    for start, stop in blocks(ply.face_count):
+        corners = ply.faces(start, stop)
+        squares = np.zeros(corners.shape)
+        for column in columns:
+            at = column[corners].astype(np.float64)
+            squares += (at - np.roll(at, -1, axis=1)) ** 2
+        if squares.size:
+            longest = max(longest, float(np.sqrt(squares.max())))
+    del records, columns
+    return Scan(low, high, longest, np.concatenate(sample), np.concatenate(picked))
+
+
+@dataclass
+class Tile:
+    """A tile read from the file: its vertices (indices in the file, increasing), their positions, which are
+    the box's own, and its faces' corners numbered in the tile."""
+
+    vertices: np.ndarray
+    positions: np.ndarray
+    own: np.ndarray
+    corners: np.ndarray
+
+
+def read_tile(ply, reaches, owns, lookup):
+    """The Tile of the vertices ``reaches(points)`` selects (``owns(points)`` its own), with the faces whose
+    corners all lie among them. ``lookup`` ((n,) -1 everywhere) numbers them meanwhile and is reset."""
+    vertices, positions, own = [], [], []
+    for start, stop in blocks(ply.vertex_count):
+        points = ply.positions(start, stop)
+        inside = np.flatnonzero(reaches(points))
+        vertices.append(start + inside)
+        positions.append(points[inside])
+        own.append(owns(points[inside]))
+    vertices = np.concatenate(vertices)
+    lookup[vertices] = np.arange(len(vertices), dtype=lookup.dtype)
+    try:
+        corners = []
+        for start, stop in blocks(ply.face_count):
+            local = lookup[ply.faces(start, stop)]
+            inside = local[:, 0] >= 0
+            for column in range(1, local.shape[1]):
+                inside &= local[:, column] >= 0
+            corners.append(local[inside])
+    finally:
+        lookup[vertices] = -1
+    return Tile(vertices, np.concatenate(positions), np.concatenate(own), np.concatenate(corners).astype(np.int64))
+
+
+def tile_capacity(limit, n):
+    """The vertices a tile may hold within ``limit`` bytes, beside the per-vertex lookup and the sample."""
+    spare = limit - BASE_BYTES - np.dtype(index_dtype(n)).itemsize * n - 24 * min(n, SAMPLE_POINTS)
+    return int(spare // TILE_BYTES_PER_VERTEX)
+
+
+def index_dtype(n):
+    return np.int32 if n < np.iinfo(np.int32).max else np.int64
+
+
+def smooth_file(source, target, options, limit, say=None, capacity=None):
+    """Smooth the binary PLY ``source`` into ``target`` in tiles within about ``limit`` bytes; ``options``
+    are core.MeshSmoother's (the operators' core_options): where they leave alpha and iterations to the
+    Automatic Amount, it chooses them once (``choose_on_region``). ``say(text)`` hears each tile's progress;
+    ``capacity``: the vertices a tile may hold (default: what ``limit`` leaves room for). Returns a TiledRun;
+    raises FormatError or ValueError with a message for what cannot run tiled (nothing is written then)."""
+    say = say or (lambda text: None)
+    problem = core.tiled_problem(options)
+    if problem:
+        raise ValueError(f"{problem}; smooth it whole (a larger --memory-limit) or leave the option out")
+    ply = PlyBlocks(source)
+    n = ply.vertex_count
+    if capacity is None and tile_capacity(limit, n) < min(SMALLEST_TILE, n):
+        raise ValueError(
+            f"--memory-limit {size_words(limit)} leaves no room for a tile of this scan's {n} vertices "
+            f"(at least {size_words(BASE_BYTES + SMALLEST_TILE * TILE_BYTES_PER_VERTEX + 4 * n)})"
+        )
+    capacity = capacity or tile_capacity(limit, n)
+    started = time.perf_counter()
+    found = scan(ply)
+    run = TiledRun(vertices=n)
+    lookup = np.full(n, -1, dtype=index_dtype(n))
+    if core.tiles_choose(options):
+        chosen = choose_on_region(ply, found, options, lookup)
+        options, run.amount = chosen.options, chosen.amount
+        run.notes.append(
+            f"the Automatic Amount chose {chosen.amount.iterations} iterations on a region of {chosen.region} vertices "
+            f"and ran them on every tile (deviation limit {chosen.limit:.3g}); a tiled run gives no closed part its "
+            "volume back, holds or gives back no part, and Keep in Place's fold guard and its rule for open outlines "
+            "judge each tile on its own (docs/large_scans.md)"
+        )
+    method, iterations = options.get("method", "hc"), options["iterations"]
+    kept = bool(options.get("keep_in_place")) and options.get("keep_in_place") != core.AUTO
+    run.rings = core.tile_rings(method, iterations, kept, ply.has_normals)
+    run.margin = core.tile_margin(run.rings, found.longest_edge)
+    run.iterations, run.kept_in_place = iterations, kept
+    scale = n / len(found.sample)
+    try:
+        boxes = core.tile_boxes(found.sample, scale, found.low, found.high, run.margin, 0.9 * capacity)
+    except ValueError as error:
+        raise ValueError(
+            f"{error}: {run.rings} rings of halo ({iterations} iterations, the longest edge {found.longest_edge:.3g}) "
+            f"need more room than --memory-limit {size_words(limit)} leaves; raise it, or run fewer iterations"
+        ) from None
+    run.tiles = len(boxes)
+    totals = Totals()
+    with files.written(target) as temporary:
+        shutil.copyfile(source, temporary)
+        output = ply.memmap_vertices("r+", temporary)
+        try:
+            for number, box in enumerate(boxes, 1):
+                tick = time.perf_counter()
+                tile = read_tile(ply, lambda p, box=box: box.reaches(p, run.margin), box.owns, lookup)
+                run.largest_tile = max(run.largest_tile, len(tile.vertices))
+                smooth_tile(tile, options, ply, output, totals)
+                say(
+                    f"tile {number} of {len(boxes)}: {len(tile.vertices)} vertices, {int(tile.own.sum())} its own, "
+                    f"{time.perf_counter() - tick:.1f} s"
+                )
+            output.flush()
+        finally:
+            del output  # the map closed: the temporary can be moved or removed (on Windows too)
+    run.change = totals.change(found)
+    run.notes.insert(
+        0,
+        f"smoothed in {run.tiles} tiles of at most {run.largest_tile} vertices ({run.rings} rings of halo, "
+        f"{run.margin:.3g} around each box), {time.perf_counter() - started:.1f} s",
+    )
+    return run
+
+
+def smooth_tile(tile, options, ply, output, totals):
+    """Smooth a tile and write its own vertices' moved positions (and the normals they touch) into ``output``."""
+    sizes = np.full(len(tile.corners), tile.corners.shape[1] if tile.corners.size else 3, dtype=np.int64)
+    corners = tile.corners.ravel()
+    edges, triangles = surface_arrays(corners, sizes)
+    run = core.MeshSmoother(tile.positions, edges, faces=triangles if len(triangles) else None, **options)
+    result = run.run()
+    moved = np.any(result != tile.positions, axis=1)
+    own = np.flatnonzero(tile.own)
+    rows = own[moved[own]]
+    write_columns(output, tile.vertices[rows], result[rows], "xyz")
+    if ply.has_normals and len(sizes):
+        starts = np.cumsum(sizes) - sizes
+        new, used = normal_maths.stored_normals(result, corners, starts, sizes, corners, len(result))
+        touched = normal_maths.touched(moved, corners, starts, sizes, corners, len(result))
+        rows = own[(used & touched)[own]]
+        write_columns(output, tile.vertices[rows], new[rows].astype(np.float32), NORMALS)
+    totals.add(tile.positions[own], result[own])
+
+
+class Totals:
+    """The sums behind a core.Change of the whole run, added tile by tile (own vertices only)."""
+
+    def __init__(self):
+        self.count = self.moved = 0
+        self.sum = self.squares = self.largest = 0.0
+        self.low, self.high = np.full(3, np.inf), np.full(3, -np.inf)
+
+    def add(self, before, after):
+        moves = np.asarray(after, np.float64) - np.asarray(before, np.float64)
+        lengths = np.sqrt(np.einsum("ij,ij->i", moves, moves))
+        self.count += len(lengths)
+        self.moved += int(np.count_nonzero(lengths))
+        self.sum += float(lengths.sum())
+        self.squares += float(np.einsum("i,i->", lengths, lengths))
+        self.largest = max(self.largest, float(lengths.max()) if lengths.size else 0.0)
+        if len(after):
+            self.low = np.minimum(self.low, np.asarray(after, np.float64).min(axis=0))
+            self.high = np.maximum(self.high, np.asarray(after, np.float64).max(axis=0))
+
+    def change(self, found):
+        diagonal = found.diagonal
+        after = float(np.linalg.norm(self.high - self.low)) if self.count else 0.0
+        return core.Change(
+            n_vertices=self.count,
+            moved=self.moved,
+            mean_displacement=self.sum / max(self.count, 1),
+            max_displacement=self.largest,
+            rms_displacement=float(np.sqrt(self.squares / max(self.count, 1))),
+            normal_displacement=None,
+            bbox_diagonal_before=diagonal,
+            bbox_diagonal_after=after,
+            bbox_change=(after - diagonal) / diagonal if diagonal else 0.0,
+            closed=False,
+            volume_before=None,
+            volume_after=None,
+            volume_change=None,
+        )
+
+
+def choose_on_region(ply, found, options, lookup):
+    """core.region_amount on boxes around REGION_PLACES vertices spread evenly over the file, each box
+    holding about REGION_VERTICES / REGION_PLACES vertices (by the sample)."""
+    sample = found.sample
+    places = sample[np.linspace(0, len(sample) - 1, REGION_PLACES).round().astype(np.int64)]
+    share = REGION_VERTICES / REGION_PLACES / ply.vertex_count * len(sample)
+    boxes = [_box_around(sample, place, share, found.diagonal) for place in places]
+
+    def reaches(points):
+        inside = np.zeros(len(points), dtype=bool)
+        for low, high in boxes:
+            inside |= ((points >= low) & (points <= high)).all(axis=1)
+        return inside
+
+    region = read_tile(ply, reaches, reaches, lookup)
+    sizes = np.full(len(region.corners), region.corners.shape[1] if region.corners.size else 3, dtype=np.int64)
+    edges, triangles = surface_arrays(region.corners.ravel(), sizes)
+    return core.region_amount(region.positions, edges, triangles, options, ply.vertex_count)
+
+
+def _box_around(sample, place, count, diagonal):
+    """(low, high) of the cube around ``place`` holding about ``count`` of the sample points."""
+    distance = np.abs(sample - place).max(axis=1)
+    if count >= len(distance):
+        half = float(distance.max())
+    else:
+        half = float(np.partition(distance, int(count))[int(count)])
+    half = max(half, 1e-9 * diagonal)
+    return place - half, place + half

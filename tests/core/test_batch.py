@@ -1,0 +1,165 @@
+"""--jobs and --scheduler (cli/batch.py): the file route's batches on Dask workers, run as a user runs them
+(scripts/hc_smooth_files.py, bpy unimportable). The results are the serial run's bytes; a worker killed
+mid-file has its file run again elsewhere; Ctrl+C stops the batch and leaves the inputs and the finished
+results intact; a Python without Dask is told what to install."""
+
+import hashlib
+import os
+import signal
+import subprocess
+import time
+
+import distributed  # in the test environments (scripts/setup_envs.sh)
+import pytest
+import scan_files
+from file_route import run_without_blender, scan_folder, stl_binary, without_blender
+
+
+def digests(folder):
+    return {path.name: hashlib.sha256(path.read_bytes()).hexdigest() for path in sorted(folder.iterdir())}
+
+
+def big_scans(folder, count, subdivisions=6):
+    """``count`` noisy closed meshes of 16k vertices (binary STL), each ~a second of smoothing."""
+    folder.mkdir(parents=True)
+    for seed in range(count):
+        positions, faces = scan_files.octahedron(noise=0.01, seed=seed, subdivisions=subdivisions)
+        (folder / f"scan{seed:02d}.stl").write_bytes(stl_binary(positions, faces))
+    return folder
+
+
+def serial(tmp_path, scans):
+    completed = run_without_blender([scans, "-o", tmp_path / "serial"], cwd=tmp_path)
+    assert completed.returncode == 0, completed.stdout + completed.stderr
+    return digests(tmp_path / "serial")
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """A LocalCluster of 2 worker processes, as `dask scheduler` and two `dask worker` would be."""
+    with (
+        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        yield cluster, client
+
+
+def test_jobs_give_the_serial_bytes(tmp_path):
+    scans = scan_folder(tmp_path / "scans")
+    completed = run_without_blender([scans, "-o", tmp_path / "jobs", "--jobs", "2"], cwd=tmp_path)
+    assert completed.returncode == 0, completed.stdout + completed.stderr
+    assert "4 of 4 files smoothed" in completed.stdout
+    assert sorted(line[:5] for line in completed.stdout.splitlines() if line.startswith("[")) == [
+        f"[{n}/4]" for n in range(1, 5)
+    ]
+    assert digests(tmp_path / "jobs") == serial(tmp_path, scans)
+    assert not [name for name in os.listdir(tmp_path / "jobs") if name.startswith(".")]
+
+
+def test_scheduler_gives_the_serial_bytes(tmp_path, cluster):
+    scans = scan_folder(tmp_path / "scans")
+    (scans / "broken.ply").write_bytes(b"ply\nformat ascii 1.0\nelement vertex 5\nend_header\n1 2\n")
+    address = cluster[0].scheduler_address
+    completed = run_without_blender([scans, "-o", tmp_path / "cluster", "--scheduler", address], cwd=tmp_path)
+    assert completed.returncode == 1, completed.stdout + completed.stderr
+    assert "broken.ply: FAILED:" in completed.stdout and "4 of 5 files smoothed" in completed.stdout
+    assert "hc_smooth: 1 of 5 files failed" in completed.stderr
+    (scans / "broken.ply").unlink()
+    assert digests(tmp_path / "cluster") == serial(tmp_path, scans)
+
+
+@pytest.mark.slow
+def test_a_worker_killed_mid_file_has_the_file_run_again(tmp_path, cluster):
+    local, client = cluster
+    scans = big_scans(tmp_path / "scans", 6)
+    expected = serial(tmp_path, scans)
+    pids = client.run(os.getpid)
+    batch = subprocess.Popen(
+        without_blender([scans, "-o", tmp_path / "cluster", "--scheduler", local.scheduler_address]),
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    killed = None
+    deadline = time.monotonic() + 300
+    while killed is None and time.monotonic() < deadline and batch.poll() is None:
+        busy = [worker for worker, keys in client.processing().items() if keys]
+        written = (tmp_path / "cluster").exists() and os.listdir(tmp_path / "cluster")
+        if busy and written:
+            killed = busy[0]  # a worker with a file in hand, after the first result is written
+            os.kill(pids[killed], signal.SIGKILL)
+        time.sleep(0.05)
+    out, err = batch.communicate(timeout=600)
+    assert killed is not None, "the batch ended before a worker could be killed mid-file"
+    assert batch.returncode == 0, out + err
+    assert "6 of 6 files smoothed" in out
+    results = {name: digest for name, digest in digests(tmp_path / "cluster").items() if not name.startswith(".")}
+    assert results == expected  # every file whole, the lost one run again, the serial run's bytes
+    leftovers = [name for name in os.listdir(tmp_path / "cluster") if name.startswith(".")]
+    assert all(name.startswith(f".hc_smooth-{pids[killed]}-") for name in leftovers)  # only the lost worker's
+    client.wait_for_workers(2, timeout=120)  # the nanny brings a new worker up for the next test
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_the_batch_and_keeps_what_is_finished(tmp_path):
+    scans = big_scans(tmp_path / "scans", 12)
+    inputs = digests(scans)
+    expected = serial(tmp_path, scans)
+    batch = subprocess.Popen(
+        without_blender([scans, "-o", tmp_path / "jobs", "--jobs", "2"]),
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # its own process group, as a terminal's foreground job: Ctrl+C reaches them all
+    )
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and batch.poll() is None:
+        if (tmp_path / "jobs").exists() and [n for n in os.listdir(tmp_path / "jobs") if not n.startswith(".")]:
+            break
+        time.sleep(0.05)
+    assert batch.poll() is None, "the batch ended before it could be interrupted"
+    os.killpg(batch.pid, signal.SIGINT)
+    out, err = batch.communicate(timeout=300)
+    assert batch.returncode == 130, out + err
+    assert "hc_smooth: interrupted:" in err and "left as they were (no partial output written)" in err
+    assert digests(scans) == inputs
+    finished = digests(tmp_path / "jobs")
+    assert finished and len(finished) < 12
+    assert all(expected[name] == digest for name, digest in finished.items())  # no temporaries, none half-written
+
+
+def test_a_python_without_dask_is_told_what_to_install(tmp_path):
+    scans = scan_folder(tmp_path / "scans")
+    env = {**os.environ, "TEST_BLOCKED": "dask distributed"}
+    completed = run_without_blender([scans, "-o", tmp_path / "out", "--jobs", "2"], cwd=tmp_path, env=env)
+    assert completed.returncode == 2, completed.stdout + completed.stderr
+    assert "--jobs and --scheduler need Dask's distributed scheduler, which this Python" in completed.stderr
+    assert 'python -m pip install "dask[distributed]"' in completed.stderr and "Traceback" not in completed.stderr
+    assert not (tmp_path / "out").exists()
+    serial_run = run_without_blender([scans, "-o", tmp_path / "out", "--jobs", "1"], cwd=tmp_path, env=env)
+    assert serial_run.returncode == 0, serial_run.stderr  # one at a time needs no Dask
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--jobs", "0"], "0 is below 1"),
+        (["--jobs", "two"], "two is not a whole number"),
+        (["--jobs", "2", "--scheduler", "tcp://127.0.0.1:1"], "give either --jobs N"),
+    ],
+)
+def test_bad_batch_options_are_refused(tmp_path, args, message):
+    completed = run_without_blender(["a.ply", "-o", tmp_path / "out", *args], cwd=tmp_path)
+    assert completed.returncode == 2 and message in completed.stderr, completed.stderr
+
+
+def test_an_unreachable_scheduler_is_said_plainly(tmp_path):
+    scans = scan_folder(tmp_path / "scans")
+    completed = run_without_blender(
+        [scans, "-o", tmp_path / "out", "--scheduler", "tcp://127.0.0.1:9"], cwd=tmp_path, timeout=300
+    )
+    assert completed.returncode == 2, completed.stdout + completed.stderr
+    assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in completed.stderr
+    assert "Traceback" not in completed.stderr and not (tmp_path / "out").exists()
