@@ -8,12 +8,13 @@ TEST_PATHS := $(if $(filter tests%,$(PYTEST_ARGS)),,tests)
 # A hung interpreter must fail the run, not stall CI: each environment's suite gets this many seconds.
 TEST_TIMEOUT ?= 1200
 
-.PHONY: envs env-bpy45 env-bpy52 env-lint test test-core test-quick lint format demo build dist clean
+.PHONY: envs env-bpy45 env-bpy52 env-lint env-bench test test-core test-quick lint format demo build dist clean
 
-# Both test environments; `make env-bpy45` / `make env-bpy52` makes one alone.
-envs: env-bpy45 env-bpy52
+# Both test environments and the benchmarks' (tests/bench runs every benchmark's smoke run in it);
+# `make env-bpy45` / `make env-bpy52` / `make env-bench` makes one alone.
+envs: env-bpy45 env-bpy52 env-bench
 
-env-bpy45 env-bpy52 env-lint:
+env-bpy45 env-bpy52 env-lint env-bench:
 	bash scripts/setup_envs.sh $(@:env-%=%)
 
 # Style (pyproject.toml): ruff's lint rules and its formatting, checked; `make format` applies both.

@@ -14,24 +14,16 @@ iterations; closed meshes get their volume back as the operator does) three pick
 R(k) is the mean square of the removed part along the normals, t(k) = tr(S_k) / n from 30 Hutchinson
 probes. RMS in % of the diagonal; a pick "wins" when it is below the best peer's default.
 
-    .envs/bench/bin/python bench/bench_amount_limits.py                     # 7 coarse meshes, ~3 min
-    .envs/bench/bin/python bench/bench_amount_limits.py --meshes cow --kinds iso --sigmas 0.002
+    .envs/bench/bin/python bench/run.py amount_limits                     # 7 coarse meshes, ~3 min
+    .envs/bench/bin/python bench/run.py amount_limits --meshes cow --kinds iso --sigmas 0.002
 """
-
-import argparse
-import pathlib
-import sys
-import time
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
-import bench_quality as bq  # noqa: E402
-import bench_quality_inputs as inputs  # noqa: E402
-from report import Report  # noqa: E402
-
-import core  # noqa: E402
+import core
+from bench import bench_quality as bq
+from bench import bench_quality_inputs as inputs
+from bench.common import Parameter
 
 BETAS = (0.6, 0.75, 0.9)
 PROBES = 30
@@ -80,50 +72,56 @@ def pick(table, score):
     return beta, k + 1, float(table[beta][0][k])
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--meshes", default=COARSE)
-    parser.add_argument("--kinds", default="normal,iso")
-    parser.add_argument("--sigmas", default="0.001,0.002,0.004")
-    parser.add_argument("--iterations", type=int, default=40)
-    args = parser.parse_args()
+PARAMETERS = (
+    Parameter("meshes", COARSE),
+    Parameter("kinds", "normal,iso"),
+    Parameter("sigmas", "0.001,0.002,0.004"),
+    Parameter("iterations", 40),
+)
+QUICK = {"meshes": "cube", "kinds": "iso", "sigmas": "0.004", "iterations": 4}
+
+
+def run(args, out):
     peers = [p for p in bq.PEERS if p.run is not None and bq.available(p)]
-    with Report("bench_amount_limits") as out:
-        out(f"`{' '.join(['bench/bench_amount_limits.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
-        out(f"Peers at their defaults: {', '.join(p.name for p in peers)}. RMS in % of the diagonal.\n")
-        out("| mesh | noise | σ | best peer default | HC Smooth default | oracle, α 0 | GCV | Cp, true σ |")
-        out("|---|---|---|---|---|---|---|---|")
-        counts = {"default": 0, "oracle": 0, "gcv": 0, "cp": 0}
-        cells = 0
-        for mesh in inputs.parse_list(args.meshes):
-            for kind in inputs.parse_list(args.kinds):
-                for sigma in inputs.parse_list(args.sigmas, float):
-                    case = bq.make_case(mesh, kind, sigma, 0)
-                    peer_rms, peer_name = min((case.rms(p.run(case, p.default)), p.name) for p in peers)
-                    default = case.rms(bq.hc_default(case)[0])
-                    table = paths(case, args.iterations)
-                    sig2 = (sigma * case.diagonal) ** 2
-                    beta_o = min(table, key=lambda b: table[b][0].min())
-                    oracle = (beta_o, int(np.argmin(table[beta_o][0])) + 1, float(table[beta_o][0].min()))
-                    gcv = pick(table, lambda r, t: r / (1.0 - t) ** 2)
-                    cp = pick(table, lambda r, t, sig2=sig2: r + sig2 * (2.0 * t - 1.0))
-                    picks = {"default": default, "oracle": oracle[2], "gcv": gcv[2], "cp": cp[2]}
-                    text = {}
-                    for key, value in picks.items():
-                        won = value < peer_rms
-                        counts[key] += won
-                        text[key] = f"**{100 * value:.4f}**" if won else f"{100 * value:.4f}"
-                    cells += 1
-                    out(
-                        f"| {mesh} | {kind} | {100 * sigma:g}% | {100 * peer_rms:.4f} ({peer_name}) | "
-                        f"{text['default']} | {text['oracle']} (β {oracle[0]:g}, {oracle[1]}) | "
-                        f"{text['gcv']} (β {gcv[0]:g}, {gcv[1]}) | {text['cp']} (β {cp[0]:g}, {cp[1]}) |"
-                    )
-        out(
-            f"\nBelow the best peer's default (bold), of {cells}: HC Smooth default {counts['default']}, "
-            f"oracle {counts['oracle']}, GCV {counts['gcv']}, Cp with the true σ {counts['cp']}."
-        )
-
-
-if __name__ == "__main__":
-    main()
+    out(f"Peers at their defaults: {', '.join(p.name for p in peers) or 'none installed'}. RMS in % of the diagonal.\n")
+    table = out.table(
+        "mesh", "noise", "σ", "best peer default", "HC Smooth default", "oracle, α 0", "GCV", "Cp, true σ"
+    )
+    counts = {"default": 0, "oracle": 0, "gcv": 0, "cp": 0}
+    cells = 0
+    for mesh in inputs.parse_list(args.meshes):
+        for kind in inputs.parse_list(args.kinds):
+            for sigma in inputs.parse_list(args.sigmas, float):
+                case = bq.make_case(mesh, kind, sigma, 0)
+                peer_rms, peer_name = min(
+                    ((case.rms(p.run(case, p.default)), p.name) for p in peers), default=(np.inf, "none")
+                )
+                default = case.rms(bq.hc_default(case)[0])
+                walks = paths(case, args.iterations)
+                sig2 = (sigma * case.diagonal) ** 2
+                beta_o = min(walks, key=lambda b: walks[b][0].min())
+                oracle = (beta_o, int(np.argmin(walks[beta_o][0])) + 1, float(walks[beta_o][0].min()))
+                gcv = pick(walks, lambda r, t: r / (1.0 - t) ** 2)
+                cp = pick(walks, lambda r, t, sig2=sig2: r + sig2 * (2.0 * t - 1.0))
+                picks = {"default": default, "oracle": oracle[2], "gcv": gcv[2], "cp": cp[2]}
+                text = {}
+                for key, value in picks.items():
+                    won = value < peer_rms
+                    counts[key] += won
+                    text[key] = f"**{100 * value:.4f}**" if won else f"{100 * value:.4f}"
+                cells += 1
+                table.row(
+                    mesh,
+                    kind,
+                    f"{100 * sigma:g}%",
+                    f"{100 * peer_rms:.4f} ({peer_name})",
+                    text["default"],
+                    f"{text['oracle']} (β {oracle[0]:g}, {oracle[1]})",
+                    f"{text['gcv']} (β {gcv[0]:g}, {gcv[1]})",
+                    f"{text['cp']} (β {cp[0]:g}, {cp[1]})",
+                )
+    out(
+        f"\nBelow the best peer's default (bold), of {cells}: HC Smooth default {counts['default']}, "
+        f"oracle {counts['oracle']}, GCV {counts['gcv']}, Cp with the true σ {counts['cp']}."
+    )
+    return out.rows

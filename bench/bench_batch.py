@@ -1,8 +1,8 @@
 """A folder of scans through the file route without Blender: serial against `--jobs 2` (a LocalCluster) and
 against `--scheduler` (a 2-worker LocalCluster started here, as `dask scheduler` + 2 `dask worker`).
 
-    .envs/bpy45/bin/python bench/bench_batch.py                   # 16 files of 250k vertices, medians of 3
-    .envs/bpy45/bin/python bench/bench_batch.py --files 4 --vertices 20k --repeats 1   # smoke run
+    .envs/bench/bin/python bench/run.py batch                     # 16 files of 250k vertices, medians of 3
+    .envs/bench/bin/python bench/run.py batch --quick             # 4 files of 20k vertices, one run
 
 Each run is `python scripts/hc_smooth_files.py scans/ -o OUT [--jobs 2 | --scheduler ADDRESS]` in a fresh
 process, timed end to end (start-up, the cluster's start for --jobs, reading, smoothing, writing), runs
@@ -10,7 +10,6 @@ interleaved; every result is checked byte for byte against the serial run's. The
 reported beside the times (the VM is shared: compare the ratios of one run).
 """
 
-import argparse
 import hashlib
 import math
 import os
@@ -24,16 +23,9 @@ import time
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-from bench.report import Report  # noqa: E402
+from bench.common import ROOT, Parameter, count, repeats
 
 SCRIPT = ROOT / "scripts" / "hc_smooth_files.py"
-
-
-def count(text):
-    text = text.lower()
-    return int(float(text[:-1]) * {"k": 1e3, "m": 1e6}[text[-1]]) if text[-1] in "km" else int(text)
 
 
 def torus_ply(path, vertices, seed):
@@ -58,7 +50,7 @@ def digests(folder):
     return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
 
 
-def run(scans, out, extra):
+def timed_run(scans, out, extra):
     shutil.rmtree(out, ignore_errors=True)
     start = time.perf_counter()
     completed = subprocess.run(
@@ -70,19 +62,22 @@ def run(scans, out, extra):
     return seconds
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--files", type=int, default=16)
-    parser.add_argument("--vertices", default="250k")
-    parser.add_argument("--repeats", type=int, default=3)
-    args = parser.parse_args()
+PARAMETERS = (
+    Parameter("files", 16),
+    Parameter("vertices", "250k", "vertices per file", count),
+    repeats(3),
+)
+QUICK = {"files": 4, "vertices": "20k", "repeats": 1}
+
+
+def run(args, out):
     import distributed
 
-    with tempfile.TemporaryDirectory(prefix="bench_batch_") as temporary, Report("bench_batch") as out:
+    with tempfile.TemporaryDirectory(prefix="bench_batch_") as temporary:
         work = pathlib.Path(temporary)
         scans = work / "scans"
         scans.mkdir()
-        sizes = [torus_ply(scans / f"scan{i:02d}.ply", count(args.vertices), i) for i in range(args.files)]
+        sizes = [torus_ply(scans / f"scan{i:02d}.ply", args.vertices, i) for i in range(args.files)]
         with distributed.LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as cluster:
             routes = {
                 "serial": [],
@@ -95,24 +90,18 @@ def main():
             for _ in range(args.repeats):
                 for name, extra in routes.items():
                     loads.append(os.getloadavg()[0])
-                    times[name].append(run(scans, work / "out", extra))
+                    times[name].append(timed_run(scans, work / "out", extra))
                     found = digests(work / "out")
                     expected = expected or found
                     if found != expected:
                         raise SystemExit(f"{name}: results differ from the serial run's")
         serial = statistics.median(times["serial"])
-        out(f"# bench_batch: {args.files} files of {sizes[0]:,} vertices, medians of {args.repeats}")
-        out()
-        out(f"`{' '.join([os.path.basename(sys.executable), *sys.argv])}`; {os.cpu_count()} cores; load average")
-        out(f"(1 min) {min(loads):.1f} to {max(loads):.1f} while it ran (other jobs share the machine).")
+        out(f"{args.files} files of {sizes[0]:,} vertices, medians of {args.repeats}; load average (1 min)")
+        out(f"{min(loads):.1f} to {max(loads):.1f} while it ran (other jobs share the machine).")
         out("Every run's result files equal the serial run's, byte for byte.")
         out()
-        out("| route | wall time, median (runs) | / serial |")
-        out("|---|---:|---:|")
+        table = out.table("route", "wall time, median (runs)", "/ serial", align="lrr")
         for name, values in times.items():
             runs = ", ".join(f"{value:.1f}" for value in values)
-            out(f"| {name} | {statistics.median(values):.1f} s ({runs}) | {statistics.median(values) / serial:.2f} |")
-
-
-if __name__ == "__main__":
-    main()
+            table.row(name, f"{statistics.median(values):.1f} s ({runs})", f"{statistics.median(values) / serial:.2f}")
+    return out.rows

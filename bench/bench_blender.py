@@ -1,7 +1,7 @@
 """End-to-end speed of the installed operators against Blender's own smoothing, in one run.
 
-    .envs/bpy45/bin/python bench/bench_blender.py [--size 1000] [--torus 1M] [--repeats 3]
-                                                  [--modifier 100k,1M] [--only-modifier]
+    .envs/bpy45/bin/python bench/run.py blender [--size 1000] [--torus 1M] [--repeats 3]
+                                                [--modifier 100k,1M] [--only-modifier]
 
 On a noisy grid of (size+1)² vertices (1000 → 1,002,001 vertices, 2M faces) it times, median of
 --repeats runs, 10 iterations each:
@@ -23,38 +23,25 @@ it with either test environment (Blender 4.5 or 5.2 as the bpy module);
 it installs the extension itself.
 """
 
-import argparse
-import pathlib
 import platform
 import statistics
 import sys
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT / "scripts")]
-
-from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
+from scripts.extension_session import (  # before bpy
+    ADDON,
+    install_extension,
+)
 
 # isort: split
 
-import bpy  # noqa: E402
-import numpy as np  # noqa: E402
+import bpy
+import numpy as np
 
-sys.path.insert(0, str(ROOT / "bench"))
-import meshes  # noqa: E402
+from bench import meshes
+from bench.common import ROOT, Parameter, count, counts, median_time, repeats
 
 ITERATIONS = 10
-
-
-def median_time(run, repeats, setup=None):
-    times = []
-    for _ in range(repeats):
-        if setup is not None:
-            setup()
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def noisy_grid(size, seed=0):
@@ -170,25 +157,22 @@ def restore(obj, points):
     obj.data.update()
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--size", type=int, default=1000, help="grid subdivisions per side")
-    parser.add_argument(
-        "--torus", type=count, default=1_000_000, help="vertices of the closed triangle tori (1M; 0 skips them)"
-    )
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument(
-        "--modifier",
-        type=lambda text: [count(part) for part in text.split(",") if count(part)],
-        default="100k,1M",
-        help="vertices of the tori for the HC Smooth modifier (0 skips it)",
-    )
-    parser.add_argument("--only-modifier", action="store_true", help="run the modifier section alone")
-    args = parser.parse_args()
+PARAMETERS = (
+    Parameter("size", 1000, "grid subdivisions per side"),
+    Parameter("torus", "1M", "vertices of the closed triangle tori (0 skips them)", count),
+    repeats(3),
+    Parameter("modifier", "100k,1M", "vertices of the tori for the HC Smooth modifier (0 skips it)", counts),
+    Parameter("only_modifier", False, "run the modifier section alone"),
+)
+QUICK = {"size": 30, "torus": "2k", "modifier": "2k", "repeats": 1}
+
+
+def run(args, out):
+    args.modifier = [n for n in args.modifier if n]
     install_extension(ROOT / "build" / "bench")
     if args.only_modifier:
-        modifier_tables(args.modifier, args.repeats)
-        return
+        modifier_tables(out, args.modifier, args.repeats)
+        return out.rows
     mesh_io = sys.modules[ADDON + ".operators.mesh_io"]
 
     bpy.ops.wm.read_homefile(use_empty=True)
@@ -256,13 +240,13 @@ def main():
 
     times = dict(rows)
     hc = times["object.hc_smooth (Object mode, HC, simultaneous)"]
-    print(
+    out(
         f"\n# HC Smooth in Blender {bpy.app.version_string}, {platform.python_version()}, {n:,} vertices, "
         f"{len(obj.data.polygons):,} faces, {ITERATIONS} iterations, median of {repeats}\n"
     )
-    print("| what | median time (s) |\n|---|---:|")
+    table = out.table("what", "median time (s)", align="lr")
     for name, seconds in rows:
-        print(f"| {name} | {seconds:.3f} |")
+        table.row(name, f"{seconds:.3f}")
     modifier_time = times["Smooth modifier (10 repeats, evaluated)"]
     vertices_smooth = times["mesh.vertices_smooth (Smooth Vertices, repeat=10, Edit mode)"]
     edit = times["mesh.hc_smooth (Edit mode, all selected, end to end)"]
@@ -279,35 +263,31 @@ def main():
             group_read < 0.25 * with_group,
         ),
     ]
-    print("\n| check | value | target | |\n|---|---:|---:|---|")
+    out("\n| check | value | target | |\n|---|---:|---:|---|")
     for name, value, target, ok in checks:
-        print(f"| {name} | {value} | {target} | {'ok' if ok else 'MISSED'} |")
+        out(f"| {name} | {value} | {target} | {'ok' if ok else 'MISSED'} |")
     if args.torus:
-        closed_tables(args.torus, repeats)
+        closed_tables(out, args.torus, repeats)
     if args.modifier:
-        modifier_tables(args.modifier, repeats)
+        modifier_tables(out, args.modifier, repeats)
+    return out.rows
 
 
-def count(text):
-    """'1M' -> 1000000, '100k' -> 100000, '0' -> 0."""
-    return int(float(text.strip().upper().replace("M", "e6").replace("K", "e3")))
-
-
-def closed_tables(n_vertices, repeats):
+def closed_tables(out, n_vertices, repeats):
     results = {
         order: bench_closed(n_vertices, order == "random order", repeats) for order in ("grid order", "random order")
     }
-    print(f"\n# Closed triangle torus, {n_vertices:,} vertices, {ITERATIONS} iterations, median of {repeats}\n")
-    print(
+    out(f"\n# Closed triangle torus, {n_vertices:,} vertices, {ITERATIONS} iterations, median of {repeats}\n")
+    out(
         "| vertex order | object.hc_smooth | report after the run | Smooth modifier "
         "| Edit mode, first call | Edit mode | Edit → Object → Edit alone |\n|---|---:|---:|---:|---:|---:|---:|"
     )
     for order, times in results.items():
-        print(
+        out(
             f"| {order} | {times['object']:.3f} s | {times['report']:.3f} s | {times['modifier']:.3f} s "
             f"| {times['edit first']:.2f} s | {times['edit']:.2f} s | {times['round trip']:.2f} s |"
         )
-    print("\n| check | value | target | |\n|---|---:|---:|---|")
+    out("\n| check | value | target | |\n|---|---:|---:|---|")
     for order, times in results.items():
         ratio, share = times["object"] / times["modifier"], times["report"] / times["object"]
         for name, value, target, ok in (
@@ -315,7 +295,7 @@ def closed_tables(n_vertices, repeats):
             (f"{order}: report / Object mode run", f"{share:.1%}", "≤ 10 %", share <= 0.1),
             (f"{order}: Edit mode, first call", f"{times['edit first']:.2f} s", "≤ 2.5 s", times["edit first"] <= 2.5),
         ):
-            print(f"| {name} | {value} | {target} | {'ok' if ok else 'MISSED'} |")
+            out(f"| {name} | {value} | {target} | {'ok' if ok else 'MISSED'} |")
 
 
 # --- the HC Smooth modifier -------------------------------------------------------------------------------
@@ -424,16 +404,16 @@ def part_trees():
     }
 
 
-def modifier_tables(sizes, repeats):
+def modifier_tables(out, sizes, repeats):
     """The HC Smooth modifier against the Smooth modifier on closed tori, and the price of its parts."""
     inputs = sys.modules[ADDON + ".nodes.inputs"]
     method_names = sys.modules[ADDON + ".nodes.hc_group"].METHOD_NAMES
-    print(
+    out(
         f"\n# HC Smooth modifier, closed triangle tori, {ITERATIONS} iterations, Blender {bpy.app.version_string}, "
         f"median of {repeats}; wall / CPU seconds (CPU: all threads), ratio to the Smooth modifier of the same "
         "run\n"
     )
-    print(
+    out(
         "| vertices | Smooth modifier | "
         + " | ".join(METHODS)
         + " | HC, influence group (every other vertex 0.5) |\n|---:|---:|"
@@ -464,7 +444,7 @@ def modifier_tables(sizes, repeats):
         cells.append(f"{wall:.3f} / {cpu:.3f} ({wall / reference[0]:.1f}× / {cpu / reference[1]:.1f}×)")
         inputs.set_input_attribute(modifier, "Influence", "")
         obj.vertex_groups.remove(group)
-        print(f"| {len(obj.data.vertices):,} | {reference[0]:.3f} / {reference[1]:.3f} | " + " | ".join(cells) + " |")
+        out(f"| {len(obj.data.vertices):,} | {reference[0]:.3f} / {reference[1]:.3f} | " + " | ".join(cells) + " |")
         obj.modifiers.remove(modifier)
         if n_vertices >= 1_000_000:
             checks.append(
@@ -495,23 +475,19 @@ def modifier_tables(sizes, repeats):
         parts.setdefault("Smooth modifier, one of its iterations (for scale)", {})[n_vertices] = timed_evaluation(
             obj, repeats
         )
-    print("\n| check | value | target | |\n|---|---:|---:|---|")
+    out("\n| check | value | target | |\n|---|---:|---:|---|")
     for name, value, target, ok in checks:
-        print(f"| {name} | {value} | {target} | {'ok' if ok else 'MISSED'} |")
-    print(
+        out(f"| {name} | {value} | {target} | {'ok' if ok else 'MISSED'} |")
+    out(
         f"\nWhere the time goes: each part repeated {ITERATIONS}× in a Repeat zone, milliseconds per repetition, "
         "wall / CPU\n"
     )
-    print("| part | " + " | ".join(f"{n:,}" for n in sizes) + " |\n|---|" + "---:|" * len(sizes))
+    out("| part | " + " | ".join(f"{n:,}" for n in sizes) + " |\n|---|" + "---:|" * len(sizes))
     for name, by_size in parts.items():
-        print(
+        out(
             f"| {name} | "
             + " | ".join(
                 f"{1000 * by_size[n][0] / ITERATIONS:.1f} / {1000 * by_size[n][1] / ITERATIONS:.1f}" for n in sizes
             )
             + " |"
         )
-
-
-if __name__ == "__main__":
-    run_and_exit(main)

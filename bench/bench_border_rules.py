@@ -31,21 +31,14 @@ border/interior RMS move ratio (item 5: ≤ 1.5) and the bounding-box diagonal's
     python bench/bench_border_rules.py --meshes planar_scan --kinds normal --sigmas 0.005
 """
 
-import argparse
-import pathlib
-import sys
-
 import numpy as np
 import scipy.sparse as sp
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
-import bench_default_heldout as heldout  # noqa: E402
-import bench_quality as quality  # noqa: E402
-import bench_quality_inputs as inputs  # noqa: E402
-from report import Report  # noqa: E402
-
-import core  # noqa: E402
+import core
+from bench import bench_default_heldout as heldout
+from bench import bench_quality as quality
+from bench import bench_quality_inputs as inputs
+from bench.common import Parameter
 
 RULES = ("free", "curve", "hybrid", "slide", "height", "corners", "areas")
 CORNER = 45.0  # degrees
@@ -220,33 +213,47 @@ def measure(case, borders, positions):
     }
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--meshes", default=MESHES)
-    parser.add_argument("--kinds", default="normal,iso")
-    parser.add_argument("--sigmas", default="0.001,0.005")
-    args = parser.parse_args()
-    with Report("bench_border_rules") as out:
-        out(f"`bench/bench_border_rules.py --meshes {args.meshes} --kinds {args.kinds} --sigmas {args.sigmas}`\n")
-        out("Figures in % of the diagonal; `all`/`interior`: RMS distance to the clean surface; border `height`/")
-        out("`overhang`: its split at the nearest surface point; `own`: border vertices to their clean positions.\n")
-        out("| mesh | noise | it. | rule | all | interior | border height | border overhang | own | ratio | box |")
-        out("|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|")
-        for mesh in inputs.parse_list(args.meshes):
-            for kind in inputs.parse_list(args.kinds):
-                for sigma in inputs.parse_list(args.sigmas, float):
-                    case = make_case(mesh, kind, sigma)
-                    _, chosen = quality.hc_default(case)
-                    borders = Borders(case.faces, len(case.noisy))
-                    for rule in RULES:
-                        result = run_rule(case, borders, rule, chosen["alpha"], chosen["beta"], chosen["iterations"])
-                        m = measure(case, borders, result)
-                        out(
-                            f"| {mesh} | {kind} {100 * sigma:g} % | {chosen['iterations']} | {rule} | {m['all']:.4f} "
-                            f"| {m['interior']:.4f} | {m['height']:.4f} | {m['overhang']:.4f} | {m['own']:.4f} "
-                            f"| {m['ratio']:.2f} | {m['box']:+.3f} |"
-                        )
+PARAMETERS = (Parameter("meshes", MESHES), Parameter("kinds", "normal,iso"), Parameter("sigmas", "0.001,0.005"))
+QUICK = {"meshes": "grid", "kinds": "iso", "sigmas": "0.005"}
 
 
-if __name__ == "__main__":
-    main()
+def run(args, out):
+    out("Figures in % of the diagonal; `all`/`interior`: RMS distance to the clean surface; border `height`/")
+    out("`overhang`: its split at the nearest surface point; `own`: border vertices to their clean positions.\n")
+    table = out.table(
+        "mesh",
+        "noise",
+        "it.",
+        "rule",
+        "all",
+        "interior",
+        "border height",
+        "border overhang",
+        "own",
+        "ratio",
+        "box",
+        align="llrlrrrrrrr",
+    )
+    for mesh in inputs.parse_list(args.meshes):
+        for kind in inputs.parse_list(args.kinds):
+            for sigma in inputs.parse_list(args.sigmas, float):
+                case = make_case(mesh, kind, sigma)
+                _, chosen = quality.hc_default(case)
+                borders = Borders(case.faces, len(case.noisy))
+                for rule in RULES:
+                    result = run_rule(case, borders, rule, chosen["alpha"], chosen["beta"], chosen["iterations"])
+                    m = measure(case, borders, result)
+                    table.row(
+                        mesh,
+                        f"{kind} {100 * sigma:g} %",
+                        chosen["iterations"],
+                        rule,
+                        f"{m['all']:.4f}",
+                        f"{m['interior']:.4f}",
+                        f"{m['height']:.4f}",
+                        f"{m['overhang']:.4f}",
+                        f"{m['own']:.4f}",
+                        f"{m['ratio']:.2f}",
+                        f"{m['box']:+.3f}",
+                    )
+    return out.rows

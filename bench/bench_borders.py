@@ -24,7 +24,7 @@ of one vertex (% of the diagonal); the RMS distance to the clean scan, border an
     .envs/bench/bin/python bench/bench_borders.py --scans face --noises 0 --rules free,curve
     .envs/bench/bin/python bench/bench_borders.py --timing 1M   # the cost of welding and borders instead
 
-``--primitives``: Blender's Plane, Grid and open Cylinder (tests/core/primitives.py, as Blender builds
+``--primitives``: Blender's Plane, Grid and open Cylinder (bench/primitives.py, as Blender builds
 them) and a 20 x 20 Grid with a hole (its middle 2 x 2 quads taken out: 8 vertices around it), noise of
 0.1 and 0.3 median edge lengths along the normals and on every axis, 5 seeds: each border loop's length
 and enclosed area (the magnitude of its vector area) over the clean loop's, for the noisy input, the
@@ -37,21 +37,16 @@ welded) and the torus cut open (two border loops), the time of core.mesh.welding
 core.smooth_mesh (alpha 0.1, beta 0.6, 10 iterations) under each rule, best of ``--repeats``.
 """
 
-import argparse
 import importlib.util
 import pathlib
-import sys
 import time
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "bench"), str(ROOT / "tests" / "core")]
-import bench_quality_inputs as inputs  # noqa: E402
-import meshes  # noqa: E402
-from report import Report  # noqa: E402
-
-import core  # noqa: E402
+import core
+from bench import bench_quality_inputs as inputs
+from bench import meshes
+from bench.common import Parameter, counts, repeats
 
 RULES = {
     "free": dict(weld=False, border="free"),
@@ -180,7 +175,7 @@ PRIMITIVE_SEEDS = (0, 1, 2, 3, 4)
 def grid_with_hole(subdivisions=20, size=2.0, hole=2):
     """Blender's Grid of ``subdivisions`` quads a side with its middle ``hole`` x ``hole`` quads taken out
     (4 * hole boundary vertices around the hole; the vertices inside it dropped)."""
-    import primitives
+    from bench import primitives
 
     part = primitives.grid(subdivisions, size)
     side, low = subdivisions + 1, (subdivisions - hole) // 2
@@ -196,7 +191,7 @@ def grid_with_hole(subdivisions=20, size=2.0, hole=2):
 
 
 def open_primitives():
-    import primitives
+    from bench import primitives
 
     return {
         "plane": primitives.plane(),
@@ -247,7 +242,7 @@ def loop_area(points):
 
 def outline_rows():
     """[(shape, loop name, vertices on it, kind, ratio, {run: (length ratios, area ratios)})] over the seeds."""
-    import primitives
+    from bench import primitives
 
     rows = []
     for name, part in open_primitives().items():
@@ -289,11 +284,20 @@ def outlines(out):
         f"clean loop's, mean (min–max) over seeds {', '.join(map(str, PRIMITIVE_SEEDS))}; noise in median edge "
         "lengths. default: core.smooth_mesh(..., weld=True) (Keep in Place); sliding: keep_in_place=False.\n"
     )
-    out(
-        "| shape | loop | vertices | noise | σ / edge | length: input | default | sliding "
-        "| area: input | default | sliding |"
+    table = out.table(
+        "shape",
+        "loop",
+        "vertices",
+        "noise",
+        "σ / edge",
+        "length: input",
+        "default",
+        "sliding",
+        "area: input",
+        "default",
+        "sliding",
+        align="llrlrrrrrrr",
     )
-    out("|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|")
 
     def text(values):
         return f"{values.mean():.3f} ({values.min():.3f}–{values.max():.3f})"
@@ -301,7 +305,7 @@ def outlines(out):
     for name, loop, count, kind, ratio, values in outline_rows():
         cells = [text(values[run][:, 0]) for run in ("input", "default", "sliding")]
         cells += [text(values[run][:, 1]) for run in ("input", "default", "sliding")]
-        out(f"| {name} | {loop} | {count} | {kind} | {ratio:g} | " + " | ".join(cells) + " |")
+        table.row(name, loop, count, kind, f"{ratio:g}", *cells)
 
 
 def best_time(repeats, function, *args, **kwargs):
@@ -328,8 +332,7 @@ def timing(out, size, repeats):
         ("torus cut open", vertices, cut),
     ]
     out(f"Timing, best of {repeats}: core.smooth_mesh(alpha=0.1, beta=0.6, iterations=10), seconds\n")
-    out("| mesh | vertices | border vertices | weld() alone | free | weld | curve | fixed |")
-    out("|---|---|---|---|---|---|---|---|")
+    table = out.table("mesh", "vertices", "border vertices", "weld() alone", *RULES)
     for name, points, triangles in cases:
         edges = meshes.edges_from_faces(triangles)
         operator = core.umbrella_operator(edges, len(points))
@@ -339,75 +342,80 @@ def timing(out, size, repeats):
         for rule in RULES.values():
             options = dict(faces=triangles, alpha=0.1, beta=0.6, iterations=10, **rule)
             cells.append(f"{best_time(repeats, core.smooth_mesh, points, edges, **options):.2f}")
-        out("| " + " | ".join(cells) + " |")
+        table.row(*cells)
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--scans", default=None, help="comma-separated: face, bunny10k, stanford_bunny (default all)")
-    parser.add_argument("--noises", default="0,0.001,0.0025", help="noise along the normals, fractions of the diagonal")
-    parser.add_argument("--rules", default=",".join(RULES))
-    parser.add_argument("--timing", default=None, help="vertex count (e.g. 1M): time welding and the rules instead")
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--primitives", action="store_true", help="outline length and area of open primitives")
-    args = parser.parse_args()
+PARAMETERS = (
+    Parameter("scans", "", "comma-separated: face, bunny10k, stanford_bunny (default all)"),
+    Parameter("noises", "0,0.001,0.0025", "noise along the normals, fractions of the diagonal"),
+    Parameter("rules", ",".join(RULES)),
+    Parameter("timing", "", "vertex count (e.g. 1M): time welding and the rules instead"),
+    repeats(3),
+    Parameter("primitives", False, "outline length and area of open primitives instead"),
+)
+QUICK = {"scans": "bunny10k", "noises": "0.001", "rules": "weld", "repeats": 1}
+
+
+def report_name(args):
+    return "bench_borders_primitives" if args.primitives else "bench_borders_timing" if args.timing else "bench_borders"
+
+
+def run(args, out):
     if args.primitives:
-        with Report("bench_borders_primitives") as out:
-            out(f"`{' '.join(['bench/bench_borders.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
-            outlines(out)
-        return
+        outlines(out)
+        return out.rows
     if args.timing:
-        size = int(float(args.timing.upper().replace("M", "e6").replace("K", "e3")))
-        with Report("bench_borders_timing") as out:
-            out(f"`{' '.join(['bench/bench_borders.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
-            timing(out, size, args.repeats)
-        return
+        timing(out, counts(args.timing)[0], args.repeats)
+        return out.rows
     files = scan_files()
     names = inputs.parse_list(args.scans) if args.scans else list(files)
-    with Report("bench_borders") as out:
-        out(f"`{' '.join(['bench/bench_borders.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
+    out("Automatic Amount (core.smooth_mesh defaults) under each rule; figures in % of the bounding-box diagonal.\n")
+    scans = {name: Scan(name, files[name]) for name in names}
+    for name, scan in scans.items():
         out(
-            "Automatic Amount (core.smooth_mesh defaults) under each rule; figures in % of the bounding-box diagonal.\n"
+            f"{name}: {len(scan.vertices)} vertices as imported, {len(scan.first)} welded, "
+            f"{int(scan.border.sum())} on a border\n"
         )
-        scans = {name: Scan(name, files[name]) for name in names}
-        for name, scan in scans.items():
-            out(
-                f"{name}: {len(scan.vertices)} vertices as imported, {len(scan.first)} welded, "
-                f"{int(scan.border.sum())} on a border\n"
-            )
-        out(
-            "| scan | noise | rule | iterations | border RMS move | interior RMS move | ratio | border pulled in "
-            "| box side shift | box diagonal | seam gap | error border | error interior |"
-        )
-        out("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-        for name, scan in scans.items():
-            for noise in inputs.parse_list(args.noises, float):
-                noisy = scan.noisy(noise)
-                for rule in inputs.parse_list(args.rules):
-                    start = time.perf_counter()
-                    result, report = core.smooth_mesh(
-                        noisy, scan.edges, faces=scan.faces, return_report=True, **RULES[rule]
-                    )
-                    seconds = time.perf_counter() - start
-                    m = measure(scan, noisy, result)
-                    ratio = m["border"] / m["interior"] if m["interior"] > 0 else float("inf")
-                    cells = [
-                        name,
-                        f"{100 * noise:g}%",
-                        rule,
-                        f"{report.iterations} (β {report.beta:g}, {seconds:.1f} s)",
-                        f"{m['border']:.4f}",
-                        f"{m['interior']:.4f}",
-                        f"{ratio:.2f}",
-                        f"{m['pull']:+.4f}",
-                        f"{m['shift']:.4f}",
-                        f"{m['diagonal']:+.4f}",
-                        f"{m['gap']:.2g}",
-                        f"{m['error_border']:.4f}",
-                        f"{m['error_interior']:.4f}",
-                    ]
-                    out("| " + " | ".join(cells) + " |")
-
-
-if __name__ == "__main__":
-    main()
+    table = out.table(
+        "scan",
+        "noise",
+        "rule",
+        "iterations",
+        "border RMS move",
+        "interior RMS move",
+        "ratio",
+        "border pulled in",
+        "box side shift",
+        "box diagonal",
+        "seam gap",
+        "error border",
+        "error interior",
+    )
+    for name, scan in scans.items():
+        for noise in inputs.parse_list(args.noises, float):
+            noisy = scan.noisy(noise)
+            for rule in inputs.parse_list(args.rules):
+                start = time.perf_counter()
+                result, report = core.smooth_mesh(
+                    noisy, scan.edges, faces=scan.faces, return_report=True, **RULES[rule]
+                )
+                seconds = time.perf_counter() - start
+                m = measure(scan, noisy, result)
+                ratio = m["border"] / m["interior"] if m["interior"] > 0 else float("inf")
+                cells = [
+                    name,
+                    f"{100 * noise:g}%",
+                    rule,
+                    f"{report.iterations} (β {report.beta:g}, {seconds:.1f} s)",
+                    f"{m['border']:.4f}",
+                    f"{m['interior']:.4f}",
+                    f"{ratio:.2f}",
+                    f"{m['pull']:+.4f}",
+                    f"{m['shift']:.4f}",
+                    f"{m['diagonal']:+.4f}",
+                    f"{m['gap']:.2g}",
+                    f"{m['error_border']:.4f}",
+                    f"{m['error_interior']:.4f}",
+                ]
+                table.row(*cells)
+    return out.rows

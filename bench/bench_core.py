@@ -1,6 +1,6 @@
-"""Speed, exactness and memory of core.hc_smooth against its peers (issue 2, item 7).
+"""Speed, exactness and memory of core.hc_smooth against its peers.
 
-    python bench/bench_core.py [--sizes 100k,1M] [--repeats N] [--quick] [--shuffle]
+    python bench/run.py core [--sizes 100k,1M] [--repeats N] [--quick] [--shuffle] [--amount]
 
 On a noisy closed torus (sigma = 1 % of the bounding-box diagonal, fixed seed) it times 10 HC
 iterations with the operator built inside every run (both modes, float32 and float64), trimesh's
@@ -8,46 +8,33 @@ filter_humphrey, PyMeshLab's HC (10 calls) and Open3D's Laplacian and Taubin fil
 run; prints medians, speed-ups against filter_humphrey and the volume change of each result. Then it
 checks the float64 result against an independent sparse-matrix form of Algorithm 1, the
 sequential/simultaneous time ratio and the peak extra memory per vertex. Peers that are not installed
-are reported as such. The markdown report goes to stdout and to bench/results/.
+are reported as such. ``--amount`` times the mesh Automatic Amount instead (whole mesh vs patches).
 """
 
-import argparse
 import ctypes
 import gc
 import os
 import platform
 import statistics
-import sys
 import time
 import tracemalloc
 import warnings
-from datetime import datetime
 from importlib import metadata
-from pathlib import Path
 
 import numpy as np
 import scipy
 import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve_triangular
 
-HERE = Path(__file__).resolve().parent
-sys.path[:0] = [str(HERE.parent), str(HERE)]  # the repository root holds `core`; meshes.py is beside us
-
-import meshes  # noqa: E402
-
-import core  # noqa: E402
+import core
+from bench import meshes
+from bench.common import Parameter, repeats, sizes
 
 RATIO, MINOR = 2.5, 0.4  # torus shape (R = RATIO * MINOR)
 TARGET_SPEEDUP = 3.0  # HC simultaneous vs filter_humphrey at 1M vertices
 TARGET_SEQUENTIAL = 1.5  # sequential time / simultaneous time
 TARGET_BYTES = 250.0  # peak extra memory per vertex
 TARGET_AGREEMENT = 1e-9  # max deviation / bbox diagonal, float64
-
-
-def parse_size(text):
-    text = text.strip().lower()
-    scale = {"k": 10**3, "m": 10**6}.get(text[-1:], 1)
-    return int(float(text.rstrip("km")) * scale)
 
 
 # --- Reference: Algorithm 1 in matrix form (paper section 5), written independently of core/ --------
@@ -311,22 +298,34 @@ def bench_size(n_target, args, peers, out):
             )
 
     humphrey = next((row[2] for row in rows if row[0] == "trimesh filter_humphrey"), None)
-    out(
-        "| method | variant | median time (s) | CPU / wall | speed-up vs filter_humphrey | volume change | "
-        "volume vs true torus | RMS to true torus (% diag) |"
+    table = out.table(
+        "method",
+        "variant",
+        "median time (s)",
+        "CPU / wall",
+        "speed-up vs filter_humphrey",
+        "volume change",
+        "volume vs true torus",
+        "RMS to true torus (% diag)",
+        align="llrrrrrr",
     )
-    out("|---|---|---:|---:|---:|---:|---:|---:|")
     for method, variant, seconds, cpu, result in rows:
         if seconds is None:
-            out(f"| {method} | {variant} | – | – | – | – | – | – |")
+            table.row(method, variant, "–", "–", "–", "–", "–", "–")
             continue
         change = core.measure_change(noisy, result, faces)
         volume = f"{change.volume_change:+.3%}" if change.volume_change is not None else "n/a"
         truth = f"{change.volume_after / true_volume - 1:+.3%}" if change.volume_after is not None else "n/a"
         speedup = f"{humphrey / seconds:.2f}×" if humphrey else "–"
-        out(
-            f"| {method} | {variant} | {seconds:.3f} | {cpu:.2f} | {speedup} | {volume} | {truth} | "
-            f"{torus_rms(result, diagonal):.3f} |"
+        table.row(
+            method,
+            variant,
+            f"{seconds:.3f}",
+            f"{cpu:.2f}",
+            speedup,
+            volume,
+            truth,
+            f"{torus_rms(result, diagonal):.3f}",
         )
 
     # Exactness: float64 against the independent matrix form, both modes; trimesh's HC as a bonus.
@@ -405,8 +404,9 @@ def amount_timing(sizes, args, out):
     t(k), the degrees of freedom per vertex, between the two."""
     from core.mesh import amount as noise
 
-    out("| vertices | noise (% of diagonal) | probes on | seconds | iterations chosen | largest t(k) difference |")
-    out("|---|---|---|---|---|---|")
+    table = out.table(
+        "vertices", "noise (% of diagonal)", "probes on", "seconds", "iterations chosen", "largest t(k) difference"
+    )
     for n_target in sizes:
         vertices, faces = meshes.torus(n_target, ratio=RATIO, minor_radius=MINOR)
         edges = meshes.edges_from_faces(faces).astype(np.int32)
@@ -414,58 +414,45 @@ def amount_timing(sizes, args, out):
             noisy = meshes.add_noise(vertices, fraction=fraction, seed=args.seed)
             operator = core.umbrella_operator(edges, noisy.shape[0])
             traces = {}
-            for where, patch_from in (("whole mesh", None), ("patches", noise.PATCH_FROM)):
-                saved = noise.PATCH_FROM
-                noise.PATCH_FROM = noisy.shape[0] + 1 if patch_from is None else patch_from
-                try:
-                    clock = time.perf_counter()
-                    chooser = core.AmountChooser(noisy, operator=operator, beta=args.beta)
-                    for _ in chooser.steps():
-                        pass
-                    seconds = time.perf_counter() - clock
-                finally:
-                    noise.PATCH_FROM = saved
+            for where, patch_from in (("whole mesh", noisy.shape[0] + 1), ("patches", noise.PATCH_FROM)):
+                clock = time.perf_counter()
+                chooser = core.AmountChooser(noisy, operator=operator, beta=args.beta, patch_from=patch_from)
+                for _ in chooser.steps():
+                    pass
+                seconds = time.perf_counter() - clock
                 traces[where] = chooser.traces
                 difference = ""
                 if where == "patches":
                     whole = traces["whole mesh"]
                     common = [k for k in chooser.traces if k in whole]
                     difference = f"{max(abs(chooser.traces[k] / whole[k] - 1) for k in common):.2%}"
-                out(
-                    f"| {noisy.shape[0]:,} | {100 * fraction:g} | {where} | {seconds:.2f} | "
-                    f"{chooser.amount.iterations} | {difference} |"
+                table.row(
+                    f"{noisy.shape[0]:,}",
+                    f"{100 * fraction:g}",
+                    where,
+                    f"{seconds:.2f}",
+                    chooser.amount.iterations,
+                    difference,
                 )
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--sizes", default="100k,1M", help="comma-separated vertex counts, e.g. 100k,1M")
-    parser.add_argument("--repeats", type=int, default=0, help="runs per timing (default 5 below 500k, 3 above)")
-    parser.add_argument("--quick", action="store_true", help="tiny smoke run: 5k vertices, 1 repeat")
-    parser.add_argument("--shuffle", action="store_true", help="renumber vertices at random (scanner-like order)")
-    parser.add_argument("--alpha", type=float, default=0.1)
-    parser.add_argument("--beta", type=float, default=0.6)
-    parser.add_argument("--iterations", type=int, default=10)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--no-peers", action="store_true", help="time core only")
-    parser.add_argument("--strict", action="store_true", help="exit 1 when a target is missed")
-    parser.add_argument(
-        "--amount", action="store_true", help="time the mesh Automatic Amount instead (whole mesh vs patches)"
-    )
-    args = parser.parse_args(argv)
-    if args.quick:
-        args.sizes, args.repeats = "5k", 1
-    sizes = [parse_size(s) for s in args.sizes.split(",") if s.strip()]
-    if not sizes or min(sizes) < 9 or args.repeats < 0 or args.iterations < 1:
-        parser.error("sizes must be >= 9 vertices, repeats >= 0, iterations >= 1")
+PARAMETERS = (
+    sizes("100k,1M"),
+    repeats(0, "runs per timing (0: 5 below 500k vertices, 3 above)"),
+    Parameter("shuffle", False, "renumber vertices at random (scanner-like order)"),
+    Parameter("alpha", 0.1),
+    Parameter("beta", 0.6),
+    Parameter("iterations", 10),
+    Parameter("seed", 0),
+    Parameter("no_peers", False, "time core only"),
+    Parameter("amount", False, "time the mesh Automatic Amount instead (whole mesh vs patches)"),
+)
+QUICK = {"sizes": "5k", "repeats": 1}
 
-    lines = []
 
-    def out(line=""):
-        print(line, flush=True)
-        lines.append(line)
-
-    out(f"# core.hc_smooth benchmark, {datetime.now():%Y-%m-%d %H:%M}\n")
+def run(args, out):
+    if not args.sizes or min(args.sizes) < 9 or args.repeats < 0 or args.iterations < 1:
+        raise SystemExit("sizes must be >= 9 vertices, repeats >= 0, iterations >= 1")
     out(f"Machine: {machine_line()}.")
     out(
         f"HC α = {args.alpha}, β = {args.beta}; core timings include input checks and building the "
@@ -476,25 +463,14 @@ def main(argv=None):
     tiny, tiny_faces = meshes.torus(100)
     for mode in ("simultaneous", "sequential"):
         core.hc_smooth(tiny, meshes.edges_from_faces(tiny_faces), mode=mode, alpha=0.1, beta=0.6, iterations=1)
-    for _, run in peers.values():
-        if run is not None:
-            run(tiny, tiny_faces)
-
+    for _, peer in peers.values():
+        if peer is not None:
+            peer(tiny, tiny_faces)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", core.ConvergenceWarning)  # --beta ≤ 0.5 is allowed for comparisons
         if args.amount:
-            amount_timing(sizes, args, out)
-            passed = [True]
+            amount_timing(args.sizes, args, out)
         else:
-            passed = [bench_size(n, args, peers, out) for n in sizes]
-
-    results = HERE / "results"
-    results.mkdir(exist_ok=True)
-    path = results / f"bench_core-{datetime.now():%Y%m%d-%H%M%S}.md"
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    print(f"\nwritten to {path}", file=sys.stderr)
-    return 1 if args.strict and not all(passed) else 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+            for n in args.sizes:
+                bench_size(n, args, peers, out)
+    return out.rows

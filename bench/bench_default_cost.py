@@ -3,7 +3,7 @@ defaults and as the add-on runs it (``weld=True``), against the fixed 10-iterati
 run (alpha 0.1, beta 0.6), on the same noisy mesh, in the same process; and the default with Keep in
 Place off (``keep_in_place=False``), whose difference is what keeping every move across the surface costs.
 
-Time: median wall time of ``--repeat`` runs each, alternating. Memory: the peak of what NumPy and SciPy
+Time: median wall time of ``--repeats`` runs each, alternating. Memory: the peak of what NumPy and SciPy
 allocate during one more run of each (tracemalloc, which NumPy reports its buffers to, and which slows
 the run: so not timed), above what was allocated before it. Gap: the longest wall time between the
 start and a slice of ``core.MeshSmoother.steps``, or between two slices (what a cancel waits for), run
@@ -16,42 +16,32 @@ midpoints ``--subdivisions`` times (3: 1.8M vertices; the surface is the scan's)
 
 ``--error``: the RMS distance of every result to the clean surface in % of the diagonal (the torus's
 own; the bunny's along the clean vertex normals), with the Automatic Amount as it runs and with its
-work budget (core.mesh.amount.WORK_BUDGET) lifted, which is what the budget costs. ``--choice``: the
-iterations GCV chooses on patches (big meshes) and on the whole mesh (core.mesh.amount.PATCH_FROM
-lifted), both without the work budget, and the time each choice takes.
+work budget lifted (``work_budget=math.inf``), which is what the budget costs. ``--choice``: the
+iterations GCV chooses on patches (big meshes) and on the whole mesh (``patch_from=math.inf``), both
+without the work budget, and the time each choice takes.
 
-    python bench/bench_default_cost.py                 # 5M vertices, 3 runs each
-    python bench/bench_default_cost.py --vertices 1M --repeat 5
-    python bench/bench_default_cost.py --vertices 5M --repeat 1 --error --choice
-    python bench/bench_default_cost.py --mesh bunny --subdivisions 3 --repeat 1 --error --choice   # pymeshlab
+    python bench/run.py default_cost                 # 5M vertices, 3 runs each
+    python bench/run.py default_cost --vertices 1M --repeats 5
+    python bench/run.py default_cost --vertices 5M --repeats 1 --error --choice
+    python bench/run.py default_cost --mesh bunny --subdivisions 3 --repeats 1 --error --choice   # pymeshlab
 """
 
-import argparse
-import contextlib
 import math
 import pathlib
 import statistics
-import sys
 import time
 import tracemalloc
 
 import numpy as np
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-import core  # noqa: E402
-from bench import meshes  # noqa: E402
-from bench.report import Report  # noqa: E402
-from core.mesh import amount as mesh_amount  # noqa: E402
+import core
+from bench import meshes
+from bench.common import Parameter, count, repeats
+from core.mesh import amount as mesh_amount
 
 CHUNK_WORK = 5_000_000  # vertex-iterations a slice, as operators/mesh_smooth.py's MODAL_WORK
 FIXED = dict(alpha=0.1, beta=0.6, iterations=10)
-ADDON = dict(weld=True)  # as jobs/mesh.py runs it (border: the paper's rule)
-
-
-def count(text):
-    """'5M' -> 5_000_000, '250k' -> 250_000."""
-    scale = {"k": 1_000, "M": 1_000_000}.get(text[-1], 1)
-    return int(float(text[:-1] if scale > 1 else text) * scale)
+ADDON = dict(weld=True)  # as operators/jobs.py runs it (border: the paper's rule)
 
 
 def peak_of(function):
@@ -66,35 +56,23 @@ def peak_of(function):
 
 
 def smoothed(noisy, edges, faces, options, budget=None):
-    """(seconds, positions, report, longest gap) of one core.MeshSmoother run, construction included."""
-    with lifted(mesh_amount, "WORK_BUDGET", budget):
-        start = last = time.perf_counter()
-        run = core.MeshSmoother(noisy, edges, faces=faces, **options)
-        gap = 0.0
-        for _ in run.steps(max(1, CHUNK_WORK // len(noisy))):
-            now = time.perf_counter()
-            gap, last = max(gap, now - last), now
+    """(seconds, positions, report, longest gap) of one core.MeshSmoother run, construction included (``budget``:
+    the work budget, None: core's)."""
+    start = last = time.perf_counter()
+    run = core.MeshSmoother(noisy, edges, faces=faces, work_budget=budget, **options)
+    gap = 0.0
+    for _ in run.steps(max(1, CHUNK_WORK // len(noisy))):
+        now = time.perf_counter()
+        gap, last = max(gap, now - last), now
     return last - start, run.result, run.report, gap
 
 
-@contextlib.contextmanager
-def lifted(module, name, value):
-    """``module.name`` set to ``value`` meanwhile (None: as it is)."""
-    kept = getattr(module, name)
-    if value is not None:
-        setattr(module, name, value)
-    try:
-        yield
-    finally:
-        setattr(module, name, kept)
-
-
 def chosen(noisy, edges, patch_from):
-    """(iterations, sigma, seconds) GCV chooses without the work budget, PATCH_FROM at ``patch_from``."""
+    """(iterations, sigma, seconds) GCV chooses without the work budget, on patches from ``patch_from``
+    movable vertices up."""
     operator = core.umbrella_operator(edges, len(noisy))
-    with lifted(mesh_amount, "WORK_BUDGET", math.inf), lifted(mesh_amount, "PATCH_FROM", patch_from):
-        start = time.perf_counter()
-        amount = core.choose_amount(noisy, operator=operator)
+    start = time.perf_counter()
+    amount = core.choose_amount(noisy, operator=operator, work_budget=math.inf, patch_from=patch_from)
     return amount.iterations, amount.sigma, time.perf_counter() - start
 
 
@@ -138,26 +116,28 @@ def normals_of(vertices, faces):
     return core.geometry.vertex_normals(vertices, faces)
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--mesh", choices=("torus", "bunny"), default="torus", help="the noisy mesh (torus)")
-    parser.add_argument("--vertices", default="5M", help="torus size, e.g. 5M, 1M, 250k (default 5M)")
-    parser.add_argument("--subdivisions", type=int, default=3, help="bunny: midpoint subdivisions (3: 1.8M)")
-    parser.add_argument("--noise", type=float, default=0.001, help="noise, a fraction of the diagonal (0.001)")
-    parser.add_argument("--repeat", type=int, default=3, help="runs of each (median reported; default 3)")
-    parser.add_argument("--error", action="store_true", help="also the error, with and without the budget")
-    parser.add_argument("--choice", action="store_true", help="also GCV's choice on patches and on the whole mesh")
-    args = parser.parse_args()
+PARAMETERS = (
+    Parameter("mesh", "torus", "the noisy mesh: torus or bunny"),
+    Parameter("vertices", "5M", "torus size, e.g. 5M, 1M, 250k", count),
+    Parameter("subdivisions", 3, "bunny: midpoint subdivisions (3: 1.8M)"),
+    Parameter("noise", 0.001, "noise, a fraction of the diagonal"),
+    repeats(3),
+    Parameter("error", False, "also the error, with and without the budget"),
+    Parameter("choice", False, "also GCV's choice on patches and on the whole mesh"),
+)
+QUICK = {"vertices": "20k", "repeats": 1, "error": True, "choice": True}
+
+
+def run(args, out):
+    if args.mesh not in ("torus", "bunny"):
+        raise SystemExit(f"--mesh {args.mesh}: torus or bunny")
     if args.mesh == "torus":
-        clean, faces = meshes.torus(count(args.vertices))
-        name, command = "noisy torus", f"--vertices {args.vertices}"
+        clean, faces = meshes.torus(args.vertices)
+        name = "noisy torus"
         distance = torus_distance
     else:
         clean, faces = bunny(args.subdivisions)
-        name, command = (
-            f"bunny subdivided {args.subdivisions} times",
-            f"--mesh bunny --subdivisions {args.subdivisions}",
-        )
+        name = f"bunny subdivided {args.subdivisions} times"
         normals = normals_of(clean, faces)
 
         def distance(points):
@@ -173,7 +153,7 @@ def main():
         "default, sliding: Keep in Place off": {"keep_in_place": False},
     }
     figures = {label: [] for label in runs}
-    for _ in range(args.repeat):
+    for _ in range(args.repeats):
         for label, options in runs.items():  # alternating, so all see the same machine
             figures[label].append(smoothed(noisy, edges, faces, options))
     peaks = {
@@ -191,45 +171,42 @@ def main():
     if args.choice:
         choices["on patches"] = chosen(noisy, edges, mesh_amount.PATCH_FROM)
         choices["on the whole mesh"] = chosen(noisy, edges, math.inf)
-    with Report("bench_default_cost") as out:
-        out(f"# The default's cost on {len(noisy):,} vertices ({name}, noise {args.noise:.2%} of the diagonal)")
+    out(f"# The default's cost on {len(noisy):,} vertices ({name}, noise {args.noise:.2%} of the diagonal)")
+    out()
+    table = out.table(
+        "run", "iterations", "median time", "peak memory", "time / fixed", "memory / fixed", "longest gap"
+    )
+    fixed_label = next(iter(runs))
+    fixed_time = statistics.median(row[0] for row in figures[fixed_label])
+    for label, rows in figures.items():
+        seconds = statistics.median(row[0] for row in rows)
+        report, gap = rows[-1][2], max(row[3] for row in rows)
+        table.row(
+            label,
+            report.iterations,
+            f"{seconds:.2f} s",
+            f"{peaks[label] / 2**30:.2f} GiB",
+            f"{seconds / fixed_time:.2f}x",
+            f"{peaks[label] / peaks[fixed_label]:.2f}x",
+            f"{gap:.2f} s",
+        )
+    kept = statistics.median(row[0] for row in figures["default: Automatic Amount"])
+    sliding = statistics.median(row[0] for row in figures["default, sliding: Keep in Place off"])
+    out()
+    out(f"Keep in Place costs {kept - sliding:+.2f} s, {(kept - sliding) / kept:+.1%} of the default's run.")
+    if errors:
         out()
-        flags = " --error" * args.error + " --choice" * args.choice
-        out(f"`python bench/bench_default_cost.py {command} --noise {args.noise} --repeat {args.repeat}{flags}`")
+        out("RMS distance to the clean surface, % of the diagonal:")
         out()
-        out("| run | iterations | median time | peak memory | time / fixed | memory / fixed | longest gap |")
-        out("|---|---|---|---|---|---|---|")
-        fixed_label = next(iter(runs))
-        fixed_time = statistics.median(row[0] for row in figures[fixed_label])
-        for label, rows in figures.items():
-            seconds = statistics.median(row[0] for row in rows)
-            report, gap = rows[-1][2], max(row[3] for row in rows)
-            out(
-                f"| {label} | {report.iterations} | {seconds:.2f} s | {peaks[label] / 2**30:.2f} GiB | "
-                f"{seconds / fixed_time:.2f}x | {peaks[label] / peaks[fixed_label]:.2f}x | {gap:.2f} s |"
-            )
-        kept = statistics.median(row[0] for row in figures["default: Automatic Amount"])
-        sliding = statistics.median(row[0] for row in figures["default, sliding: Keep in Place off"])
+        table = out.table("run", "iterations", "RMS distance")
+        for label, (report, points) in errors.items():
+            rms = math.sqrt(float(np.mean(distance(points) ** 2))) / diagonal
+            table.row(label, "" if report is None else report.iterations, f"{rms:.4%}")
+    if choices:
         out()
-        out(f"Keep in Place costs {kept - sliding:+.2f} s, {(kept - sliding) / kept:+.1%} of the default's run.")
-        if errors:
-            out()
-            out("RMS distance to the clean surface, % of the diagonal:")
-            out()
-            out("| run | iterations | RMS distance |")
-            out("|---|---|---|")
-            for label, (report, points) in errors.items():
-                rms = math.sqrt(float(np.mean(distance(points) ** 2))) / diagonal
-                out(f"| {label} | {'' if report is None else report.iterations} | {rms:.4%} |")
-        if choices:
-            out()
-            out("Iterations GCV chooses without the work budget:")
-            out()
-            out("| chosen | iterations | noise (sigma), % of the diagonal | time |")
-            out("|---|---|---|---|")
-            for label, (iterations, sigma, seconds) in choices.items():
-                out(f"| {label} | {iterations} | {sigma / diagonal:.4%} | {seconds:.2f} s |")
-
-
-if __name__ == "__main__":
-    main()
+        out("Iterations GCV chooses without the work budget:")
+        out()
+        table = out.table("chosen", "iterations", "noise (sigma), % of the diagonal", "time")
+        for label, (iterations, sigma, seconds) in choices.items():
+            table.row(label, iterations, f"{sigma / diagonal:.4%}", f"{seconds:.2f} s")
+    return out.rows

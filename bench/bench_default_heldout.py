@@ -46,13 +46,12 @@ Taubin) and the result is the clean mesh the noise is added to.
     python bench/bench_default_heldout.py --meshes face,armadillo --sigmas 0.001 --kinds normal
     python bench/bench_default_heldout.py --scanner                           # scanner noise only
     python bench/bench_default_heldout.py --sets heldout --sigmas 0.001 --reference two-step
-    python bench/bench_default_heldout.py --from a.json b.json                # the report of earlier runs
+    python bench/run.py default_heldout --sources a.json,b.json           # the report of earlier runs
 
 The report goes to stdout and bench/results/; the numbers (grids included) to a JSON file beside it,
 which ``--from`` reads back (runs split by mesh or σ give one report).
 """
 
-import argparse
 import json
 import os
 import pathlib
@@ -62,14 +61,11 @@ import zlib
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
-import bench_quality as quality  # noqa: E402
-import bench_quality_inputs as inputs  # noqa: E402
-import meshes  # noqa: E402
-from report import Report  # noqa: E402
-
-import core  # noqa: E402
+import core
+from bench import bench_quality as quality
+from bench import bench_quality_inputs as inputs
+from bench import meshes
+from bench.common import ROOT, Parameter
 
 SIGMAS = "0.001,0.0025,0.005"
 ALPHAS = (0.0, 0.05, 0.1, 0.2)
@@ -631,48 +627,47 @@ def report(record, out):
         scanner_table(scans, cells, out)
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--sets", default="tuning,heldout", help="tuning and/or heldout")
-    parser.add_argument("--meshes", default="", help="only these meshes (of the sets)")
-    parser.add_argument("--kinds", default="normal,iso")
-    parser.add_argument("--sigmas", default=SIGMAS, help="noise, fractions of the bounding-box diagonal")
-    parser.add_argument("--scanner", action="store_true", help="only the real scans with no noise added")
-    parser.add_argument("--no-scanner", action="store_true", help="skip the real scans with no noise added")
-    parser.add_argument("--reference", default="scan", choices=tuple(REFERENCES), help="the real scans' truth")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--border", default=quality.BORDER, help="the default's open-border rule (core.mesh.borders)")
-    parser.add_argument("--from", dest="sources", nargs="+", default=[], help="report these JSON files' numbers")
-    args = parser.parse_args()
-    quality.BORDER = args.border
-    with Report("bench_default_heldout") as out:
-        out(f"`{' '.join(['bench/bench_default_heldout.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
-        if args.sources:
-            record = {"cells": [], "scanner": []}
-            for source in args.sources:
-                data = json.loads(pathlib.Path(source).read_text())
-                record["cells"] += data["cells"]
-                record["scanner"] += data["scanner"]
-            report(record, out)
-            return
-        out(f"The default's open borders: {quality.BORDER}; {core_version()}.")
-        out(f"Load average at start: {' '.join(f'{x:.2f}' for x in os.getloadavg())}.")
-        only = set(inputs.parse_list(args.meshes))
-        sets = inputs.parse_list(args.sets)
-        chosen = [(name, mesh) for name in sets for mesh in inputs.SETS[name] if not only or mesh in only]
+PARAMETERS = (
+    Parameter("sets", "tuning,heldout", "tuning and/or heldout"),
+    Parameter("meshes", "", "only these meshes (of the sets)"),
+    Parameter("kinds", "normal,iso"),
+    Parameter("sigmas", SIGMAS, "noise, fractions of the bounding-box diagonal"),
+    Parameter("scanner", False, "only the real scans with no noise added"),
+    Parameter("no_scanner", False, "skip the real scans with no noise added"),
+    Parameter("reference", "scan", f"the real scans' truth: {', '.join(REFERENCES)}"),
+    Parameter("seed", 0),
+    Parameter("border", quality.BORDER, "the default's open-border rule (core.mesh.borders)"),
+    Parameter("sources", "", "report these JSON files' numbers instead (comma-separated)"),
+)
+QUICK = {"sets": "tuning", "meshes": "cube", "kinds": "iso", "sigmas": "0.0025", "no_scanner": True}
+
+
+def run(args, out):
+    if args.reference not in REFERENCES:
+        raise SystemExit(f"--reference {args.reference}: one of {', '.join(REFERENCES)}")
+    quality.BORDER = args.border  # the rule bench_quality.hc_default runs the default with
+    if args.sources:
         record = {"cells": [], "scanner": []}
-        for set_name, mesh in chosen:
-            if not args.scanner:
-                for kind in inputs.parse_list(args.kinds):
-                    for sigma in inputs.parse_list(args.sigmas, float):
-                        start = time.perf_counter()
-                        record["cells"].append(measure_cell(mesh, set_name, kind, sigma, args.seed, args.reference))
-                        print(f"  {mesh} {kind} {sigma:g}: {time.perf_counter() - start:.0f} s", file=sys.stderr)
-            if not args.no_scanner and args.reference == "scan" and is_scan(mesh):
-                record["scanner"].append(measure_scanner(mesh, set_name))
-        out.sibling(".json").write_text(json.dumps(record))
+        for source in inputs.parse_list(args.sources):
+            data = json.loads(pathlib.Path(source).read_text())
+            record["cells"] += data["cells"]
+            record["scanner"] += data["scanner"]
         report(record, out)
-
-
-if __name__ == "__main__":
-    main()
+        return record
+    out(f"The default's open borders: {quality.BORDER}; {core_version()}.")
+    out(f"Load average at start: {' '.join(f'{x:.2f}' for x in os.getloadavg())}.")
+    only = set(inputs.parse_list(args.meshes))
+    sets = inputs.parse_list(args.sets)
+    chosen = [(name, mesh) for name in sets for mesh in inputs.SETS[name] if not only or mesh in only]
+    record = {"cells": [], "scanner": []}
+    for set_name, mesh in chosen:
+        if not args.scanner:
+            for kind in inputs.parse_list(args.kinds):
+                for sigma in inputs.parse_list(args.sigmas, float):
+                    start = time.perf_counter()
+                    record["cells"].append(measure_cell(mesh, set_name, kind, sigma, args.seed, args.reference))
+                    print(f"  {mesh} {kind} {sigma:g}: {time.perf_counter() - start:.0f} s", file=sys.stderr)
+        if not args.no_scanner and args.reference == "scan" and is_scan(mesh):
+            record["scanner"].append(measure_scanner(mesh, set_name))
+    report(record, out)
+    return record

@@ -1,6 +1,6 @@
 """What the Deviation Map costs: object.hc_smooth with and without it on a big noisy scan, in one run.
 
-    .envs/bpy45/bin/python bench/bench_deviation_map.py [--vertices 1M] [--repeats 5]
+    .envs/bpy45/bin/python bench/run.py deviation_map [--vertices 1M] [--repeats 5]
 
 On a closed noisy triangle torus (isotropic noise of 0.2 % of the bounding-box diagonal, as bench_blender.py
 makes it) it times object.hc_smooth end to end (read, smooth, write, report) with Deviation Map off and on,
@@ -13,25 +13,19 @@ Deviation Map input off and on: one evaluation through the depsgraph each, alter
 Installs the extension itself; runs with either test environment (Blender 4.5 or 5.2 as the bpy module).
 """
 
-import argparse
-import pathlib
 import platform
 import statistics
 import sys
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT / "scripts")]
-
-from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
+from scripts.extension_session import ADDON, install_extension  # before bpy
 
 # isort: split
 
-import bpy  # noqa: E402
+import bpy
 
-sys.path.insert(0, str(ROOT / "bench"))
-from bench_blender import closed_torus, count  # noqa: E402  (a noisy torus, as the other Blender benchmarks use)
-from report import Report  # noqa: E402
+from bench.bench_blender import closed_torus  # a noisy torus, as the other Blender benchmarks use
+from bench.common import ROOT, Parameter, count, repeats
 
 TARGET = 0.10  # the map's cost, a share of the run without it
 
@@ -59,17 +53,17 @@ def alternating(runs, repeats, setup):
     return {name: statistics.median(values) for name, values in times.items()}
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--vertices", default="1M", help="torus vertices, e.g. 1M, 250k (default 1M)")
-    parser.add_argument("--repeats", type=int, default=5)
-    args = parser.parse_args()
+PARAMETERS = (Parameter("vertices", "1M", "torus vertices, e.g. 1M, 250k", count), repeats(5))
+QUICK = {"vertices": "2k", "repeats": 1}
+
+
+def run(args, out):
     install_extension(ROOT / "build" / "bench")
     jobs, mesh_objects = sys.modules[ADDON + ".jobs.mesh"], sys.modules[ADDON + ".operators.mesh_objects"]
     mesh_io = sys.modules[ADDON + ".operators.mesh_io"]
     core = sys.modules[ADDON + ".core"]
     bpy.ops.wm.read_homefile(use_empty=True)
-    obj, points = closed_torus(count(args.vertices), shuffle=False)
+    obj, points = closed_torus(args.vertices, shuffle=False)
     n = len(points)
 
     def reset():
@@ -123,36 +117,37 @@ def main():
     rows.append(("HC Smooth modifier, HC, 10 iterations", medians["off"], medians["on"]))
     obj.modifiers.remove(modifier)
 
-    with Report("bench_deviation_map") as out:
-        out(f"# Deviation Map cost, {time.strftime('%Y-%m-%d')}")
-        out()
-        out(
-            f"Blender {bpy.app.version_string}, {platform.python_implementation()} {platform.python_version()}; "
-            f"closed triangle torus of {n:,} vertices, isotropic noise 0.2% of the diagonal "
-            f"(bench_blender.closed_torus); object.hc_smooth end to end, median of {args.repeats} alternating runs."
-        )
-        out()
-        out("| run (object.hc_smooth unless named) | map off (s) | map on (s) | map's cost | share of the run |")
-        out("|---|---:|---:|---:|---:|")
-        worst = 0.0
-        for label, off, on in rows:
-            share = (on - off) / off
-            worst = max(worst, share)
-            out(f"| {label} | {off:.3f} | {on:.3f} | {on - off:+.3f} s | {share:+.1%} |")
-        out()
-        out("| part of the map | median (s) |")
-        out("|---|---:|")
-        for name, seconds in parts.items():
-            out(f"| {name} | {seconds:.4f} |")
-        fastest = min(off for _, off, _ in rows[:2])
-        out()
-        out(
-            f"Parts together: {sum(parts.values()):.3f} s, {sum(parts.values()) / fastest:.1%} of the fastest operator "
-            f"run without the map. Target: at most {TARGET:.0%} of the run: "
-            + ("met" if worst <= TARGET else f"missed (up to {worst:.1%} end to end)")
-            + "."
-        )
-
-
-if __name__ == "__main__":
-    run_and_exit(main)
+    out("# Deviation Map cost")
+    out()
+    out(
+        f"Blender {bpy.app.version_string}, {platform.python_implementation()} {platform.python_version()}; "
+        f"closed triangle torus of {n:,} vertices, isotropic noise 0.2% of the diagonal "
+        f"(bench_blender.closed_torus); object.hc_smooth end to end, median of {args.repeats} alternating runs."
+    )
+    out()
+    table = out.table(
+        "run (object.hc_smooth unless named)",
+        "map off (s)",
+        "map on (s)",
+        "map's cost",
+        "share of the run",
+        align="lrrrr",
+    )
+    worst = 0.0
+    for label, off, on in rows:
+        share = (on - off) / off
+        worst = max(worst, share)
+        table.row(label, f"{off:.3f}", f"{on:.3f}", f"{on - off:+.3f} s", f"{share:+.1%}")
+    out()
+    table = out.table("part of the map", "median (s)", align="lr")
+    for name, seconds in parts.items():
+        table.row(name, f"{seconds:.4f}")
+    fastest = min(off for _, off, _ in rows[:2])
+    out()
+    out(
+        f"Parts together: {sum(parts.values()):.3f} s, {sum(parts.values()) / fastest:.1%} of the fastest operator "
+        f"run without the map. Target: at most {TARGET:.0%} of the run: "
+        + ("met" if worst <= TARGET else f"missed (up to {worst:.1%} end to end)")
+        + "."
+    )
+    return out.rows

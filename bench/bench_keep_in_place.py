@@ -15,22 +15,15 @@ vertex normal), of
     .envs/bench/bin/python bench/bench_keep_in_place.py            # the cells of docs/keep_in_place.md (~3 min)
 """
 
-import argparse
-import pathlib
-import sys
-import time
 import warnings
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
-import bench_default_heldout as heldout  # noqa: E402
-import bench_quality_inputs as inputs  # noqa: E402
-from report import Report  # noqa: E402
-
-import core  # noqa: E402
-from core.geometry import vertex_normals  # noqa: E402
+import core
+from bench import bench_default_heldout as heldout
+from bench import bench_quality_inputs as inputs
+from bench.common import Parameter
+from core.geometry import vertex_normals
 
 CELLS = "face/normal/0.005,cow/normal/0.0025,bunny10k/normal/0.0025,cube/normal/0.0025,cube/iso/0.0025"
 
@@ -72,22 +65,17 @@ def runs(case):
     yield "Keep Sharp Edges, keep_in_place=True", core.smooth_mesh(case.noisy, case.edges, keep_in_place=True, **sharp)
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--cells", default=CELLS, help="mesh/kind/sigma, comma-separated")
-    args = parser.parse_args()
-    with Report("bench_keep_in_place") as out:
-        out(f"`bench/bench_keep_in_place.py {' '.join(sys.argv[1:])}`, {time.strftime('%Y-%m-%d')}\n")
-        out("| cell | run | surface | vertex | slide |")
-        out("|---|---|---:|---:|---:|")
-        for cell in inputs.parse_list(args.cells):
-            mesh, kind, sigma = cell.split("/")
-            case = heldout.make_case(mesh, kind, float(sigma), 0)
-            clean_normals = inputs.vertex_normals(case.clean, case.faces)
-            for label, result in runs(case):
-                surface, vertex, slide = measures(case, result, clean_normals)
-                out(f"| {cell} | {label} | {100 * surface:.4f} | {100 * vertex:.4f} | {100 * slide:.4f} |")
+PARAMETERS = (Parameter("cells", CELLS, "mesh/kind/sigma, comma-separated"),)
+QUICK = {"cells": "cube/iso/0.0025"}
 
 
-if __name__ == "__main__":
-    main()
+def run(args, out):
+    table = out.table("cell", "run", "surface", "vertex", "slide", align="llrrr")
+    for cell in inputs.parse_list(args.cells):
+        mesh, kind, sigma = cell.split("/")
+        case = heldout.make_case(mesh, kind, float(sigma), 0)
+        clean_normals = inputs.vertex_normals(case.clean, case.faces)
+        for label, result in runs(case):
+            surface, vertex, slide = measures(case, result, clean_normals)
+            table.row(cell, label, f"{100 * surface:.4f}", f"{100 * vertex:.4f}", f"{100 * slide:.4f}")
+    return out.rows

@@ -1,6 +1,6 @@
 """What the HC Smooth modifier's limits rest on: seconds per 1000 iterations, and what its guards cost.
 
-    .envs/bpy45/bin/python bench/bench_modifier_limits.py [--sizes 10k,100k] [--iterations 200] [--repeats 3]
+    .envs/bpy45/bin/python bench/run.py modifier_limits [--sizes 10k,100k] [--iterations 200] [--repeats 3]
 
 A Geometry Nodes evaluation cannot be cancelled, so the modifier's Iterations has a hard maximum
 (settings_spec.MODIFIER_MAX_ITERATIONS). On noisy closed triangle tori of each size it times one evaluation
@@ -12,30 +12,21 @@ takes its merged vertex's position back (Sample Nearest, Sample Index), timed al
 Run it with either test environment (Blender 4.5 or 5.2 as the bpy module); it installs the extension itself.
 """
 
-import argparse
-import pathlib
 import platform
 import statistics
 import sys
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT / "scripts"), str(ROOT / "bench")]
-
-from extension_session import ADDON, install_extension, run_and_exit  # noqa: E402  (before bpy)
+from scripts.extension_session import ADDON, install_extension  # before bpy
 
 # isort: split
 
-import bpy  # noqa: E402
-from bench_blender import closed_torus  # noqa: E402
+import bpy
+
+from bench.bench_blender import closed_torus
+from bench.common import ROOT, Parameter, repeats, sizes
 
 METHODS = ("HC", "LAPLACIAN", "LAPLACIAN_CENTRAL", "LAPLACIAN_ORIGINAL")
-
-
-def count(text):
-    text = text.strip().lower()
-    scale = {"k": 1_000, "m": 1_000_000}.get(text[-1], 1)
-    return int(float(text.rstrip("km")) * scale)
 
 
 def evaluation_seconds(obj, repeats):
@@ -56,20 +47,24 @@ def evaluation_seconds(obj, repeats):
     return statistics.median(times)
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sizes", default="10k,100k", help="torus vertex counts, comma-separated")
-    parser.add_argument("--iterations", type=int, default=200, help="iterations per timed evaluation")
-    parser.add_argument("--repeats", type=int, default=3)
-    args = parser.parse_args()
+PARAMETERS = (
+    sizes("10k,100k", "torus vertex counts, comma-separated"),
+    Parameter("iterations", 200, "iterations per timed evaluation"),
+    repeats(3),
+)
+QUICK = {"sizes": "2k", "iterations": 20, "repeats": 1}
+
+
+def run(args, out):
     install_extension(ROOT / "build" / "bench")
     inputs = sys.modules[ADDON + ".nodes.inputs"]
     settings_spec = sys.modules[ADDON + ".settings_spec"]
-    print(f"Blender {bpy.app.version_string}, {platform.processor() or platform.machine()}, ", end="")
-    print(f"{args.iterations} iterations per evaluation, median of {args.repeats}\n")
-    print("| vertices | case | s per evaluation | s per 1000 iterations |")
-    print("|---:|---|---:|---:|")
-    for size in (count(text) for text in args.sizes.split(",")):
+    out(
+        f"Blender {bpy.app.version_string}, {platform.processor() or platform.machine()}, "
+        f"{args.iterations} iterations per evaluation, median of {args.repeats}\n"
+    )
+    table = out.table("vertices", "case", "s per evaluation", "s per 1000 iterations", align="rlrr")
+    for size in args.sizes:
         bpy.ops.wm.read_homefile(use_empty=True)
         obj = closed_torus(size, shuffle=False)[0]  # as bench_blender.py times the operator
         assert bpy.ops.object.hc_smooth_modifier_add(iterations=args.iterations) == {"FINISHED"}
@@ -83,21 +78,22 @@ def main():
             for key, value in values.items():
                 inputs.set_input(modifier, key, value)
             seconds = evaluation_seconds(obj, args.repeats)
-            print(f"| {n:,} | {name} | {seconds:.3f} | {1000 * seconds / args.iterations:.2f} |")
+            table.row(f"{n:,}", name, f"{seconds:.3f}", f"{1000 * seconds / args.iterations:.2f}")
         inputs.set_input(modifier, "Deviation Limit", 0.0)
         inputs.set_input(modifier, "Method", "HC")
         inputs.set_input(modifier, "Iterations", 0)
-        print(f"| {n:,} | HC, 0 iterations (set-up and guards) | {evaluation_seconds(obj, args.repeats):.3f} | |")
+        table.row(f"{n:,}", "HC, 0 iterations (set-up and guards)", f"{evaluation_seconds(obj, args.repeats):.3f}", "")
         inputs.set_input(modifier, "Iterations", args.iterations)
         inputs.set_input(modifier, "Beta", 0.0)
-        print(f"| {n:,} | HC, Beta 0 (refused: passed through) | {evaluation_seconds(obj, args.repeats):.3f} | |")
+        table.row(f"{n:,}", "HC, Beta 0 (refused: passed through)", f"{evaluation_seconds(obj, args.repeats):.3f}", "")
         inputs.set_input(modifier, "Beta", 0.6)
         inputs.set_input(modifier, "Iterations", 10)
-        print(f"| {n:,} | HC, 10 iterations | {evaluation_seconds(obj, args.repeats):.3f} | |")
+        table.row(f"{n:,}", "HC, 10 iterations", f"{evaluation_seconds(obj, args.repeats):.3f}", "")
         modifier.show_viewport = False
         obj.modifiers.new("Weld", "NODES").node_group = weld_tree()
         seconds = evaluation_seconds(obj, args.repeats)
-        print(f"| {n:,} | welding alone (Merge by Distance, sampled back) | {seconds:.3f} | |")
+        table.row(f"{n:,}", "welding alone (Merge by Distance, sampled back)", f"{seconds:.3f}", "")
+    return out.rows
 
 
 def weld_tree():
@@ -127,7 +123,3 @@ def weld_tree():
 
 def _menu_name(settings_spec, identifier):
     return next(choice.label for choice in settings_spec.METHOD.items if choice.identifier == identifier)
-
-
-if __name__ == "__main__":
-    run_and_exit(main)

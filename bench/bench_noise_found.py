@@ -7,7 +7,7 @@ deviation limit uses) over the true noise. Clean meshes: the robust estimate in 
 largest move of a default run in % of the bounding-box diagonal.
 
 Tuning set (the threshold and gain were chosen on these): Blender's primitives at their defaults
-(tests/core/primitives.py, the same meshes as bpy's), Suzanne (Blender's Monkey, as it comes and
+(bench/primitives.py, the same meshes as bpy's), Suzanne (Blender's Monkey, as it comes and
 Catmull-Clark subdivided once and twice), CAD-like parts built in NumPy (a box with rounded or
 chamfered edges, a tube). Held out: parts made in Blender (a cube with its edges bevelled by the Bevel
 modifier, 1 and 3 segments; booleans: a disc with a hole, a cube with a hole, triangulated) and the
@@ -20,23 +20,17 @@ Needs numpy, scipy, pymeshlab (bench/requirements.txt) and .envs/bpy45 for the B
 (made once, cached in bench/results/).
 """
 
-import argparse
-import pathlib
 import subprocess
-import sys
 import warnings
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests" / "core"))
-sys.path.insert(0, str(ROOT / "bench"))
-import primitives  # noqa: E402
-from bench_quality_inputs import BPY45, pymeshlab_samples  # noqa: E402
-from report import RESULTS, Report  # noqa: E402
-
-import core  # noqa: E402
+import core
+from bench import bench_quality_inputs as inputs
+from bench import primitives
+from bench.bench_quality_inputs import BPY45, pymeshlab_samples
+from bench.common import Parameter
+from bench.report import RESULTS
 
 LEVELS = (0.05, 0.1, 0.3, 0.5)
 SCANS = {
@@ -113,14 +107,23 @@ def scan(path):
     return primitives.mesh(mesh.vertex_matrix().astype(np.float64), mesh.face_matrix().tolist())
 
 
-def all_meshes():
-    tuning = {name: make() for name, make in primitives.PRIMITIVES.items()}
-    tuning.update({name: make() for name, make in primitives.CAD.items()})
-    made = blender_meshes()
-    tuning.update({name: made[name] for name in ("suzanne_0", "suzanne_1", "suzanne_2")})
-    held_out = {name: made[name] for name in ("bevel_box_1", "bevel_box_3", "disc_hole", "cube_hole")}
-    samples = pymeshlab_samples()
-    held_out.update({name: scan(samples / file) for name, file in SCANS.items()})
+def all_meshes(wanted=None):
+    """(tuning, held out): name -> mesh, only those in ``wanted`` (None: all)."""
+
+    def keep(names):
+        return [name for name in names if wanted is None or name in wanted]
+
+    tuning = {
+        name: make() for name, make in {**primitives.PRIMITIVES, **primitives.CAD}.items() if name in keep([name])
+    }
+    held_out = {}
+    if keep(BLENDER_MESHES):
+        made = blender_meshes()
+        tuning.update({name: made[name] for name in keep(("suzanne_0", "suzanne_1", "suzanne_2"))})
+        held_out = {name: made[name] for name in keep(("bevel_box_1", "bevel_box_3", "disc_hole", "cube_hole"))}
+    if keep(SCANS):
+        samples = pymeshlab_samples()
+        held_out.update({name: scan(samples / SCANS[name]) for name in keep(SCANS)})
     return tuning, held_out
 
 
@@ -149,26 +152,21 @@ def measure(part):
     return cells
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--meshes", help="comma-separated names (default: all)")
-    args = parser.parse_args()
+PARAMETERS = (Parameter("meshes", "", "comma-separated names (default: all)"),)
+QUICK = {"meshes": "cube,cone_ngon"}
+
+
+def run(args, out):
     warnings.simplefilter("ignore", core.ConvergenceWarning)
-    tuning, held_out = all_meshes()
-    wanted = None if args.meshes is None else set(args.meshes.split(","))
+    wanted = set(inputs.parse_list(args.meshes)) or None
+    tuning, held_out = all_meshes(wanted)
     header = ["mesh", "vertices", "clean: estimate / edge", "clean: moved % diag"]
     header += [f"{kind} {ratio}" for kind in ("normal", "iso") for ratio in LEVELS]
-    with Report("bench_noise_found") as out:
-        out(f"* = noise found (threshold {core.mesh.noise.NOISE_THRESHOLD} edge lengths); noisy cells: robust")
-        out("estimate / truth, and where found the Automatic Amount's sigma / truth.")
-        for title, meshes in (("Tuning set", tuning), ("Held-out set", held_out)):
-            out(f"\n### {title}\n")
-            out("| " + " | ".join(header) + " |")
-            out("|" + "---|" * len(header))
-            for name, part in meshes.items():
-                if wanted is None or name in wanted:
-                    out("| " + " | ".join([name, str(len(part.positions))] + measure(part)) + " |")
-
-
-if __name__ == "__main__":
-    main()
+    out(f"* = noise found (threshold {core.mesh.noise.NOISE_THRESHOLD} edge lengths); noisy cells: robust")
+    out("estimate / truth, and where found the Automatic Amount's sigma / truth.")
+    for title, parts in (("Tuning set", tuning), ("Held-out set", held_out)):
+        out(f"\n### {title}\n")
+        table = out.table(*header)
+        for name, part in parts.items():
+            table.row(name, len(part.positions), *measure(part))
+    return out.rows

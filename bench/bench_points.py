@@ -6,34 +6,28 @@ noise sigma = 0.5 / 1 / 2 % of the bounding-box diagonal. Reported per method: R
 true surface before and after, size change (mean distance to the shape's centre, after vs before),
 and wall time of the smoothing call (conversions to the peers' data structures excluded).
 
-    python bench/bench_points.py                       # 20k and 100k points, every shape and sigma
-    python bench/bench_points.py --sizes 20k --shapes sphere,cube --sigmas 0.01
-    python bench/bench_points.py --timing 100k,1M --repeat 3   # end-to-end time by stage, against CGAL jet
-    python bench/bench_points.py --timing 1M --warm 6  # the same after touching 6 GB of fresh memory
-    python bench/bench_points.py --emst 200x5000       # exact EMST of scan rings (rings x points per ring)
-    python bench/bench_points.py --hc-steps 1M --repeat 3   # 66 HC steps alone, float32/64, with/without influence
-    python bench/bench_points.py --sparse 1500         # sparse, nearly clean sphere (noise 0.1 x spacing)
-    python bench/bench_points.py --alpha 0.01 --iterations-per-round 22   # a fixed amount: 3 x 22 steps
+    python bench/run.py points                       # 20k and 100k points, every shape and sigma
+    python bench/run.py points --sizes 20k --shapes sphere,cube --sigmas 0.01
+    python bench/run.py points --timing 100k,1M --repeats 3   # end-to-end time by stage, against CGAL jet
+    python bench/run.py points --timing 1M --warm 6  # the same after touching 6 GB of fresh memory
+    python bench/run.py points --emst 200x5000       # exact EMST of scan rings (rings x points per ring)
+    python bench/run.py points --hc-steps 1M --repeats 3   # 66 HC steps alone, float32/64, with/without influence
+    python bench/run.py points --sparse 1500         # sparse, nearly clean sphere (noise 0.1 x spacing)
+    python bench/run.py points --alpha 0.01 --iterations-per-round 22   # a fixed amount: 3 x 22 steps
 
 Our rows show the noise / spacing estimate r and the amount the run chose (rounds × steps, alpha).
 
 Peers that are not installed are listed as such; the machine's python3 runs the core and baseline.
 """
 
-import argparse
-import pathlib
-import sys
 import time
 import warnings
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-from report import Report  # noqa: E402
-
-import core  # noqa: E402
+import core
+from bench.common import Parameter, repeats, sizes
 
 # --- shapes: sampling and exact distance --------------------------------------------------------------
 
@@ -264,9 +258,10 @@ def quality(args, out):
         "RMS distance to the true surface as % of the bounding-box diagonal (before → after), size change "
         "(mean distance to the centre, after vs before), wall time of the smoothing call.\n"
     )
-    out("| shape | points | σ | method | RMS before | RMS after | after/before | size change | time (s) |")
-    out("|---|---|---|---|---|---|---|---|---|")
-    for n in [parse_count(s) for s in args.sizes.split(",")]:
+    table = out.table(
+        "shape", "points", "σ", "method", "RMS before", "RMS after", "after/before", "size change", "time (s)"
+    )
+    for n in args.sizes:
         for shape in args.shapes.split(","):
             _, distance, centre = SHAPES[shape]
             for sigma in [float(s) for s in args.sigmas.split(",")]:
@@ -276,7 +271,8 @@ def quality(args, out):
                     try:
                         result, seconds, *note = method(points)  # ours adds its noise estimate and amount
                     except Exception as error:  # a peer failing is a result too
-                        out(f"| {shape} | {n} | {sigma:.1%} | {name} | failed: {type(error).__name__}: {error} |||||")
+                        failed = f"failed: {type(error).__name__}: {error}"
+                        table.row(shape, n, f"{sigma:.1%}", name, failed, "", "", "", "")
                         continue
                     finite = np.isfinite(result).all(axis=1)  # MeshLab APSS can return NaN points
                     lost = "" if finite.all() else f" ({(~finite).sum()} NaN points left out)"
@@ -284,9 +280,16 @@ def quality(args, out):
                     after = rms(distance(result)) / diagonal
                     size = size_of(result, centre) / size_of(points[finite], centre) - 1
                     note = f" [{note[0]}]" if note else ""
-                    out(
-                        f"| {shape} | {n} | {sigma:.1%} | {name}{note}{lost} | {before:.3%} | {after:.3%} | "
-                        f"{after / before:.2f} | {size:+.2%} | {seconds:.2f} |"
+                    table.row(
+                        shape,
+                        n,
+                        f"{sigma:.1%}",
+                        f"{name}{note}{lost}",
+                        f"{before:.3%}",
+                        f"{after:.3%}",
+                        f"{after / before:.2f}",
+                        f"{size:+.2%}",
+                        f"{seconds:.2f}",
                     )
 
 
@@ -329,7 +332,7 @@ def timing(args, out):
         points, _ = noisy("sphere", n, 0.005, seed=args.seed)
         points = points.astype(np.float32)
         totals, peers = [], []
-        for run in range(args.repeat):
+        for run in range(args.repeats):
             start = time.perf_counter()
             _, report = core.smooth_point_cloud(points, return_mesh=True, **hc_options(args))
             totals.append(time.perf_counter() - start)
@@ -356,13 +359,13 @@ def hc_steps_timing(args, out):
     operator = umbrella_operator(report.mesh.edges, n)
     weighted = int((report.influence < 1).sum())
     out(f"## 66 HC steps on the RFS mesh of a noisy {n}-point sphere ({operator.indptr[-1]} non-zeros)\n")
-    out(f"| precision | influence | seconds ({args.repeat} runs) |")
+    out(f"| precision | influence | seconds ({args.repeats} runs) |")
     out("|---|---|---|")
     for dtype in (np.float32, np.float64):
         start = points.astype(dtype)
         for influence in (None, report.influence):
             seconds = []
-            for _ in range(args.repeat):
+            for _ in range(args.repeats):
                 clock = time.perf_counter()
                 smooth(start, None, alpha=0.0033, beta=0.55, iterations=66, operator=operator, influence=influence)
                 seconds.append(time.perf_counter() - clock)
@@ -404,7 +407,7 @@ def emst_timing(args, out):
     out(f"## Exact EMST of {rings} scan rings x {per_ring} points ({len(points)} points)\n")
     out("| run | kNN lists (s) | Borůvka (s) | total (s) |")
     out("|---|---|---|---|")
-    for run in range(args.repeat):
+    for run in range(args.repeats):
         start = time.perf_counter()
         index = NeighbourIndex(points, 12)
         middle = time.perf_counter()
@@ -426,37 +429,32 @@ def hc_options(args):
     return options
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--sizes", default="20k,100k")
-    parser.add_argument("--shapes", default="sphere,torus,cube,patch")
-    parser.add_argument("--sigmas", default="0.005,0.01,0.02")
-    parser.add_argument("--methods", default="", help="comma-separated name fragments, e.g. 'ours,jet'")
-    parser.add_argument("--timing", default="", help="sizes for the end-to-end timing table instead, e.g. 100k,1M")
-    parser.add_argument("--emst", default="", help="time the exact EMST of scan rings instead, e.g. 200x5000")
-    parser.add_argument(
-        "--sparse",
-        default="",
-        help="noise removed from a sparse, nearly clean sphere of this many points instead, e.g. 1500",
-    )
-    parser.add_argument("--warm", type=float, default=0.0, help="with --timing: touch this many GB of memory first")
-    parser.add_argument("--hc-steps", default="", help="time 66 HC steps alone on one size instead, e.g. 1M")
-    parser.add_argument("--repeat", type=int, default=1, help="timing runs per size (the table gives each)")
-    parser.add_argument("--rounds", type=int, default=None, help="for our rows (default: the core's)")
-    parser.add_argument("--alpha", type=float, default=None)
-    parser.add_argument("--beta", type=float, default=None)
-    parser.add_argument("--spacing-factor", type=float, default=None)
-    parser.add_argument("--iterations-per-round", type=int, default=None)
-    parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args()
-    with Report("bench_points") as out:
-        if args.emst:
-            emst_timing(args, out)
-        elif args.hc_steps:
-            hc_steps_timing(args, out)
-        else:
-            (timing if args.timing else sparse if args.sparse else quality)(args, out)
+PARAMETERS = (
+    sizes("20k,100k"),
+    Parameter("shapes", "sphere,torus,cube,patch"),
+    Parameter("sigmas", "0.005,0.01,0.02"),
+    Parameter("methods", "", "comma-separated name fragments, e.g. 'ours,jet'"),
+    Parameter("timing", "", "sizes for the end-to-end timing table instead, e.g. 100k,1M"),
+    Parameter("emst", "", "time the exact EMST of scan rings instead, e.g. 200x5000"),
+    Parameter("sparse", "", "noise removed from a sparse, nearly clean sphere of this many points instead, e.g. 1500"),
+    Parameter("warm", 0.0, "with --timing: touch this many GB of memory first"),
+    Parameter("hc_steps", "", "time 66 HC steps alone on one size instead, e.g. 1M"),
+    repeats(1, "timing runs per size (the table gives each)"),
+    Parameter("rounds", None, "for our rows (default: the core's)", int),
+    Parameter("alpha", None, "", float),
+    Parameter("beta", None, "", float),
+    Parameter("spacing_factor", None, "", float),
+    Parameter("iterations_per_round", None, "", int),
+    Parameter("seed", 0),
+)
+QUICK = {"sizes": "2k", "shapes": "sphere", "sigmas": "0.01"}
 
 
-if __name__ == "__main__":
-    main()
+def run(args, out):
+    if args.emst:
+        emst_timing(args, out)
+    elif args.hc_steps:
+        hc_steps_timing(args, out)
+    else:
+        (timing if args.timing else sparse if args.sparse else quality)(args, out)
+    return out.rows

@@ -11,23 +11,21 @@ volume change against the noisy input (closed meshes: the smoother's own change;
 against the clean mesh), wall time of the smoothing call (median of
 --repeats for the rows at defaults, one run for grid rows).
 
-    python bench/bench_quality.py                                  # every mesh, noise kind and σ; peers in Python
-    python bench/bench_quality.py --blender                        # with Blender's Smooth / Laplacian Smooth modifiers
-    python bench/bench_quality.py --meshes bunny,cow --kinds normal --sigmas 0.004
-    python bench/bench_quality.py --no-grid                        # skip the HC parameter grid (faster)
-    python bench/bench_quality.py --hc 0.05,0.6,20                 # an extra fixed HC setting (alpha,beta,iterations)
-    python bench/bench_quality.py --plot docs/images/error_vs_iterations.png   # error vs iterations, one scan
+    python bench/run.py quality                                  # every mesh, noise kind and σ; peers in Python
+    python bench/run.py quality --blender                        # with Blender's Smooth / Laplacian Smooth modifiers
+    python bench/run.py quality --meshes bunny,cow --kinds normal --sigmas 0.004
+    python bench/run.py quality --no-grid                        # skip the HC parameter grid (faster)
+    python bench/run.py quality --hc 0.05,0.6,20                 # an extra fixed HC setting (alpha,beta,iterations)
+    python bench/run.py quality --plot docs/images/error_vs_iterations.png   # error vs iterations, one scan
 
 The report (markdown) goes to stdout and bench/results/; the raw numbers, HC grid included, to a JSON
 file beside it.
 """
 
-import argparse
 import json
 import pathlib
 import statistics
 import subprocess
-import sys
 import tempfile
 import time
 import warnings
@@ -36,14 +34,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
-import bench_quality_inputs as inputs  # noqa: E402
-import meshes  # noqa: E402
-from report import Report  # noqa: E402
-
-import core  # noqa: E402
-import settings_spec  # noqa: E402
+import core
+import settings_spec
+from bench import bench_quality_inputs as inputs
+from bench import meshes
+from bench.common import ROOT, Parameter, repeats
 
 SIGMAS = "0.001,0.002,0.004,0.01"
 HC_ALPHAS = (0.0, 0.01, 0.03, 0.1, 0.3)
@@ -405,7 +400,8 @@ def run_blender(cases, peers, repeats, out):
         job_file, result_file = pathlib.Path(folder, "jobs.npz"), pathlib.Path(folder, "results.npz")
         np.savez(job_file, count=len(index), **jobs)
         subprocess.run(
-            [str(python), str(ROOT / "bench" / "bench_quality_blender.py"), str(job_file), str(result_file)],
+            [str(python), "-m", "bench.bench_quality_blender", str(job_file), str(result_file)],
+            cwd=ROOT,  # `-m` finds bench/ there
             check=True,
             timeout=3600,
         )
@@ -695,31 +691,27 @@ def plot(args, out):
     out(f"\nwritten {path}")
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--meshes", default=",".join(inputs.ALL_MESHES))
-    parser.add_argument("--kinds", default="normal,iso", help="noise along the normals and/or isotropic")
-    parser.add_argument("--sigmas", default=SIGMAS, help="noise, fractions of the bounding-box diagonal")
-    parser.add_argument("--blender", action="store_true", help="also run Blender's modifiers (in .envs/bpy45)")
-    parser.add_argument("--no-grid", action="store_true", help="skip the HC parameter grid")
-    parser.add_argument("--no-peers", action="store_true")
-    parser.add_argument("--hc", default="", help="an extra HC setting alpha,beta,iterations")
-    parser.add_argument("--repeats", type=int, default=3, help="timing runs at defaults (median)")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--plot", default="", help="write the error-vs-iterations figure here instead")
-    parser.add_argument("--plot-case", default="bunny/normal/0.004", help="mesh/kind/sigma of the figure")
-    parser.add_argument("--plot-iterations", type=int, default=300)
-    args = parser.parse_args()
+PARAMETERS = (
+    Parameter("meshes", ",".join(inputs.ALL_MESHES)),
+    Parameter("kinds", "normal,iso", "noise along the normals and/or isotropic"),
+    Parameter("sigmas", SIGMAS, "noise, fractions of the bounding-box diagonal"),
+    Parameter("blender", False, "also run Blender's modifiers (in .envs/bpy45)"),
+    Parameter("no_grid", False, "skip the HC parameter grid"),
+    Parameter("no_peers", False),
+    Parameter("hc", "", "an extra HC setting alpha,beta,iterations"),
+    repeats(3, "timing runs at defaults (median)"),
+    Parameter("seed", 0),
+    Parameter("plot", "", "write the error-vs-iterations figure here instead"),
+    Parameter("plot_case", "bunny/normal/0.004", "mesh/kind/sigma of the figure"),
+    Parameter("plot_iterations", 300),
+)
+QUICK = {"meshes": "cube", "kinds": "iso", "sigmas": "0.004", "no_grid": True, "repeats": 1}
+
+
+def run(args, out):
     record = []
-    with Report("bench_quality") as out:
-        out(f"`{' '.join(['bench/bench_quality.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}\n")
-        if args.plot:
-            plot(args, out)
-        else:
-            quality(args, out, record)
-        if record:
-            out.sibling(".json").write_text(json.dumps(record))
-
-
-if __name__ == "__main__":
-    main()
+    if args.plot:
+        plot(args, out)
+    else:
+        quality(args, out, record)
+    return record

@@ -1,7 +1,7 @@
 """Blender's own smoothing modifiers on the quality benchmark's noisy meshes (run by bench_quality.py
 --blender in .envs/bpy45; not meant to be run by hand).
 
-    .envs/bpy45/bin/python bench/bench_quality_blender.py JOBS.npz RESULTS.npz
+    .envs/bpy45/bin/python -m bench.bench_quality_blender JOBS.npz RESULTS.npz   # in the repository's folder
 
 JOBS.npz holds, per job i: ``vertices_i`` (n, 3), ``faces_i`` (f, 3), ``modifier_i`` ("SMOOTH" or
 "LAPLACIANSMOOTH"), ``settings_i`` (a JSON object of modifier properties; empty: Blender's defaults)
@@ -10,20 +10,16 @@ and ``repeats_i``. RESULTS.npz gets ``positions_i`` (the evaluated vertex positi
 """
 
 import json
-import pathlib
 import statistics
 import sys
 import time
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT / "scripts")]
-
-from extension_session import run_and_exit  # noqa: E402  (before bpy: a throw-away Blender user folder)
+from scripts.extension_session import run_and_exit  # before bpy: a throw-away Blender user folder
 
 # isort: split
 
-import bpy  # noqa: E402
-import numpy as np  # noqa: E402
+import bpy
+import numpy as np
 
 
 def mesh_object(vertices, faces):

@@ -32,16 +32,14 @@ Benchmark tools only: trimesh loads the files and Open3D measures distances (ben
 import io
 import pathlib
 import subprocess
-import sys
 import tarfile
 import tempfile
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "bench"))
-import meshes  # noqa: E402
-from report import RESULTS  # noqa: E402
+from bench import meshes
+from bench.common import ROOT
+from bench.report import RESULTS
 
 BPY45 = ROOT / ".envs" / "bpy45" / "bin" / "python"
 

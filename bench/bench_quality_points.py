@@ -12,30 +12,24 @@ removed (1 - RMS after / RMS before), the mean-radius change (mean distance to t
 centroid, against the clean sample's; the noisy input's own is shown) and the wall time of the
 smoothing call (conversion into CGAL / MeshLab structures excluded).
 
-    python bench/bench_quality_points.py                              # 20k points, every object, noise and σ
-    python bench/bench_quality_points.py --sizes 100k --methods ours,jet,pca --kinds normal
-    python bench/bench_quality_points.py --objects cow,bunny --sigmas 0.0025,0.005 --methods ours,jet
-    python bench/bench_quality_points.py --methods ours,uniform,jet  # with and without the local amount
-    python bench/bench_quality_points.py --objects plate --sigmas 0.005,0.01 --methods ours,jet --steps 8,20
+    python bench/run.py quality_points                              # 20k points, every object, noise and σ
+    python bench/run.py quality_points --sizes 100k --methods ours,jet,pca --kinds normal
+    python bench/run.py quality_points --objects cow,bunny --sigmas 0.0025,0.005 --methods ours,jet
+    python bench/run.py quality_points --methods ours,uniform,jet  # with and without the local amount
+    python bench/run.py quality_points --objects plate --sigmas 0.005,0.01 --methods ours,jet --steps 8,20
 
 The report goes to stdout and bench/results/ (markdown and JSON).
 """
 
-import argparse
-import json
 import os
-import pathlib
-import sys
 import time
 import zlib
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
-import bench_points  # noqa: E402
-import bench_quality_inputs as inputs  # noqa: E402
-from report import Report  # noqa: E402
+from bench import bench_points
+from bench import bench_quality_inputs as inputs
+from bench.common import Parameter, sizes
 
 SIGMAS = "0.001,0.0025,0.005,0.01"
 
@@ -70,18 +64,19 @@ def mean_radius(points, centre):
     return float(np.linalg.norm(points - centre, axis=1).mean())
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--objects", default=",".join(inputs.ALL_MESHES))
-    parser.add_argument("--sizes", default="20k")
-    parser.add_argument("--kinds", default="normal,iso")
-    parser.add_argument("--sigmas", default=SIGMAS)
-    parser.add_argument("--methods", default=",".join(METHODS), help=f"keys among {', '.join(METHODS)}")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument(
-        "--steps", default="", help="also ours with these fixed HC steps per round (alpha matched), e.g. 8,20"
-    )
-    args = parser.parse_args()
+PARAMETERS = (
+    Parameter("objects", ",".join(inputs.ALL_MESHES)),
+    sizes("20k", "points per sample, comma-separated"),
+    Parameter("kinds", "normal,iso"),
+    Parameter("sigmas", SIGMAS),
+    Parameter("methods", ",".join(METHODS), f"keys among {', '.join(METHODS)}"),
+    Parameter("seed", 0),
+    Parameter("steps", "", "also ours with these fixed HC steps per round (alpha matched), e.g. 8,20"),
+)
+QUICK = {"objects": "cube", "sizes": "2k", "kinds": "iso", "sigmas": "0.005"}
+
+
+def run(args, out):
     methods = {key: METHODS[key] for key in inputs.parse_list(args.methods)}
     for steps in inputs.parse_list(args.steps, int):
         methods[f"steps{steps}"] = (
@@ -89,94 +84,86 @@ def main():
             lambda points, steps=steps: bench_points.hc_rfs(points, iterations_per_round=steps),
         )
     record = []
-    with Report("bench_quality_points") as out:
-        out(
-            f"`{' '.join(['bench/bench_quality_points.py'] + sys.argv[1:])}`, {time.strftime('%Y-%m-%d %H:%M')}, "
-            f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}\n"
-        )
-        out(
-            "Each cell: noise removed (1 − RMS after / RMS before; higher is better), RMS after in % of the "
-            "diagonal, mean-radius change against the clean sample, time (s). "
-            "Ours adds its noise estimate and amount.\n"
-        )
-        names = [name for name, _ in methods.values()]
-        out("| object | points | noise | σ | input RMS (radius) | " + " | ".join(names) + " | ours − jet |")
-        out("|---" * (len(names) + 6) + "|")
-        for size in [bench_points.parse_count(s) for s in inputs.parse_list(args.sizes)]:
-            for name in inputs.parse_list(args.objects):
-                vertices, faces = inputs.load_mesh(name)
-                surface = inputs.Surface(vertices, faces)
-                for kind in inputs.parse_list(args.kinds):
-                    for sigma in inputs.parse_list(args.sigmas, float):
-                        seed = zlib.crc32(f"{name}/{size}/{kind}/{sigma:g}".encode()) ^ args.seed
-                        clean, normals = inputs.sample_surface(vertices, faces, size, seed)
-                        diagonal = inputs.diagonal(clean)
-                        noisy = inputs.add_noise(clean, normals, sigma * diagonal, kind, seed + 1)
-                        centre = clean.mean(axis=0)
-                        radius = mean_radius(clean, centre)
-                        before = float(np.sqrt(np.mean(surface.distance(noisy) ** 2)))
-                        cell = {
-                            "object": name,
-                            "points": size,
-                            "kind": kind,
-                            "sigma": sigma,
-                            "input": {"rms": before / diagonal, "radius": mean_radius(noisy, centre) / radius - 1},
-                            "methods": {},
+    out(f"Load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}.\n")
+    out(
+        "Each cell: noise removed (1 − RMS after / RMS before; higher is better), RMS after in % of the "
+        "diagonal, mean-radius change against the clean sample, time (s). "
+        "Ours adds its noise estimate and amount.\n"
+    )
+    names = [name for name, _ in methods.values()]
+    out("| object | points | noise | σ | input RMS (radius) | " + " | ".join(names) + " | ours − jet |")
+    out("|---" * (len(names) + 6) + "|")
+    for size in args.sizes:
+        for name in inputs.parse_list(args.objects):
+            vertices, faces = inputs.load_mesh(name)
+            surface = inputs.Surface(vertices, faces)
+            for kind in inputs.parse_list(args.kinds):
+                for sigma in inputs.parse_list(args.sigmas, float):
+                    seed = zlib.crc32(f"{name}/{size}/{kind}/{sigma:g}".encode()) ^ args.seed
+                    clean, normals = inputs.sample_surface(vertices, faces, size, seed)
+                    diagonal = inputs.diagonal(clean)
+                    noisy = inputs.add_noise(clean, normals, sigma * diagonal, kind, seed + 1)
+                    centre = clean.mean(axis=0)
+                    radius = mean_radius(clean, centre)
+                    before = float(np.sqrt(np.mean(surface.distance(noisy) ** 2)))
+                    cell = {
+                        "object": name,
+                        "points": size,
+                        "kind": kind,
+                        "sigma": sigma,
+                        "input": {"rms": before / diagonal, "radius": mean_radius(noisy, centre) / radius - 1},
+                        "methods": {},
+                    }
+                    texts = []
+                    for key, (_label, method) in methods.items():
+                        try:
+                            result, seconds, *note = method(noisy)
+                        except Exception as error:  # a peer failing is a result too
+                            cell["methods"][key] = {"error": f"{type(error).__name__}: {error}"}
+                            texts.append(f"failed: {type(error).__name__}")
+                            continue
+                        finite = np.isfinite(result).all(axis=1)  # MeshLab APSS can return NaN points
+                        distance = surface.distance(result[finite])
+                        after = float(np.sqrt(np.mean(distance**2)))
+                        entry = {
+                            "rms": after / diagonal,
+                            "max": float(distance.max()) / diagonal,
+                            "removed": 1 - after / before,
+                            "radius": mean_radius(result[finite], centre) / radius - 1,
+                            "seconds": seconds,
+                            "nan_points": int((~finite).sum()),
                         }
-                        texts = []
-                        for key, (_label, method) in methods.items():
-                            try:
-                                result, seconds, *note = method(noisy)
-                            except Exception as error:  # a peer failing is a result too
-                                cell["methods"][key] = {"error": f"{type(error).__name__}: {error}"}
-                                texts.append(f"failed: {type(error).__name__}")
-                                continue
-                            finite = np.isfinite(result).all(axis=1)  # MeshLab APSS can return NaN points
-                            distance = surface.distance(result[finite])
-                            after = float(np.sqrt(np.mean(distance**2)))
-                            entry = {
-                                "rms": after / diagonal,
-                                "max": float(distance.max()) / diagonal,
-                                "removed": 1 - after / before,
-                                "radius": mean_radius(result[finite], centre) / radius - 1,
-                                "seconds": seconds,
-                                "nan_points": int((~finite).sum()),
-                            }
-                            if note:
-                                entry["note"] = note[0]
-                            cell["methods"][key] = entry
-                            extra = f"; {note[0]}" if note else ""
-                            lost = f"; {entry['nan_points']} NaN" if entry["nan_points"] else ""
-                            texts.append(
-                                f"{entry['removed']:.0%} ({100 * entry['rms']:.3f}, {100 * entry['radius']:+.2f}%, "
-                                f"{seconds:.1f} s{extra}{lost})"
-                            )
-                        m = cell["methods"]
-                        versus = (
-                            f"{m['ours']['removed'] - m['jet']['removed']:+.0%}"
-                            if "removed" in m.get("ours", {}) and "removed" in m.get("jet", {})
-                            else "–"
+                        if note:
+                            entry["note"] = note[0]
+                        cell["methods"][key] = entry
+                        extra = f"; {note[0]}" if note else ""
+                        lost = f"; {entry['nan_points']} NaN" if entry["nan_points"] else ""
+                        texts.append(
+                            f"{entry['removed']:.0%} ({100 * entry['rms']:.3f}, {100 * entry['radius']:+.2f}%, "
+                            f"{seconds:.1f} s{extra}{lost})"
                         )
-                        out(
-                            f"| {name} | {size} | {kind} | {sigma:.2%} | {100 * before / diagonal:.3f} "
-                            f"({100 * cell['input']['radius']:+.2f}%) | " + " | ".join(texts) + f" | {versus} |"
-                        )
-                        record.append(cell)
-        for key in ("ours", "uniform"):
-            pairs = [
-                (c["methods"][key], c["methods"]["jet"])
-                for c in record
-                if "removed" in c["methods"].get(key, {}) and "removed" in c["methods"].get("jet", {})
-            ]
-            if not pairs:
-                continue
-            won = sum(o["removed"] >= j["removed"] for o, j in pairs)
-            out(
-                f"\n{methods[key][0]} removed at least jet's share of the noise in {won} of {len(pairs)} cells; "
-                f"largest |radius change| {100 * max(abs(o['radius']) for o, _ in pairs):.2f} %."
-            )
-        out.sibling(".json").write_text(json.dumps(record))
-
-
-if __name__ == "__main__":
-    main()
+                    m = cell["methods"]
+                    versus = (
+                        f"{m['ours']['removed'] - m['jet']['removed']:+.0%}"
+                        if "removed" in m.get("ours", {}) and "removed" in m.get("jet", {})
+                        else "–"
+                    )
+                    out(
+                        f"| {name} | {size} | {kind} | {sigma:.2%} | {100 * before / diagonal:.3f} "
+                        f"({100 * cell['input']['radius']:+.2f}%) | " + " | ".join(texts) + f" | {versus} |"
+                    )
+                    record.append(cell)
+    for key in ("ours", "uniform"):
+        pairs = [
+            (c["methods"][key], c["methods"]["jet"])
+            for c in record
+            if "removed" in c["methods"].get(key, {}) and "removed" in c["methods"].get("jet", {})
+        ]
+        if not pairs:
+            continue
+        won = sum(o["removed"] >= j["removed"] for o, j in pairs)
+        out(
+            f"\n{methods[key][0]} removed at least jet's share of the noise in {won} of {len(pairs)} cells; "
+            f"largest |radius change| {100 * max(abs(o['radius']) for o, _ in pairs):.2f} %."
+        )
+    return record

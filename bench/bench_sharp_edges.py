@@ -51,35 +51,30 @@ crease lines).
 ``--organic`` smooths organic scans (no sharp edges) with the option on and reports it beside HC's
 default and the best HC setting.
 
-    python bench/bench_sharp_edges.py                                   # both sets (~10 min)
-    python bench/bench_sharp_edges.py --sets tuning --parts cube --sigmas 0.005 --kinds normal
-    python bench/bench_sharp_edges.py --organic bunny,cow --sigmas 0.001,0.0025,0.005 --sets none
-    python bench/bench_sharp_edges.py --sets none --cost 250k,1M       # time and memory on noisy tori (~6 min)
-    python bench/bench_sharp_edges.py --bounds --sigmas 0.005           # with perfect normals (~1 min)
+    python bench/run.py sharp_edges                                   # both sets (~10 min)
+    python bench/run.py sharp_edges --sets tuning --parts cube --sigmas 0.005 --kinds normal
+    python bench/run.py sharp_edges --organic bunny,cow --sigmas 0.001,0.0025,0.005 --sets none
+    python bench/run.py sharp_edges --sets none --cost 250k,1M       # time and memory on noisy tori (~6 min)
+    python bench/run.py sharp_edges --bounds --sigmas 0.005           # with perfect normals (~1 min)
 
 The report goes to stdout and bench/results/; the numbers to a JSON file beside it.
 """
 
-import argparse
 import json
 import math
-import pathlib
 import sys
 import time
 import zlib
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
-import bench_default_heldout as heldout  # noqa: E402
-import bench_quality as quality  # noqa: E402
-import bench_quality_inputs as inputs  # noqa: E402
-import sharp_parts  # noqa: E402
-from report import Report  # noqa: E402
-
-import core  # noqa: E402
-from core.mesh import sharp_edges  # noqa: E402
+import core
+from bench import bench_default_heldout as heldout
+from bench import bench_quality as quality
+from bench import bench_quality_inputs as inputs
+from bench import sharp_parts
+from bench.common import ROOT, Parameter, counts, repeats
+from core.mesh import sharp_edges
 
 SETS = {"tuning": ("cube", "bevelled_box", "holed_cylinder"), "heldout": ("plate", "fandisk")}
 SIGMAS = "0.001,0.0025,0.005,0.01"
@@ -444,11 +439,8 @@ def targets(cells, out, name):
 
 
 def report(record, out):
-    out("# Keep Sharp Edges on sharp-edged parts (bench_sharp_edges.py)\n")
-    out(
-        f"Command: `{record['command']}`; default angle {record['angle']:g}°, "
-        f"{time.strftime('%Y-%m-%d')}, load average {record['load']}."
-    )
+    out("# Keep Sharp Edges on sharp-edged parts\n")
+    out(f"Default angle {record['angle']:g}°, load average {record['load']}.")
     for set_name in ("tuning", "heldout"):
         cells = [c for c in record["cells"] if c["set"] == set_name]
         if not cells:
@@ -525,7 +517,7 @@ def cost_child(size, method):
     (the torus, NumPy and SciPy included) and its RSS before the run."""
     import resource
 
-    import meshes
+    from bench import meshes
 
     vertices, faces = meshes.torus(size)
     noisy = meshes.add_noise(vertices, 0.001, seed=1).astype(np.float32)
@@ -570,8 +562,8 @@ def cost(sizes, repeat, out, record):
         runs = {"hc": [], "sharp": []}
         for _ in range(repeat):
             for method in runs:
-                command = [sys.executable, __file__, "--cost-child", f"{size}:{method}"]
-                done = subprocess.run(command, capture_output=True, text=True, check=True)
+                command = [sys.executable, "-m", "bench.bench_sharp_edges", str(size), method]
+                done = subprocess.run(command, capture_output=True, text=True, check=True, cwd=ROOT)
                 runs[method].append(json.loads(done.stdout.strip().splitlines()[-1]))
         record.setdefault("cost", []).append({"size": size, **runs})
         hc, ours = (float(np.median([r["seconds"] for r in runs[m]])) for m in ("hc", "sharp"))
@@ -583,27 +575,34 @@ def cost(sizes, repeat, out, record):
         )
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--sets", default="tuning,heldout", help="tuning, heldout, or none")
-    parser.add_argument("--parts", default=None, help="only these parts of the sets")
-    parser.add_argument("--sigmas", default=SIGMAS)
-    parser.add_argument("--kinds", default="normal,iso")
-    parser.add_argument("--organic", default="", help="organic scans to run with the option on, e.g. bunny")
-    parser.add_argument("--cost", default="", help="torus sizes to time, e.g. 250k,1M")
-    parser.add_argument("--repeat", type=int, default=3, help="--cost runs of each method (medians)")
-    parser.add_argument("--cost-child", default="", help=argparse.SUPPRESS)  # SIZE:METHOD, one run (cost)
-    parser.add_argument("--bounds", action="store_true", help="with perfect normals, instead of the peers")
-    parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args()
-    if args.cost_child:
-        size, method = args.cost_child.split(":")
-        return cost_child(int(size), method)
+PARAMETERS = (
+    Parameter("sets", "tuning,heldout", "tuning, heldout, or none"),
+    Parameter("parts", "", "only these parts of the sets"),
+    Parameter("sigmas", SIGMAS),
+    Parameter("kinds", "normal,iso"),
+    Parameter("organic", "", "organic scans to run with the option on, e.g. bunny"),
+    Parameter("cost", "", "torus sizes to time, e.g. 250k,1M", counts),
+    repeats(3, "--cost runs of each method, each in a fresh process (medians)"),
+    Parameter("bounds", False, "with perfect normals, instead of the peers"),
+    Parameter("no_peers", False, "ours alone"),
+    Parameter("seed", 0),
+)
+QUICK = {
+    "sets": "tuning",
+    "parts": "holed_cylinder",
+    "sigmas": "0.005",
+    "kinds": "iso",
+    "cost": "5k",
+    "repeats": 1,
+    "no_peers": True,
+}
+
+
+def run(args, out):
     sigmas = inputs.parse_list(args.sigmas, float)
     kinds = inputs.parse_list(args.kinds)
-    only = set(inputs.parse_list(args.parts)) if args.parts else None
+    only = set(inputs.parse_list(args.parts)) or None
     record = {
-        "command": "python bench/bench_sharp_edges.py " + " ".join(sys.argv[1:]),
         "angle": math.degrees(sharp_edges.DEFAULT_SHARPNESS_ANGLE),
         "load": " ".join(f"{x:.1f}" for x in __import__("os").getloadavg()),
         "cells": [],
@@ -620,7 +619,9 @@ def main():
                     if args.bounds:
                         record["bounds"].append(bounds_cell(name, set_name, kind, sigma, args.seed, cache))
                         continue
-                    record["cells"].append(measure_cell(name, set_name, kind, sigma, args.seed, cache))
+                    record["cells"].append(
+                        measure_cell(name, set_name, kind, sigma, args.seed, cache, peers=not args.no_peers)
+                    )
                     c = record["cells"][-1]
                     print(
                         f"  {name} {kind} {sigma:g}: ours {pct(c['ours']['rms'])}, two-step "
@@ -632,16 +633,11 @@ def main():
         for kind in kinds:
             for sigma in sigmas:
                 record["organic"].append(measure_cell(name, "organic", kind, sigma, args.seed, cache, peers=False))
-    with Report("bench_sharp_edges") as out:
-        report(record, out)
-        if args.cost:
-            sizes = [
-                int(float(x.rstrip("kKmM")) * (1e6 if x[-1] in "mM" else 1e3 if x[-1] in "kK" else 1))
-                for x in inputs.parse_list(args.cost)
-            ]
-            cost(sizes, args.repeat, out, record)
-        out.sibling(".json").write_text(json.dumps(record, indent=1))
+    report(record, out)
+    if args.cost:
+        cost(args.cost, args.repeats, out, record)
+    return record
 
 
-if __name__ == "__main__":
-    main()
+if __name__ == "__main__":  # one --cost run in a fresh process: python -m bench.bench_sharp_edges SIZE METHOD
+    cost_child(int(sys.argv[1]), sys.argv[2])

@@ -14,11 +14,10 @@ under /usr/bin/time -v: its peak memory is that process's maximum resident set, 
 
 The generated files are deleted afterwards (they take about 30 bytes per vertex, twice: input and output).
 
-    .envs/bpy45/bin/python bench/bench_tiled.py --compare 5M --memory-limit 2G --repeats 3
-    .envs/bpy45/bin/python bench/bench_tiled.py --big 30M --memory-limit 4G --repeats 1
+    .envs/bench/bin/python bench/run.py tiled --compare 5M --compare-limit 2G --repeats 3
+    .envs/bench/bin/python bench/run.py tiled --big 30M --memory-limit 4G --big-repeats 1
 """
 
-import argparse
 import os
 import re
 import shutil
@@ -29,21 +28,12 @@ import tempfile
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
-sys.path.insert(0, HERE)
-from report import Report  # noqa: E402
+from bench.common import ROOT, Parameter, count, repeats
 
 RATIO, MINOR = 2.5, 0.4  # as bench/meshes.torus
 VERTEX = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("red", "u1"), ("green", "u1"), ("blue", "u1")])
 FACE = np.dtype([("count", "u1"), ("corners", "<i4", (3,))])
 ROWS = 256  # torus rows (around the axis) per block written
-
-
-def count(text):
-    """'5M' -> 5_000_000."""
-    scale = {"K": 1e3, "M": 1e6}.get(text[-1:].upper(), 1)
-    return int(float(text[:-1] if scale != 1 else text) * scale)
 
 
 def write_torus(path, vertices, noise=0.2, seed=0):
@@ -96,12 +86,12 @@ sys.exit(status)
 """
 
 
-def run(source, folder, iterations, limit=None):
+def command_run(source, folder, iterations, limit=None):
     """(seconds of the command, peak resident memory in bytes, its output) of one command-line run."""
     shutil.rmtree(folder, ignore_errors=True)
     argv = [source, "-o", folder, "--iterations", str(iterations)] + (["--memory-limit", limit] if limit else [])
     done = subprocess.run(
-        ["/usr/bin/time", "-v", sys.executable, "-c", CHILD, ROOT, *argv], capture_output=True, text=True
+        ["/usr/bin/time", "-v", sys.executable, "-c", CHILD, str(ROOT), *argv], capture_output=True, text=True
     )
     if done.returncode:
         raise SystemExit(f"the run failed:\n{done.stdout}\n{done.stderr}")
@@ -135,52 +125,52 @@ def same_bytes(a, b):
                 return True
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--compare", type=count, help="vertices of the mesh run whole and tiled")
-    parser.add_argument("--big", type=count, help="vertices of the mesh run tiled only")
-    parser.add_argument("--memory-limit", default="4G", help="the --big run's --memory-limit")
-    parser.add_argument("--compare-limit", default="2G", help="the --compare tiled run's --memory-limit")
-    parser.add_argument("--iterations", type=int, default=10)
-    parser.add_argument("--repeats", type=int, default=3, help="runs of each kind in --compare (medians)")
-    parser.add_argument("--big-repeats", type=int, default=1, help="runs of --big (median)")
-    parser.add_argument("--folder", default=None, help="where the files go (default: a temporary folder)")
-    args = parser.parse_args()
+PARAMETERS = (
+    Parameter("compare", None, "vertices of the mesh run whole and tiled", count),
+    Parameter("big", None, "vertices of the mesh run tiled only", count),
+    Parameter("memory_limit", "4G", "the --big run's --memory-limit"),
+    Parameter("compare_limit", "2G", "the --compare tiled run's --memory-limit"),
+    Parameter("iterations", 10),
+    repeats(3, "runs of each kind in --compare (medians)"),
+    Parameter("big_repeats", 1, "runs of --big (median)"),
+    Parameter("folder", None, "where the files go (default: a temporary folder)"),
+)
+QUICK = {"compare": "200k", "compare_limit": "380M", "iterations": 2, "repeats": 1}
+
+
+def run(args, out):
     folder = tempfile.mkdtemp(prefix="bench_tiled_", dir=args.folder)
     try:
-        with Report("bench_tiled") as out:
-            out("# Scans larger than memory: tiled against whole (bench/bench_tiled.py)")
-            out()
-            out(f"`{' '.join(sys.argv)}`; noisy torus (noise 0.2 edge lengths), {args.iterations} iterations.")
-            out()
-            whole = compare(args, folder, out) if args.compare else None
-            if args.big:
-                big(args, folder, out, whole)
+        out(f"Noisy torus (noise 0.2 edge lengths), {args.iterations} iterations.")
+        out()
+        whole = compare(args, folder, out) if args.compare else None
+        if args.big:
+            big(args, folder, out, whole)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
+    return out.rows
 
 
 def header(out):
-    out("| run | vertices | tiles (largest) | time | time per vertex | peak memory |")
-    out("|---|---|---|---|---|---|")
+    return out.table("run", "vertices", "tiles (largest)", "time", "time per vertex", "peak memory")
 
 
-def row(out, label, n, seconds, peak, tiles):
+def row(table, label, n, seconds, peak, tiles):
     tiles = f"{tiles[0]} ({int(tiles[1]):,})" if tiles else "-"
-    out(f"| {label} | {n:,} | {tiles} | {seconds:.1f} s | {seconds / n * 1e6:.2f} us | {peak / 2**30:.2f} GiB |")
+    table.row(label, f"{n:,}", tiles, f"{seconds:.1f} s", f"{seconds / n * 1e6:.2f} us", f"{peak / 2**30:.2f} GiB")
 
 
 def compare(args, folder, out):
     source = os.path.join(folder, "compare.ply")
     n, _ = write_torus(source, args.compare)
-    header(out)
-    whole = [run(source, os.path.join(folder, "whole"), args.iterations) for _ in range(args.repeats)]
+    table = header(out)
+    whole = [command_run(source, os.path.join(folder, "whole"), args.iterations) for _ in range(args.repeats)]
     limit = args.compare_limit
-    tiled = [run(source, os.path.join(folder, "tiled"), args.iterations, limit) for _ in range(args.repeats)]
+    tiled = [command_run(source, os.path.join(folder, "tiled"), args.iterations, limit) for _ in range(args.repeats)]
     time_whole = statistics.median(r[0] for r in whole)
     time_tiled = statistics.median(r[0] for r in tiled)
-    row(out, "whole", n, time_whole, max(r[1] for r in whole), None)
-    row(out, f"tiled, --memory-limit {limit}", n, time_tiled, max(r[1] for r in tiled), tiled[0][2])
+    row(table, "whole", n, time_whole, max(r[1] for r in whole), None)
+    row(table, f"tiled, --memory-limit {limit}", n, time_tiled, max(r[1] for r in tiled), tiled[0][2])
     a, b = os.path.join(folder, "whole", "compare.ply"), os.path.join(folder, "tiled", "compare.ply")
     one, two = positions(a), positions(b)
     diagonal = float(np.linalg.norm(one.max(axis=0) - one.min(axis=0)))
@@ -201,17 +191,13 @@ def big(args, folder, out, whole):
     """The --big run; ``whole``: the --compare whole run's seconds per vertex, if it ran."""
     source = os.path.join(folder, "big.ply")
     n, _ = write_torus(source, args.big)
-    header(out)
+    table = header(out)
     limit = args.memory_limit
-    runs = [run(source, os.path.join(folder, "big"), args.iterations, limit) for _ in range(args.big_repeats)]
+    runs = [command_run(source, os.path.join(folder, "big"), args.iterations, limit) for _ in range(args.big_repeats)]
     seconds, peak = statistics.median(r[0] for r in runs), max(r[1] for r in runs)
-    row(out, f"tiled, --memory-limit {limit}", n, seconds, peak, runs[0][2])
+    row(table, f"tiled, --memory-limit {limit}", n, seconds, peak, runs[0][2])
     out()
     words = f"{n:,} vertices tiled within --memory-limit {limit}: peak memory {peak / 2**30:.2f} GiB"
     if whole:
         words += f", time per vertex {seconds / n / whole:.2f}x the whole run's at {args.compare:,} vertices"
     out(words + ".")
-
-
-if __name__ == "__main__":
-    main()

@@ -2,8 +2,10 @@
 Gaussian noise, then CGAL jet smoothing and HC Smooth (core.smooth_point_cloud at its defaults), each
 cloud coloured by its distance to the clean surface on one shared scale.
 
-    .envs/bench/bin/python bench/figure_points.py                 # the figure of docs/point_clouds.md
-    .envs/bench/bin/python bench/figure_points.py --object cow --sigma 0.01 --output /tmp/cow.png
+    .envs/bench/bin/python -m bench.figure_points                 # the figure of docs/point_clouds.md
+    .envs/bench/bin/python -m bench.figure_points --object cow --sigma 0.01 --output /tmp/cow.png
+
+(from the repository's folder: ``-m`` finds bench/ there).
 
 Input: the pymeshlab wheel's Stanford bunny (a closed scan), area-uniform samples (bench_quality_inputs.py),
 noise along the normals. Prints RMS / mean signed / max distance to the clean surface for each cloud.
@@ -13,15 +15,13 @@ Needs the bench environment (bench/requirements.txt: trimesh, Open3D, CGAL, matp
 import argparse
 import io
 import pathlib
-import sys
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
-import bench_points  # noqa: E402
-import bench_quality_inputs as inputs  # noqa: E402
+from bench import bench_points
+from bench import bench_quality_inputs as inputs
+from bench.common import ROOT
 
 BACKGROUND = "#3b3c41"  # the mesh figure's (demo/scene_setup.py) background, for a matching pair
 LIGHT = np.array([-0.45, 0.55, 0.70])  # towards the viewer, from the upper left

@@ -12,8 +12,9 @@ scanner's mesh is: the constructive solid's long thin triangles would be no scan
   convex and concave creases, curved faces, creases meeting curved faces (a fandisk's kind of shape).
 """
 
-import meshes  # bench/, on sys.path beside this module
 import numpy as np
+
+from bench import meshes
 
 
 def _remeshed(solid, edge):

@@ -19,7 +19,7 @@ import tempfile
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT / "scripts"), str(ROOT / "demo"), str(ROOT), str(ROOT / "bench")]
+sys.path[:0] = [str(ROOT / "scripts"), str(ROOT / "demo"), str(ROOT)]
 
 NOISE = 0.005  # of the bounding-box diagonal, along the normals
 COLOUR_LIMIT = 0.5  # % of the diagonal at the ends of the colour scale
@@ -29,11 +29,10 @@ TILT = math.radians(55.0)  # the part's top turned towards the camera
 
 def smooth(path):
     """The clean part, its noisy copy and the three results, written to ``path`` (.npz)."""
-    import bench_quality as quality
-    import bench_quality_inputs as inputs
-    import sharp_parts
-
     import core
+    from bench import bench_quality as quality
+    from bench import bench_quality_inputs as inputs
+    from bench import sharp_parts
 
     clean, faces = sharp_parts.holed_cylinder()
     clean = clean - (clean.max(axis=0) + clean.min(axis=0)) / 2

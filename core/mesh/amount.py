@@ -226,6 +226,8 @@ def choose_amount(
     beta: float = 0.6,
     fixed: ArrayLike | None = None,
     operator: Umbrella | None = None,
+    work_budget: float | None = None,
+    patch_from: int | None = None,
 ) -> MeshAmount:
     """The HC amount (alpha, iterations) for a noisy mesh at the given beta: see the module docstring.
 
@@ -241,6 +243,11 @@ def choose_amount(
         Vertices that never move.
     operator : Umbrella, optional
         A prebuilt ``umbrella_operator``.
+    work_budget : float, optional
+        The most vertex-iterations the chosen run may do (``math.inf``: no cut; None: WORK_BUDGET).
+    patch_from : int, optional
+        From this many movable vertices up the choice runs on patches, below on the whole mesh (None:
+        PATCH_FROM).
 
     Returns
     -------
@@ -267,7 +274,9 @@ def choose_amount(
     >>> bool(smoothed[:, 2].std() < noisy[:, 2].std() / 3)
     True
     """
-    chooser = AmountChooser(positions, edges, beta=beta, fixed=fixed, operator=operator)
+    chooser = AmountChooser(
+        positions, edges, beta=beta, fixed=fixed, operator=operator, work_budget=work_budget, patch_from=patch_from
+    )
     for _ in chooser.steps():
         pass
     return chooser.amount
@@ -295,7 +304,17 @@ class AmountChooser:
     True
     """
 
-    def __init__(self, positions, edges=None, *, beta=0.6, fixed=None, operator=None):
+    def __init__(
+        self,
+        positions,
+        edges=None,
+        *,
+        beta=0.6,
+        fixed=None,
+        operator=None,
+        work_budget=None,
+        patch_from=None,
+    ):
         start = check_positions(positions)
         self.beta = check_unit_interval(beta, "beta")
         n = start.shape[0]
@@ -304,6 +323,8 @@ class AmountChooser:
         elif not isinstance(operator, Umbrella) or operator.n_vertices != n:
             raise ValueError(f"operator must be a core.umbrella_operator built for {n} vertices")
         self.operator = operator
+        self.work_budget = WORK_BUDGET if work_budget is None else work_budget
+        self.patch_from = PATCH_FROM if patch_from is None else patch_from
         self.fine_beta = FINE_BETA  # light noise: choose again on steps of this beta (None: never)
         self.amount = None
         self.data = None  # the data run, where it ran on the whole mesh (what result() reads)
@@ -321,7 +342,9 @@ class AmountChooser:
 
     def steps(self):
         if self._ground is None:
-            self._ground = yield from as_fraction(_Ground.made(self._start, self.operator, self._given), 0.0)
+            self._ground = yield from as_fraction(
+                _Ground.made(self._start, self.operator, self._given, self.patch_from), 0.0
+            )
         ground = self._ground
         if ground.movable == 0:
             self.amount = MeshAmount(0.0, self.beta, 0, ground.noise.level(), ground.edge_length, 0, ground.noise.found)
@@ -338,7 +361,7 @@ class AmountChooser:
             for block, run in zip(ground.probe_blocks, self.runs)
         ]
         rows, runs, operator = ground.rows, self.runs, ground.operator
-        most = most_iterations(self.operator.n_vertices)
+        most = most_iterations(self.operator.n_vertices, self.work_budget)
         use_normals, probe_count = ground.use_normals, ground.probe_count
         ring = _ring_of(rows, operator) if use_normals else None
         points = np.zeros((operator.n_vertices, 3)) if use_normals else None  # the state at ``ring``, for the normals
@@ -380,7 +403,14 @@ class AmountChooser:
         self.traces = dict(zip(steps, traces))  # t(k) at each checkpoint, for inspection
         light = 1 <= self.amount.iterations <= FINE_MAX and not self.amount.capped
         if self.fine_beta is not None and self.beta < self.fine_beta and light:
-            fine = AmountChooser(self._start, beta=self.fine_beta, fixed=self._given, operator=self.operator)
+            fine = AmountChooser(
+                self._start,
+                beta=self.fine_beta,
+                fixed=self._given,
+                operator=self.operator,
+                work_budget=self.work_budget,
+                patch_from=self.patch_from,
+            )
             fine._ground = ground  # the same noise, fixed vertices and samples
             for fraction in fine.steps():
                 yield min(done / MAX_ITERATIONS + fraction, 0.999)
@@ -421,7 +451,7 @@ class _Ground:
     the mesh the runs go on (the whole one, or patches of it) and the sample vertices read there."""
 
     @classmethod
-    def made(cls, start, operator, given):
+    def made(cls, start, operator, given, patch_from):
         """A generator (yields None between its passes) that returns the _Ground of a mesh."""
         ground = cls()
         ground.noise = yield from noise_steps(start, operator)
@@ -429,7 +459,7 @@ class _Ground:
         movable = np.flatnonzero(~fixed_mask)
         ground.movable = movable.size
         ground.edge_length = median_edge_length(start, operator)
-        ground.whole = movable.size < PATCH_FROM
+        ground.whole = movable.size < patch_from
         if movable.size == 0:
             return ground
         yield
@@ -468,9 +498,11 @@ class _Ground:
         return ground
 
 
-def most_iterations(vertices):
-    """The most iterations the work budget allows on a mesh of ``vertices`` vertices (at least one)."""
-    return int(max(1, min(MAX_ITERATIONS, WORK_BUDGET // max(vertices, 1))))
+def most_iterations(vertices, work_budget=None):
+    """The most iterations the work budget (None: WORK_BUDGET) allows on a mesh of ``vertices`` vertices (at
+    least one)."""
+    budget = WORK_BUDGET if work_budget is None else work_budget
+    return int(max(1, min(MAX_ITERATIONS, budget // max(vertices, 1))))
 
 
 def _patches(operator, fixed_mask, movable):

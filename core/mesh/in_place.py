@@ -15,7 +15,7 @@ An open border's vertex has its surface on one side only: its slide is the pull 
 shrinks outlines and holes. Kept in place it does not slide; where keeping folds the layout (noise along
 the surface larger than the edges) and its corners take their slide back, an outline vertex (on exactly
 two border edges) takes back only the move across its border curve that smoothing the border as a curve
-makes (the same smoother on the border edges alone, core.borders' ``"curve"`` rows): the outline loses
+makes (the same smoother on the border edges alone, core.mesh.borders' ``"curve"`` rows): the outline loses
 its jaggies there and keeps its place and size. Where nothing folds, an outline keeps its jaggies across
 the curve: a scan's outline is ragged in its own right, and smoothing it as a curve would take that away.
 

@@ -176,6 +176,8 @@ class MeshSmoother:
         keep_sharp_edges: bool = False,
         sharpness_angle: float = DEFAULT_SHARPNESS_ANGLE,
         keep_in_place: bool | str = AUTO,
+        work_budget: float | None = None,
+        hold_parts: bool = True,
     ) -> None:
         self.positions = start = check_positions(positions)
         n = start.shape[0]
@@ -216,6 +218,7 @@ class MeshSmoother:
                 "or border='free'"
             )
         self.operator, self.weld = operator, bool(weld)
+        self.work_budget, self.hold_parts = work_budget, bool(hold_parts)
         # Every number checked now, as core.Smoothing checks them.
         check_choice(mode, "mode", MODES)
         self.alpha = check_unit_interval(self.alpha, "alpha")  # float: a Fraction reports as the number ran
@@ -306,7 +309,13 @@ class MeshSmoother:
         if restoring:  # what the restore needs of the input, on another thread while the choice runs on one
             measuring = parallel.in_background(lambda: volume.measure_before(self.positions, self.faces, self.surface))
         if self.automatic:
-            chooser = AmountChooser(self.positions, operator=self.surface_operator, beta=self.beta, fixed=self.fixed)
+            chooser = AmountChooser(
+                self.positions,
+                operator=self.surface_operator,
+                beta=self.beta,
+                fixed=self.fixed,
+                work_budget=self.work_budget,
+            )
             if self.beta_given:
                 chooser.fine_beta = None  # the caller's beta is used as given
             share = CHOOSING_SHARE if self.operator.n_vertices < PATCH_FROM else PATCH_CHOOSING_SHARE
@@ -378,7 +387,7 @@ class MeshSmoother:
         (alpha, beta, iterations) that ran, which smooth the open borders as curves for Keep in Place."""
         offset, parts, ran = 0.0, None, run[2]
         if self.in_place and ran > 0:
-            if noise is not None:
+            if noise is not None and self.hold_parts:
                 parts = yield from self._held_parts(result, noise, residual, progress)
             outline = self._outline(result, run, fixed, limit) if self.border == "free" else None
             result = project_in_place(self.positions, result, self.faces, outline)
@@ -389,7 +398,7 @@ class MeshSmoother:
             result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), progress)
             if np.any(limit):  # the offset keeps to the limit too
                 project_rows_within(result, self.positions, limit)
-        if parts is None and noise is not None and ran > 0:
+        if parts is None and noise is not None and ran > 0 and self.hold_parts:
             parts = yield from self._held_parts(result, noise, residual, progress)
         held = 0 if parts is None else int(np.count_nonzero(parts))
         if held:
@@ -595,6 +604,11 @@ def smooth_mesh(
         core.mesh.in_place): textures, UVs and open outlines stay where they were. Needs faces. ``"auto"``: on
         with the Automatic Amount (HC's, where faces are given), off when numbers are given (the paper's
         algorithm, bit for bit).
+    work_budget : float, optional
+        The Automatic Amount's most vertex-iterations (None: ``core.mesh.amount.WORK_BUDGET``; ``math.inf``: no cut).
+    hold_parts : bool
+        The Automatic Amount gives parts whose shape the run took away their input back (core.mesh.collapse);
+        False: never (for measuring what that rule holds).
     return_report : bool
         Also return a MeshReport (what ran, what was chosen).
     progress : callable, optional

@@ -7,11 +7,11 @@ displacement projected on them. The colours are checked against the ramp's ancho
 import numpy as np
 import pytest
 import scan_files
-from primitives import grid, ico_sphere, with_noise
 from test_cli_arguments import load
 from test_cli_formats import ENCODINGS, header, ply_values, smoothed
 
 import core
+from bench.primitives import grid, ico_sphere, with_noise
 from core.mesh import deviation as deviation_module
 
 formats = load("cli.formats")

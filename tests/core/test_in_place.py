@@ -5,9 +5,9 @@ import warnings
 
 import numpy as np
 import pytest
-from primitives import grid, ico_sphere
 
 import core
+from bench.primitives import grid, ico_sphere
 from core.geometry import vertex_normals
 from core.mesh.borders import border_edges
 from core.mesh.in_place import keep_in_place, outline_curves

@@ -1,5 +1,6 @@
 """core.choose_amount: the Automatic Amount for meshes (core/mesh/amount.py)."""
 
+import math
 import warnings
 
 import numpy as np
@@ -304,7 +305,7 @@ def test_patches_estimate_the_trace_and_the_amount_of_the_whole_mesh(monkeypatch
 def test_sigma_is_capped_by_the_robust_estimate_on_coarse_meshes():
     """On Blender's cone (33 vertices) with light noise GCV reads the shape as noise (~4x the truth); the
     amount's sigma is at most ROBUST_SIGMAS times core.mesh.noise's estimate, within 2x of the truth."""
-    from primitives import PRIMITIVES, with_noise
+    from bench.primitives import PRIMITIVES, with_noise
 
     cone, sigma = with_noise(PRIMITIVES["cone_ngon"](), 0.1, "isotropic")
     chooser = core.AmountChooser(cone.positions, cone.edges)
@@ -313,3 +314,33 @@ def test_sigma_is_capped_by_the_robust_estimate_on_coarse_meshes():
     assert chooser.amount.noise_found
     assert chooser.amount.sigma == pytest.approx(noise.ROBUST_SIGMAS * chooser.noise.level())
     assert 0.5 * sigma < chooser.amount.sigma < 3.0 * sigma
+
+
+def test_work_budget_and_patches_are_parameters():
+    """``work_budget`` cuts the chosen iterations to budget / vertices (math.inf: no cut, the default's
+    choice on a mesh this small); ``patch_from`` at or below the movable vertices runs the choice on
+    patches, which hand back no result."""
+    vertices, faces = icosphere(4)
+    edges = edges_of(faces)
+    noisy, _ = with_normal_noise(vertices, 0.5, edges)
+    uncut = core.choose_amount(noisy, edges, work_budget=math.inf)
+    assert uncut == core.choose_amount(noisy, edges) and uncut.iterations > 3 and not uncut.capped
+    cut = core.choose_amount(noisy, edges, work_budget=3 * len(noisy))
+    assert cut.iterations == 3 and cut.capped
+    whole = core.AmountChooser(noisy, edges)
+    patched = core.AmountChooser(noisy, edges, patch_from=1)
+    for chooser in (whole, patched):
+        for _ in chooser.steps():
+            pass
+    assert whole.data is not None and patched.data is None
+
+
+def test_held_parts_are_a_parameter():
+    """``hold_parts=False``: the part the default gives back (the bumps of the test above) is smoothed."""
+    vertices, faces = icosphere(4)
+    vertices = vertices * (1.0 + 0.08 * np.prod(np.sin(12 * vertices), axis=1))[:, None]
+    edges = edges_of(faces)
+    held, report = core.smooth_mesh(vertices, edges, faces=faces, return_report=True)
+    assert report.held_parts == 1 and np.array_equal(held, vertices)
+    smoothed, report = core.smooth_mesh(vertices, edges, faces=faces, return_report=True, hold_parts=False)
+    assert report.held_parts == 0 and report.iterations > 0 and not np.array_equal(smoothed, vertices)

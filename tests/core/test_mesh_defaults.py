@@ -5,11 +5,11 @@ import warnings
 
 import numpy as np
 import pytest
-from primitives import CAD, PRIMITIVES, TINY, joined, moved, subdivided_cube, with_noise
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 import core
+from bench.primitives import CAD, PRIMITIVES, TINY, joined, moved, subdivided_cube, with_noise
 
 CLEAN = {**PRIMITIVES, **CAD, **TINY}
 
@@ -90,7 +90,7 @@ def test_a_noisy_coarse_cone_is_left_as_it_was(sharp):
 
 
 def test_a_coarse_tube_is_left_as_it_was_where_smoothing_would_round_it():
-    """The tube of tests/core/primitives.py (walls of single quads, every vertex on a rim) with noise of 0.1
+    """The tube of bench/primitives.py (walls of single quads, every vertex on a rim) with noise of 0.1
     median edge lengths: one HC iteration rounds its rims by more than the noise it takes away (1.5 times
     the input's distance to the clean surface, bench_primitives.py). What it would take away correlates
     between neighbours (core.mesh.collapse.smooth_residual): the tube stays as it was. With noise of 0.5 edge

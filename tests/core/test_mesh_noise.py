@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
-from primitives import CAD, PRIMITIVES, TINY, joined, median_edge, mesh, moved, with_noise
 
 import core
 from bench.meshes import icosphere  # pure NumPy, no bench requirements
+from bench.primitives import CAD, PRIMITIVES, TINY, joined, median_edge, mesh, moved, with_noise
 from core.mesh.noise import LIGHT_FLOOR, NOISE_THRESHOLD, WHITE_SAMPLES, find_noise
 
 

@@ -4,9 +4,9 @@ import math
 
 import numpy as np
 import pytest
-from primitives import CAD, PRIMITIVES, TINY
 
 import core
+from bench.primitives import CAD, PRIMITIVES, TINY
 from core.geometry import face_normals
 from core.mesh import sharp_edges
 from core.mesh.sharp_edges import FaceRings, SharpSmoothing, filter_normals, fit_vertices, sharp_smooth
