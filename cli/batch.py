@@ -62,7 +62,7 @@ def task_of(plan):
 
 def smooth_task(task, source, target):
     """On a worker: one file through the file route, as a serial run smooths it; returns its Outcome."""
-    from . import arguments, command
+    from . import arguments, one_file
 
     plan = arguments.Plan(
         settings=arguments.Settings(**task["settings"]),
@@ -71,9 +71,9 @@ def smooth_task(task, source, target):
         points=task["points"],
         point_options=task["point_options"],
     )
-    settings = command.point_settings(plan) if plan.points else plan.settings
-    outcome = command.Outcome(source=source, target=target)
-    command.process(outcome, plan, settings, command.Console())
+    settings = one_file.point_settings(plan) if plan.points else plan.settings
+    outcome = one_file.Outcome(source=source, target=target)
+    one_file.process(outcome, plan, settings, one_file.Console())
     return outcome
 
 

@@ -223,13 +223,13 @@ def test_command_line_points_use_the_automatic_amount_unless_alpha_or_steps_are_
 ):
     # blender -b -c hc_smooth --points runs the operator's functions: its automatic amount unless --alpha or
     # --steps-per-round is given, which (as the operator's toggle) uses both manual values.
-    command, arguments = sys.modules[ADDON + ".cli.command"], sys.modules[ADDON + ".cli.arguments"]
+    one_file, arguments = sys.modules[ADDON + ".cli.one_file"], sys.modules[ADDON + ".cli.arguments"]
     blend = sys.modules[ADDON + ".cli.blend"]
     obj = cloud_object()
     before = positions_of(obj.data)
     plan = arguments.parse(["cloud.ply", "-o", str(tmp_path), "--points", *given])
-    outcome = command.Outcome(source="cloud", target="cloud")
-    blend.smooth_point_clouds([obj], command.point_settings(plan), outcome)
+    outcome = one_file.Outcome(source="cloud", target="cloud")
+    blend.smooth_point_clouds([obj], one_file.point_settings(plan), outcome)
     assert np.array_equal(positions_of(obj.data), core.smooth_point_cloud(before, **amount))
     _, report = core.smooth_point_cloud(before, return_mesh=True, **amount)
     assert outcome.rounds == [(report.rounds, report.iterations_per_round)]

@@ -158,8 +158,8 @@ def test_long_runs_print_progress_lines(cli, capsys, tmp_path, monkeypatch):
     """A file's smoothing prints 'smoothing FILE: N %' lines once it has run PROGRESS_FIRST seconds, at
     most every PROGRESS_EVERY (both 0 here: a line for every slice), with Keep Sharp Edges as with HC."""
     source = export_noisy_sphere(tmp_path / "scan.ply")
-    monkeypatch.setattr(cli.command, "PROGRESS_FIRST", 0.0)
-    monkeypatch.setattr(cli.command, "PROGRESS_EVERY", 0.0)
+    monkeypatch.setattr(cli.one_file, "PROGRESS_FIRST", 0.0)
+    monkeypatch.setattr(cli.one_file, "PROGRESS_EVERY", 0.0)
     for options in ([], ["--keep-sharp-edges"]):
         assert cli.main([str(source), "-o", str(tmp_path / f"out{len(options)}"), *options]) == 0
         lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("hc_smooth: smoothing")]
