@@ -43,7 +43,7 @@ from .convergence import (
 from .geometry import face_normals, face_vectors, fan_triangles, unit_rows, vertex_normals
 from .mesh.amount import MAX_ITERATIONS, AmountChooser, MeshAmount, choose_amount
 from .mesh.deviation import DeviationMap, deviation_colors, deviation_extent, deviation_map, normal_deviation
-from .mesh.metrics import Change, InputMeasure, measure_change, measure_input
+from .mesh.metrics import Change, InputMeasure, enclosed_volume, measure_change, measure_input
 from .mesh.smooth import AUTO, DEFAULT_ALPHA, DEFAULT_BETA, DEFAULT_ITERATIONS, MeshReport, MeshSmoother, smooth_mesh
 from .mesh.tiles import region_amount, tile_boxes, tile_margin, tile_rings, tiled_problem, tiles_choose
 from .mesh.topology import closed_from_corners, every_edge_shared
@@ -109,6 +109,7 @@ __all__ = [
     "deviation_map",
     "from_frame",
     "measure_change",
+    "enclosed_volume",
     "measure_input",
     "normal_deviation",
     "region_amount",

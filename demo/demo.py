@@ -21,6 +21,7 @@ clean shape's outline drawn over both results.
 """
 
 import argparse
+import dataclasses
 import pathlib
 import re
 import sys
@@ -134,7 +135,7 @@ def print_table(rows):
     )
 
 
-def main():
+def arguments():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--output-dir", default=str(ROOT / "demo_output"))
     parser.add_argument(
@@ -144,65 +145,83 @@ def main():
     parser.add_argument("--samples", type=int, default=8, help="Cycles samples per pixel, denoised (8)")
     parser.add_argument("--scale", type=int, default=100, help="picture size in %% of 1300 x 471 (100)")
     parser.add_argument("--no-render", action="store_true", help="skip the picture (the table only)")
-    args = parser.parse_args()
-    output = pathlib.Path(args.output_dir).resolve()
-    output.mkdir(parents=True, exist_ok=True)
+    return parser.parse_args()
 
-    with console.captured():
-        zip_path = install_extension(output / "build")
-    print(
-        f"HC Smooth {pathlib.Path(zip_path).stem.rpartition('-')[2]} installed into a throw-away Blender "
-        f"{bpy.app.version_string} user folder"
-    )
-    defaults = operator_defaults()
 
+@dataclasses.dataclass
+class Scene:
+    """The clean Suzanne, its noisy copy and what the measures need of them."""
+
+    noisy: object  # the noisy object (every run smooths a copy of it)
+    clean_obj: object
+    clean: np.ndarray  # (n, 3) float64 clean positions
+    noisy_points: np.ndarray
+    faces: tuple  # Blender's face layout (offsets, corner_verts)
+    mesh_edges: np.ndarray
+    diagonal: float
+    surface: object  # scene_setup.CleanSurface
+
+
+def make_scene(noise):
     bpy.ops.wm.read_homefile(use_empty=True)
     noisy = scene_setup.closed_suzanne(level=3)
     clean = scene_setup.positions(noisy.data).astype(np.float64)
     clean_obj = scene_setup.object_from_mesh(noisy.data.copy(), "Clean", (0, 0, 0))
     faces = scene_setup.faces(noisy.data)
-    mesh_edges = scene_setup.edges(noisy.data)
     diagonal = float(np.linalg.norm(clean.max(axis=0) - clean.min(axis=0)))
-    scene_setup.add_normal_noise(noisy, args.noise * diagonal, np.random.default_rng(SEED))
+    scene_setup.add_normal_noise(noisy, noise * diagonal, np.random.default_rng(SEED))
     noisy.name = noisy.data.name = "Noisy"
-    x = scene_setup.SPACING
-    noisy.location = (x, 0, 0)
+    noisy.location = (scene_setup.SPACING, 0, 0)
     surface = scene_setup.CleanSurface(clean, faces)
-    noisy_points = scene_setup.positions(noisy.data)
     print(
         f"Suzanne, holes capped (closed), subdivided: {len(clean)} vertices, {len(faces[0]) - 1} faces; noise "
-        f"σ = {args.noise:.2%} of the diagonal along the normals (seed {SEED})\n"
+        f"σ = {noise:.2%} of the diagonal along the normals (seed {SEED})\n"
     )
+    points = scene_setup.positions(noisy.data)
+    edges = scene_setup.edges(noisy.data)
+    return Scene(noisy, clean_obj, clean, points, faces, edges, diagonal, surface)
 
-    fixed = dict(iterations=args.iterations, mode="SIMULTANEOUS")
+
+def smooth_all(scene, iterations, defaults):
+    """Each run's smoothed copy: [(name, object, iterations, seconds)], the noisy input first; ``defaults``:
+    the operator's (operator_defaults)."""
+    x = scene_setup.SPACING
+    fixed = dict(iterations=iterations, mode="SIMULTANEOUS")
     hc_fixed = dict(method="HC", alpha=defaults["alpha"], beta=defaults["beta"], **fixed)
     if "auto_amount" in defaults:
         hc_fixed["auto_amount"] = False
-    best = least_error_count(noisy_points, mesh_edges, surface, max(args.iterations, 1))
+    best = least_error_count(scene.noisy_points, scene.mesh_edges, scene.surface, max(iterations, 1))
     runs = [
         ("Laplacian", dict(method="LAPLACIAN", **fixed), (2 * x, 0, 0)),
         ("Laplacian, least error", dict(method="LAPLACIAN", iterations=best, mode="SIMULTANEOUS"), (5 * x, 0, 0)),
         (f"HC, α {defaults['alpha']:g}, β {defaults['beta']:g}", hc_fixed, (6 * x, 0, 0)),
         ("HC, operator defaults", dict(method="HC"), (3 * x, 0, 0)),
     ]
-    rows = [("Noisy", noisy, 0, None)]
+    rows = [("Noisy", scene.noisy, 0, None)]
     print("the operator reports:")
     for name, operator_args, location in runs:
-        obj, seconds, said = smooth_copy(noisy, name, location, **operator_args)
+        obj, seconds, said = smooth_copy(scene.noisy, name, location, **operator_args)
         for line in said:
             print(f"  {line}")
         rows.append((name, obj, iterations_of(said[0]), seconds))
     print()
+    return rows
 
-    triangles = core.geometry.fan_triangles(faces)
-    clean_volume = core.mesh.metrics.enclosed_volume(clean, triangles)
+
+def measure_all(scene, rows):
+    """The table's rows: each run's volume change and distances to the clean surface (also painted on the
+    objects as the attribute the picture colours)."""
+    triangles = core.fan_triangles(scene.faces)
+    clean_volume = core.enclosed_volume(scene.clean, triangles)
     table = []
     for name, obj, iterations, seconds in rows:
         points = scene_setup.positions(obj.data)
-        signed = surface.signed_distance(points)
-        scene_setup.set_point_attribute(obj, scene_setup.ERROR_ATTRIBUTE, 100 * signed / diagonal)
+        signed = scene.surface.signed_distance(points)
+        scene_setup.set_point_attribute(obj, scene_setup.ERROR_ATTRIBUTE, 100 * signed / scene.diagonal)
         # The operator's own measure on the same arrays: its input (the noisy mesh) against its result.
-        change = core.measure_change(noisy_points, points, faces=faces).volume_change if iterations else None
+        change = (
+            core.measure_change(scene.noisy_points, points, faces=scene.faces).volume_change if iterations else None
+        )
         table.append(
             {
                 "name": name,
@@ -210,20 +229,16 @@ def main():
                 "iterations": iterations,
                 "seconds": seconds,
                 "change": change,
-                "vs_clean": core.mesh.metrics.enclosed_volume(points.astype(np.float64), triangles) / clean_volume - 1,
-                "distances": distances(signed, diagonal),
+                "vs_clean": core.enclosed_volume(points.astype(np.float64), triangles) / clean_volume - 1,
+                "distances": distances(signed, scene.diagonal),
             }
         )
-    scene_setup.set_point_attribute(clean_obj, scene_setup.ERROR_ATTRIBUTE, np.zeros(len(clean)))
-    print_table(table)
+    scene_setup.set_point_attribute(scene.clean_obj, scene_setup.ERROR_ATTRIBUTE, np.zeros(len(scene.clean)))
+    return table
 
-    blend_path = output / "hc_smooth_demo.blend"
-    with console.captured():
-        bpy.ops.wm.save_as_mainfile(filepath=str(blend_path), check_existing=False)
-    print(f"\nscene: {blend_path}")
-    if args.no_render:
-        return
-    image = output / "comparison.png"
+
+def render(args, scene, table, image):
+    """The picture: clean, noisy, Laplacian and HC's default side by side, coloured by the distance."""
     image.unlink(missing_ok=True)  # a picture left by an earlier run must not pass for this one's
     start = time.perf_counter()
     row = {r["name"]: r for r in table}
@@ -233,18 +248,16 @@ def main():
         return f"{title}\nvolume {volume} %\nRMS distance {row[name]['distances'][0]:.2f} %"
 
     shown = [row["Laplacian"]["object"], row["HC, operator defaults"]["object"]]
-    for obj in [r["object"] for r in table] + [clean_obj]:
-        obj.hide_render = obj not in shown + [clean_obj, noisy]
+    for obj in [r["object"] for r in table] + [scene.clean_obj]:
+        obj.hide_render = obj not in shown + [scene.clean_obj, scene.noisy]
+    hc_iterations = row["HC, operator defaults"]["iterations"]
     panels = [
-        (clean_obj, "Clean\nthe reference\n "),
-        (noisy, label(f"Noisy, σ = {100 * args.noise:.2g} %", "Noisy")),
+        (scene.clean_obj, "Clean\nthe reference\n "),
+        (scene.noisy, label(f"Noisy, σ = {100 * args.noise:.2g} %", "Noisy")),
         (shown[0], label(f"Laplacian, {row['Laplacian']['iterations']} iterations", "Laplacian")),
-        (
-            shown[1],
-            label(f"HC, defaults: {row['HC, operator defaults']['iterations']} iterations", "HC, operator defaults"),
-        ),
+        (shown[1], label(f"HC, defaults: {hc_iterations} iterations", "HC, operator defaults")),
     ]
-    outline = scene_setup.outline_segments(surface, clean, faces)
+    outline = scene_setup.outline_segments(scene.surface, scene.clean, scene.faces)
     error = None
     with console.captured() as printed:
         try:
@@ -265,6 +278,28 @@ def main():
         print("\n".join(printed[-20:]), file=sys.stderr)
         raise error or SystemExit(f"the render did not write {image}")
     print(f"picture: {image} ({time.perf_counter() - start:.0f} s, Cycles CPU, {args.samples} samples)")
+
+
+def main():
+    args = arguments()
+    output = pathlib.Path(args.output_dir).resolve()
+    output.mkdir(parents=True, exist_ok=True)
+    with console.captured():
+        zip_path = install_extension(output / "build")
+    print(
+        f"HC Smooth {pathlib.Path(zip_path).stem.rpartition('-')[2]} installed into a throw-away Blender "
+        f"{bpy.app.version_string} user folder"
+    )
+    defaults = operator_defaults()
+    scene = make_scene(args.noise)
+    table = measure_all(scene, smooth_all(scene, args.iterations, defaults))
+    print_table(table)
+    blend_path = output / "hc_smooth_demo.blend"
+    with console.captured():
+        bpy.ops.wm.save_as_mainfile(filepath=str(blend_path), check_existing=False)
+    print(f"\nscene: {blend_path}")
+    if not args.no_render:
+        render(args, scene, table, output / "comparison.png")
 
 
 if __name__ == "__main__":

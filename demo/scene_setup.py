@@ -213,7 +213,7 @@ def outline_segments(surface, points, face_layout, reach=0.01):
     """The clean shape's outer contour as seen by the camera (looking along +Y): its silhouette edges
     (one front-facing, one back-facing triangle) with nothing of the shape just outside them.
     Returns (k, 2, 2) segments in x, z."""
-    triangles = core.geometry.fan_triangles(face_layout)
+    triangles = core.fan_triangles(face_layout)
     a, b, c = (points[triangles[:, k]] for k in range(3))
     facing = np.cross(b - a, c - a)[:, 1] < 0.0  # normal towards the camera
     pairs = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
