@@ -312,21 +312,7 @@ def build(tree):
     def value(setting):
         return inputs[input_name(setting)]
 
-    # The method as its number. A new Menu Switch has two items (numbers 0, 1): renamed, not replaced,
-    # so the items are numbered 0..3 in settings_spec's order and a 4.x script can set the number.
-    # A number outside the menu (a script can write one in 4.x) reads as 0, HC.
-    menu = t.node("GeometryNodeMenuSwitch", data_type="INT")
-    while len(menu.enum_items) < len(METHOD_ITEMS):
-        menu.enum_items.new("")
-    for number, (item, (name, description)) in enumerate(zip(menu.enum_items, METHOD_ITEMS)):
-        item.name, item.description = name, description
-        menu.inputs[name].default_value = number
-    t.feed(menu.inputs[0], value(settings_spec.METHOD))
-    method = menu.outputs[0]
-
-    def is_method(number):  # 1.0 or 0.0; COMPARE's third input, the tolerance, is 0.5 by default
-        return t.math("COMPARE", method, float(number))
-
+    is_method = _method_switch(t, value(settings_spec.METHOD))
     alpha, beta, iterations, limit, refused = _checked_inputs(t, value, is_method(HC))
 
     # The object's world matrix: the limit and the map measure lengths in world space.
@@ -338,6 +324,46 @@ def build(tree):
     deviation_map = value(settings_spec.MODIFIER_DEVIATION_MAP)
     geometry, start_position, start_normal = _start_of_map(t, inputs["Geometry"], deviation_map, transform)
 
+    movable, degree = _movable(t, value)
+    influence = _influence(t, value)
+    blurred = _blurred(t, geometry, (alpha, iterations, influence, movable, degree), is_method)
+    iterated, limited = _repeat_zone(
+        t, geometry, (alpha, beta, iterations, limit, transform), movable, influence, is_method
+    )
+    uses_blur = t.boolean("AND", t.boolean("OR", is_method(LAPLACIAN), is_method(CENTRAL)), t.boolean("NOT", limited))
+    smoothed = t.switch("GEOMETRY", uses_blur, iterated, blurred)
+    result = _guarded(t, geometry, smoothed, refused)
+    t.feed(
+        group_output.inputs["Geometry"],
+        _deviation_map(t, result, deviation_map, start_position, start_normal, transform),
+    )
+
+    sockets[input_name(settings_spec.METHOD)].default_value = METHOD_NAMES[settings_spec.METHOD.default]
+    return sockets
+
+
+def _method_switch(t, method_input):
+    """is_method(number): a node giving 1.0 where the group's method is that number, else 0.0."""
+    # The method as its number. A new Menu Switch has two items (numbers 0, 1): renamed, not replaced,
+    # so the items are numbered 0..3 in settings_spec's order and a 4.x script can set the number.
+    # A number outside the menu (a script can write one in 4.x) reads as 0, HC.
+    menu = t.node("GeometryNodeMenuSwitch", data_type="INT")
+    while len(menu.enum_items) < len(METHOD_ITEMS):
+        menu.enum_items.new("")
+    for number, (item, (name, description)) in enumerate(zip(menu.enum_items, METHOD_ITEMS)):
+        item.name, item.description = name, description
+        menu.inputs[name].default_value = number
+    t.feed(menu.inputs[0], method_input)
+    method = menu.outputs[0]
+
+    def is_method(number):  # 1.0 or 0.0; COMPARE's third input, the tolerance, is 0.5 by default
+        return t.math("COMPARE", method, float(number))
+
+    return is_method
+
+
+def _movable(t, value):
+    """(movable, degree): the vertices that move, and each vertex's neighbour count."""
     # Who moves: outside the fixed group (inside it, inverted), not on a pinned boundary, with neighbours.
     in_group = t.math("GREATER_THAN", value(settings_spec.VERTEX_GROUP), 0.0)
     fixed = t.boolean("XOR", in_group, value(settings_spec.INVERT_VERTEX_GROUP))
@@ -348,14 +374,23 @@ def build(tree):
     degree = t.node("GeometryNodeInputMeshVertexNeighbors").outputs["Vertex Count"]
     fixed = t.boolean("OR", fixed, t.math("LESS_THAN", degree, 0.5))
     movable = t.boolean("NOT", fixed)
+    return movable, degree
 
+
+def _influence(t, value):
+    """Each vertex's share of a step (the painted influence)."""
     # The painted influence, as core takes it: the group's weights (inverted: 1 - weight) clipped to [0, 1]
     # (NaN, which an attribute can hold: 0).
     painted = value(settings_spec.INFLUENCE_GROUP)
-    influence = t.clamp(
+    return t.clamp(
         t.switch("FLOAT", value(settings_spec.INVERT_INFLUENCE_GROUP), painted, t.math("SUBTRACT", 1.0, painted))
     )
 
+
+def _blurred(t, geometry, settings, is_method):
+    """The plain and central Laplacian without a limit; ``settings``: (alpha, iterations, influence, movable,
+    degree)."""
+    alpha, iterations, influence, movable, degree = settings
     # Plain and central Laplacian without a limit: one Blur Attribute, all iterations (weights as in the
     # module's docstring). Influence λ makes the step the central one with a' = a + (1 - a)(1 - λ):
     # a' q + (1 - a') T q is q + λ (p - q). Where λ = 1 this is the same arithmetic as without influence.
@@ -371,7 +406,13 @@ def build(tree):
     t.feed(blur.inputs["Weight"], blur_weight)
     # Blur gives q + 0 where the weight is 0, which turns -0.0 into 0.0: those vertices keep q itself.
     blurred = t.set_position(geometry, blur.outputs[0], t.math("GREATER_THAN", blur_weight, 0.0))
+    return blurred
 
+
+def _repeat_zone(t, geometry, settings, movable, influence, is_method):
+    """(the iterated geometry, whether a limit is on): HC and the Laplacians step by step; ``settings``:
+    (alpha, beta, iterations, limit, transform)."""
+    alpha, beta, iterations, limit, transform = settings
     # Every method with a Deviation Limit, and HC and the original point always: a Repeat zone of simultaneous steps.
     position = t.position()
     start, (original, movable, influence) = t.capture(
@@ -430,17 +471,7 @@ def build(tree):
     hc = t.set_position(carrying_w, t.switch("VECTOR", movable, original, hc_step))  # fixed: o = q, exactly
 
     t.feed(repeat_out.inputs["Geometry"], t.switch("GEOMETRY", is_method(HC), laplacian, hc))
-    iterated = repeat_out.outputs["Geometry"]
-    uses_blur = t.boolean("AND", t.boolean("OR", is_method(LAPLACIAN), is_method(CENTRAL)), t.boolean("NOT", limited))
-    smoothed = t.switch("GEOMETRY", uses_blur, iterated, blurred)
-    result = _guarded(t, geometry, smoothed, refused)
-    t.feed(
-        group_output.inputs["Geometry"],
-        _deviation_map(t, result, deviation_map, start_position, start_normal, transform),
-    )
-
-    sockets[input_name(settings_spec.METHOD)].default_value = METHOD_NAMES[settings_spec.METHOD.default]
-    return sockets
+    return repeat_out.outputs["Geometry"], limited
 
 
 def _start_of_map(t, geometry, on, transform):
