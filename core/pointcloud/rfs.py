@@ -19,6 +19,7 @@ import numpy as np
 
 from ..adjacency import umbrella_operator
 from ..parallel import run_blocks, run_chunks
+from ..slices import to_end
 from .geometry import (
     Incidence,
     face_normals,
@@ -27,7 +28,7 @@ from .geometry import (
     smallest_eigenvectors,
     triple_keys,
 )
-from .stepwise import Slices, drain
+from .stepwise import Slices
 
 _CORONA_CHUNK = 1 << 15  # vertices per piece of the corona's work: its temporaries stay small
 _PAIR_BLOCK = 1 << 16  # incidences per block of _best_pairs
@@ -213,7 +214,7 @@ def keep_best_pairs(points, faces, normals=None):
 def _prune(points, faces, normals=None, settled=None):
     """keep_best_pairs, also returning the faces' Incidence. ``settled`` (optional, one int per
     edge of the Incidence, preset to -1) receives the round in which each overfull edge settled."""
-    return drain(_prune_steps(points, faces, normals, settled))
+    return to_end(_prune_steps(points, faces, normals, settled))
 
 
 def _prune_steps(points, faces, normals=None, settled=None):
@@ -365,7 +366,7 @@ def rfs_mesh(points, edges, *, min_quality=0.3, max_gap=np.pi):
     >>> int(np.unique(sides, axis=0, return_counts=True)[1].max())  # no edge in more than two faces
     2
     """
-    return drain(rfs_steps(points, edges, min_quality=min_quality, max_gap=max_gap))
+    return to_end(rfs_steps(points, edges, min_quality=min_quality, max_gap=max_gap))
 
 
 def rfs_steps(points, edges, *, min_quality=0.3, max_gap=np.pi):

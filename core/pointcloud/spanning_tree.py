@@ -39,7 +39,8 @@ from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
 from ..adjacency import pairs_in_order
-from .stepwise import Slices, drain
+from ..slices import to_end
+from .stepwise import Slices
 
 
 def merge_duplicates(points):
@@ -72,7 +73,7 @@ class NeighbourIndex:
     """
 
     def __init__(self, points, k, scale=1.0):
-        drain(self.build(points, k, scale))
+        to_end(self.build(points, k, scale))
 
     @classmethod
     def in_steps(cls, points, k, scale=1.0):
@@ -322,7 +323,7 @@ _UNCERTAIN_FRACTION = 0.5
 
 def boruvka_emst(index):
     """EMST edges (rows of ``index.points``) and their lengths, exactly."""
-    return drain(emst_steps(index))
+    return to_end(emst_steps(index))
 
 
 class _ForeignCache:
