@@ -130,15 +130,7 @@ def smooth_modifier_time(obj, repeats):
     """Median time to evaluate Blender's Smooth modifier (factor 0.5, 10 repeats) on ``obj``."""
     modifier = obj.modifiers.new("Smooth", "SMOOTH")
     modifier.factor, modifier.iterations = 0.5, ITERATIONS
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-
-    def evaluate_modifier():
-        obj.update_tag(refresh={"DATA"})
-        depsgraph.update()
-        obj.evaluated_get(depsgraph).data  # noqa: B018 - the evaluated mesh is the product
-
-    evaluate_modifier()
-    seconds = median_time(evaluate_modifier, repeats)
+    seconds, _ = timed_evaluation(obj, repeats)
     obj.modifiers.remove(modifier)
     return seconds
 

@@ -13,9 +13,7 @@ Run it with either test environment (Blender 4.5 or 5.2 as the bpy module); it i
 """
 
 import platform
-import statistics
 import sys
-import time
 
 from scripts.extension_session import ADDON, install_extension  # before bpy
 
@@ -23,7 +21,7 @@ from scripts.extension_session import ADDON, install_extension  # before bpy
 
 import bpy
 
-from bench.bench_blender import closed_torus
+from bench.bench_blender import closed_torus, timed_evaluation
 from bench.common import ROOT, Parameter, repeats, sizes
 
 METHODS = ("HC", "LAPLACIAN", "LAPLACIAN_CENTRAL", "LAPLACIAN_ORIGINAL")
@@ -31,20 +29,7 @@ METHODS = ("HC", "LAPLACIAN", "LAPLACIAN_CENTRAL", "LAPLACIAN_ORIGINAL")
 
 def evaluation_seconds(obj, repeats):
     """Median wall seconds of re-evaluating ``obj``'s modifier stack, after one warm-up."""
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-
-    def evaluate():
-        obj.update_tag(refresh={"DATA"})
-        depsgraph.update()
-        obj.evaluated_get(depsgraph).data  # noqa: B018 - the evaluated mesh is the product
-
-    evaluate()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        evaluate()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
+    return timed_evaluation(obj, repeats)[0]
 
 
 PARAMETERS = (
