@@ -165,12 +165,14 @@ def _ring_normals(points, rows, operator):
     """Unit normals at ``rows``: the smallest PCA axis of each row's neighbours in ``points``."""
     owner, neighbour = neighbours(rows, operator)
     ring = points[neighbour]
-    centre = np.zeros((rows.size, 3))
-    np.add.at(centre, owner, ring)
+    count = rows.size
+    centre = np.stack([np.bincount(owner, ring[:, k], count) for k in range(3)], axis=1)
     centre /= operator.degree[rows][:, None]
     spread = ring - centre[owner]
-    covariance = np.zeros((rows.size, 3, 3))
-    np.add.at(covariance, owner, spread[:, :, None] * spread[:, None, :])
+    covariance = np.empty((count, 3, 3))
+    for a in range(3):
+        for b in range(a, 3):
+            covariance[:, a, b] = covariance[:, b, a] = np.bincount(owner, spread[:, a] * spread[:, b], count)
     return np.linalg.eigh(covariance)[1][:, :, 0]
 
 

@@ -200,12 +200,12 @@ def _residuals(positions, rows, operator, halves=0):
     after ``halves`` half steps towards the neighbours' mean (x + (mean(adj) - x) / 2: a whole step
     would flip, not damp, the highest frequency of a quad grid)."""
     owner, neighbour = neighbours(rows, operator)
-    ring = np.unique(np.concatenate([rows, neighbour]))
+    ring = _union(operator.n_vertices, rows, neighbour)
     # around[k]: the vertices within k + 1 rings of the rows. The positions are read (as float64) on the
     # outermost; each average reaches one ring less, and the planes' points lie within two rings.
     around = [ring]
     for _ in range(PLANE_STEPS + 1 + halves):
-        around.append(np.union1d(around[-1], neighbours(around[-1], operator)[1]))
+        around.append(_union(operator.n_vertices, around[-1], neighbours(around[-1], operator)[1]))
     points, point_vertices = np.asarray(positions[around[-1]], dtype=np.float64), around[-1]
     for step in range(halves):
         targets = around[PLANE_STEPS + halves - step]
@@ -243,6 +243,15 @@ def _residuals(positions, rows, operator, halves=0):
 
     lengths = np.linalg.norm(point_at(neighbour) - point_at(rows)[owner], axis=1)
     return residual, _group_medians(owner, lengths, rows.size)
+
+
+def _union(n, *vertex_sets):
+    """The distinct vertices of ``vertex_sets`` (indices below ``n``), sorted: marked in a mask of the mesh,
+    which a big mesh's few rings take in one pass where sorting them would take many."""
+    mask = np.zeros(n, dtype=bool)
+    for vertices in vertex_sets:
+        mask[vertices] = True
+    return np.flatnonzero(mask)
 
 
 def _averaged(values, sources, targets, operator):
