@@ -169,8 +169,9 @@ def unit_rows(vectors):
     return np.divide(vectors, length, out=np.zeros_like(vectors), where=length > 0)
 
 
-def vertex_normals(positions, triangles):
-    """Area-weighted unit vertex normals of a triangle mesh (zero where no face touches a vertex).
+def vertex_normals(positions, triangles, dtype=np.float64):
+    """Area-weighted unit vertex normals of a triangle mesh (zero where no face touches a vertex), summed in
+    float64 and handed back as ``dtype``.
 
     Examples
     --------
@@ -182,24 +183,27 @@ def vertex_normals(positions, triangles):
     [[-0.577, -0.577, -0.577], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
     """
     planar = np.ascontiguousarray(np.asarray(positions).T)
-    return to_end(normals_and_measures(planar, np.asarray(triangles), None, 1, np.zeros(3)))[0].T.copy()
+    normals, _ = to_end(normals_and_measures(planar, np.asarray(triangles), None, 1, None, measure=False))
+    return np.ascontiguousarray(normals.T, dtype=dtype)
 
 
-def normals_and_measures(after, triangles, part_of_vertex, parts, centre, block=TRIANGLE_BLOCK):
+def normals_and_measures(after, triangles, part_of_vertex, parts, centre, block=TRIANGLE_BLOCK, measure=True):
     """(normals, measures) in slices, of (3, n) planar positions: the unit vertex normals (area-weighted,
-    float64 (3, n)) and per part, (2, parts), its volume less the ``centre`` (times 6) and its area
-    (times 2). Each ``block`` of triangles is measured on the threads, then its normals added at their
-    corners block by block: the same numbers whatever the thread count."""
+    float64 (3, n)) and per part, (2, parts), its volume less the ``centre`` (None: the origin) (times 6)
+    and its area (times 2); ``measure`` False: the normals alone (measures zero). Each ``block`` of
+    triangles is measured on the threads, then its normals added at their corners block by block: the
+    same numbers whatever the thread count."""
     normals = np.zeros((3, after.shape[1]))
 
     def measured(start, stop):
         block = np.ascontiguousarray(triangles[start:stop].T, dtype=index_dtype(after.shape[1]))
         a, b, c = corner_rows(after, block, centre)
-        volume = dot(a, cross(b, c))
+        volume = dot(a, cross(b, c)) if measure else None
         b -= a
         c -= a
         faces = cross(b, c)
-        return block, faces, part_sums([volume, np.sqrt(dot(faces, faces))], part_of_vertex, block, parts)
+        sums = part_sums([volume, np.sqrt(dot(faces, faces))], part_of_vertex, block, parts) if measure else 0.0
+        return block, faces, sums
 
     measures = np.zeros((2, parts))
     for blocks in in_rounds(measured, len(triangles), block):

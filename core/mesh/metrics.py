@@ -175,11 +175,13 @@ def _volume_tasks(points, corners, frame, parts):
     """The volume of ``frame.units`` as ``parts`` tasks over runs of blocks, and the function that adds
     their results up in block order (the same bits however the tasks ran)."""
     local, unit = _in_frame(points, frame)
+    rows = _whole_rows(local)
     count = corners[0].size
     blocks = [(start, min(start + _VOLUME_BLOCK, count)) for start in range(0, count, _VOLUME_BLOCK)]
     share = max(1, -(-len(blocks) // parts))
     tasks = [
-        lambda run=blocks[i : i + share]: _block_sums(local, corners, run) for i in range(0, max(1, len(blocks)), share)
+        lambda run=blocks[i : i + share]: _block_sums(rows, local.dtype, corners, run)
+        for i in range(0, max(1, len(blocks)), share)
     ]
 
     def total(results):
@@ -194,12 +196,20 @@ def _volume_tasks(points, corners, frame, parts):
 _VOLUME_BLOCK = VECTOR_BLOCK  # triangles per block: few NumPy calls, each on data that stays in cache
 
 
-def _block_sums(points, corners, blocks):
-    """Σ a·(b×c) over the triangles of each block; each corner gathers whole rows (one take per corner,
-    not one per coordinate)."""
+def _whole_rows(points):
+    """(n, 3) points as n items of four coordinates (the fourth 0), so that gathering rows is one take of
+    16- or 32-byte items, several times faster than a take of 3-coordinate rows."""
+    padded = np.zeros((len(points), 4), dtype=points.dtype)
+    padded[:, :3] = points
+    return padded.view(np.dtype((np.void, padded.strides[0]))).ravel()
+
+
+def _block_sums(rows, dtype, corners, blocks):
+    """Σ a·(b×c) over the triangles of each block; each corner gathers whole rows (``_whole_rows``: one take
+    per corner, not one per coordinate)."""
     sums = []
     for start, stop in blocks:
-        a, b, c = (np.take(points, index[start:stop], axis=0) for index in corners)
+        a, b, c = (np.take(rows, index[start:stop]).view(dtype).reshape(-1, 4) for index in corners)
         bx, by, bz, cx, cy, cz = b[:, 0], b[:, 1], b[:, 2], c[:, 0], c[:, 1], c[:, 2]
         term = by * cz
         term -= bz * cy
@@ -284,7 +294,7 @@ def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> 
         triangles = fan_triangles(faces)
         if triangles.size and (triangles.max() >= before.shape[0] or triangles.min() < 0):
             raise ValueError("faces refer to vertices that do not exist")
-        normals = vertex_normals(_in_frame(before, _Frame.of(before))[0], triangles).astype(before.dtype)
+        normals = vertex_normals(_in_frame(before, _Frame.of(before))[0], triangles, before.dtype)
         if closed is not False:  # an open surface has no volume to compare
             closed = closed_from_triangles(triangles) if closed is None else bool(closed)
             corners = _corner_columns(triangles) if closed else None
