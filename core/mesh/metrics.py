@@ -199,8 +199,9 @@ _VOLUME_BLOCK = VECTOR_BLOCK  # triangles per block: few NumPy calls, each on da
 def _whole_rows(points):
     """(n, 3) points as n items of four coordinates (the fourth 0), so that gathering rows is one take of
     16- or 32-byte items, several times faster than a take of 3-coordinate rows."""
-    padded = np.zeros((len(points), 4), dtype=points.dtype)
+    padded = np.empty((len(points), 4), dtype=points.dtype)
     padded[:, :3] = points
+    padded[:, 3] = 0.0
     return padded.view(np.dtype((np.void, padded.strides[0]))).ravel()
 
 
