@@ -34,12 +34,19 @@ sqrt(sigma^2 tr(S'S) / n + e^2), and the error exceeds the input's sigma exactly
 sqrt(2 (1 - t)) sigma; HC's rule reads that bound (one iteration keeps about half the noise: a box of 9
 cuts that one iteration rounds moves by less than sqrt(2) sigma, yet by more than sigma). That bound has no
 slack for a noise estimate read low, as core.mesh.noise reads heavy noise and the noise of a part of a few
-dozen vertices (a noisy Ico Sphere of 42 that HC takes half the error off moves by 1.1 times it): HC's
+dozen vertices (a noisy Ico Sphere of 42 vertices that HC takes half the error off moves 1.1 times that bound): HC's
 rule reads it on the light-noise parts only (core.mesh.noise's half-step test: light noise, told from
 shape, on at least its WHITE_SAMPLES vertices), the sqrt(2) bound elsewhere. The sigma these
 rules read is core.mesh.noise's floor estimate: a box of a few cuts, whose creases reach most of its
 vertices, inflates the median's estimate to a quarter of an edge (20 times the noise), the floor's to a few
 times the noise.
+
+Keep Sharp Edges, which fits planes, takes the noise away whole: what it moved a vertex along its normal is
+that vertex's noise, and the robust scale of those moves (median |r_i| / 0.6745) reads the noise where the
+estimate reads a coarse shape's creases; its rule reads the smaller of the two. A part whose input has a
+defect the filter keeps (a quad collapsed to a point at a crease drags the crease into a chamfer, and the
+filter fits the vertices around to the chamfer's plane) moves a few vertices by many times that scale,
+and gets its input back.
 """
 
 import math
