@@ -335,6 +335,7 @@ class AmountChooser:
         self._ground = None  # what every choice on this mesh stands on (_Ground), made by the first slices
         self._kept = None  # the data run's state at the amount chosen so far: the result, if the choice stays
         self._fine = None  # the choice made again on gentler steps, where it is taken (light noise)
+        self.kept = 1.0  # t(k) = tr(S_k) / n at the amount chosen (1: nothing ran)
 
     # What the ground holds, under the names callers and tests read.
     noise = property(lambda self: self._ground.noise)
@@ -403,6 +404,7 @@ class AmountChooser:
             self.data = data
         self.amount = self._amount(steps, traces, residuals, normals, done, most)
         self.traces = dict(zip(steps, traces))  # t(k) at each checkpoint, for inspection
+        self.kept = float(np.interp(self.amount.iterations, steps, traces)) if self.amount.iterations else 1.0
         light = 1 <= self.amount.iterations <= FINE_MAX and not self.amount.capped
         if self.fine_beta is not None and self.beta < self.fine_beta and light:
             fine = AmountChooser(
@@ -418,7 +420,7 @@ class AmountChooser:
                 yield min(done / MAX_ITERATIONS + fraction, 0.999)
             smooths = fine.amount.iterations * (1.0 - self.fine_beta)  # a low frequency's share, as above
             if smooths > self.amount.iterations * (1.0 - self.beta):
-                self._fine, self.amount = fine, fine.amount
+                self._fine, self.amount, self.kept = fine, fine.amount, fine.kept
         yield 1.0
 
     def result(self):

@@ -28,8 +28,25 @@ from the shape, e independent of the noise, has moved by sqrt(sigma^2 + e^2). A 
 noise model alone: nothing here is tuned. Keep Sharp Edges' filter flattens coarse curved parts (a UV
 Sphere, a Torus, adjacent faces meeting at near its own angle) that way, and HC rounds the edges and
 corners of a coarse noisy box (Blender's Cube subdivided and triangulated) that way; their input comes
-back. A part whose shape inflates its noise estimate (a box of a few cuts, sigma read as a quarter of
-an edge) is beyond this rule: it moves less than its estimate.
+back. A linear filter S that keeps t = tr(S) / n of the noise (HC's run at alpha 0: core.mesh.amount
+measures t) takes less of it away: its move is sqrt(sigma^2 (1 - 2 t + tr(S'S) / n) + e^2), its error
+sqrt(sigma^2 tr(S'S) / n + e^2), and the error exceeds the input's sigma exactly where the move exceeds
+sqrt(2 (1 - t)) sigma; HC's rule reads that bound (one iteration keeps about half the noise: a box of 9
+cuts that one iteration rounds moves by less than sqrt(2) sigma, yet by more than sigma). That bound has no
+slack for a noise estimate read low, as core.mesh.noise reads heavy noise and the noise of a part of a few
+dozen vertices (a noisy Ico Sphere of 42 vertices that HC takes half the error off moves 1.1 times that bound): HC's
+rule reads it on the light-noise parts only (core.mesh.noise's half-step test: light noise, told from
+shape, on at least its WHITE_SAMPLES vertices), the sqrt(2) bound elsewhere. The sigma these
+rules read is core.mesh.noise's floor estimate: a box of a few cuts, whose creases reach most of its
+vertices, inflates the median's estimate to a quarter of an edge (20 times the noise), the floor's to a few
+times the noise.
+
+Keep Sharp Edges, which fits planes, takes the noise away whole: what it moved a vertex along its normal is
+that vertex's noise, and the robust scale of those moves (median |r_i| / 0.6745) reads the noise where the
+estimate reads a coarse shape's creases; its rule reads the smaller of the two. A part whose input has a
+defect the filter keeps (a quad collapsed to a point at a crease drags the crease into a chamfer, and the
+filter fits the vertices around to the chamfer's plane) moves a few vertices by many times that scale,
+and gets its input back.
 """
 
 import math
@@ -39,6 +56,7 @@ import numpy as np
 from .. import parallel
 from ..geometry import vertex_normals
 from .amount import PATCH_FROM
+from .noise import _MAD, _group_medians
 
 # Of the radius noise removal can leave: a collapsing cone ends near 0 (HC) or at 0.4-0.66 (Keep Sharp Edges),
 # a smoothing that keeps the shape near 1. An 8-vertex cube with noise of half its edge can end below it (its
@@ -157,10 +175,14 @@ def residual_correlation(before, after, triangles, operator, part_of_vertex, par
 MOVED_IN_NOISE = math.sqrt(2.0)
 
 
-def moved_beyond_noise(before, after, triangles, part_of_vertex, sigma, noisy):
+def moved_beyond_noise(before, after, triangles, part_of_vertex, sigma, noisy, kept=0.0, own_scale=False):
     """(parts,) bool: the parts of at least SMOOTH_FROM vertices with noise found (``noisy``, (parts,) bool)
     whose RMS move along the result's normals, r_i = (y_i - x_i) . n_i (``before`` y, ``after`` x), exceeds
-    MOVED_IN_NOISE times their noise ``sigma``.
+    MOVED_IN_NOISE times their noise ``sigma``, times sqrt(1 - ``kept``) where the run is a linear filter S
+    whose trace ``kept`` = tr(S) / n is known (core.mesh.amount's t(k); 0: not known, the bound for any filter;
+    a number, or one per part).
+    ``own_scale`` (a filter that takes the noise away whole: Keep Sharp Edges): sigma is at most the robust
+    scale of the move itself, median |r_i| / 0.6745 over the part.
 
     Examples
     --------
@@ -183,4 +205,6 @@ def moved_beyond_noise(before, after, triangles, part_of_vertex, sigma, noisy):
         return asked
     residual = _residual(before, after, _of_parts(triangles, asked, part_of_vertex))
     moved = np.sqrt(np.bincount(part_of_vertex, residual * residual, parts) / np.maximum(counts, 1))
-    return asked & (moved > MOVED_IN_NOISE * sigma)
+    if own_scale:
+        sigma = np.fmin(sigma, _group_medians(part_of_vertex, np.abs(residual), parts) / _MAD)
+    return asked & (moved > MOVED_IN_NOISE * np.sqrt(np.maximum(1.0 - np.asarray(kept, dtype=np.float64), 0.0)) * sigma)

@@ -227,6 +227,7 @@ class MeshSmoother:
         self.tolerance = check_tolerance(tolerance)
         check_max_deviation(0.0 if self.max_deviation == AUTO else self.max_deviation, n)
         self.welding = self.surface = None
+        self.kept = 0.0  # the chosen HC run's t = tr(S) / n (core.mesh.amount), where the Automatic Amount ran
         self.prepared = False  # the welding, the faces' surface and the border rule: the first slices of steps()
         self.result = None
         self.report = None
@@ -323,6 +324,7 @@ class MeshSmoother:
                 if fraction < 1.0:
                     yield share * fraction
             amount, fixed = chooser.amount, chooser.fixed  # the Automatic Amount holds parts without noise
+            self.kept = chooser.kept  # t at the amount chosen: what core.mesh.collapse's move rule reads
             noise = chooser.noise
             alpha, beta, iterations = amount.alpha, amount.beta, amount.iterations
             if self.max_deviation == AUTO:
@@ -450,11 +452,13 @@ class MeshSmoother:
                 self.positions, result, self.faces, self.surface_operator, noise.part_of_vertex, parts.size
             )
         if self.faces is not None:
-            asked = noise.noisy
+            asked, kept = noise.noisy, 0.0
             if residual == "correlation":  # HC: as its correlation rule, big scans are not asked (a pass of normals)
                 asked = asked & (np.bincount(noise.part_of_vertex, minlength=parts.size) < collapse.PATCH_FROM)
+                kept = np.where(noise.light, self.kept, 0.0)  # the trace's bound where the estimate holds
+            sigma = noise.sigma if noise.floor is None else noise.floor
             parts |= collapse.moved_beyond_noise(
-                self.positions, result, self.faces, noise.part_of_vertex, noise.sigma, asked
+                self.positions, result, self.faces, noise.part_of_vertex, sigma, asked, kept, residual == "move"
             )
         return parts
 
