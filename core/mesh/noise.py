@@ -329,15 +329,4 @@ def _group_quantiles(owner, values, groups, share):
 
 def _group_medians(owner, values, groups):
     """The median of ``values`` per group (``owner`` in [0, groups)); NaN for an empty group."""
-    out = np.full(groups, np.nan)
-    if owner.size == 0:
-        return out
-    order = np.lexsort((values, owner))
-    counts = np.bincount(owner, minlength=groups)
-    starts = np.cumsum(counts) - counts
-    has = counts > 0
-    low = starts[has] + (counts[has] - 1) // 2
-    high = starts[has] + counts[has] // 2
-    ordered = values[order]
-    out[has] = 0.5 * (ordered[low] + ordered[high])
-    return out
+    return _group_quantiles(owner, values, groups, 0.5)
