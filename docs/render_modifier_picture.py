@@ -46,7 +46,7 @@ def main():
     noisy = scene_setup.closed_suzanne(level=3)
     clean = scene_setup.positions(noisy.data).astype(np.float64)
     faces = scene_setup.faces(noisy.data)
-    triangles = core.geometry.fan_triangles(faces)
+    triangles = core.fan_triangles(faces)
     diagonal = float(np.linalg.norm(clean.max(axis=0) - clean.min(axis=0)))
     scene_setup.add_normal_noise(noisy, NOISE * diagonal, np.random.default_rng(SEED))
     noisy.name = noisy.data.name = "Noisy"
@@ -57,14 +57,14 @@ def main():
     assert bpy.ops.object.hc_smooth_modifier_add(iterations=ITERATIONS) == {"FINISHED"}
 
     surface = scene_setup.CleanSurface(clean, faces)
-    clean_volume = core.mesh.metrics.enclosed_volume(clean, triangles)
+    clean_volume = core.enclosed_volume(clean, triangles)
     labels = {}
     for obj, title in ((noisy, f"Noisy, \u03c3 {NOISE:.1%}"), (hc, f"HC Smooth, {ITERATIONS} iterations")):
         points = evaluated_positions(obj)
         signed = surface.signed_distance(points)
         # On the original mesh: the modifiers pass point attributes through to what is rendered.
         scene_setup.set_point_attribute(obj, scene_setup.ERROR_ATTRIBUTE, 100 * signed / diagonal)
-        volume = core.mesh.metrics.enclosed_volume(points, triangles) / clean_volume - 1
+        volume = core.enclosed_volume(points, triangles) / clean_volume - 1
         rms = 100 * float(np.sqrt(np.mean(signed**2))) / diagonal
         labels[obj] = f"{title}\nvolume {100 * volume:+.1f} %\nRMS distance {rms:.2f} %"
         print(labels[obj].replace("\n", ", "))

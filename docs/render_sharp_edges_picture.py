@@ -48,14 +48,14 @@ def smooth(path):
 
 def _crease_keys(points, faces, degrees=25.0):
     """Keys (low * n + high) of the edges whose two triangles meet at more than ``degrees``."""
-    from core.mesh import sharp_edges
+    import core
 
     pairs = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
     keys = pairs[:, 0] * len(points) + pairs[:, 1]
     order = np.argsort(keys, kind="stable")
     keys, owner = keys[order], np.repeat(np.arange(len(faces)), 3)[order]
     shared = np.flatnonzero(keys[1:] == keys[:-1])
-    normals = sharp_edges.face_normals(points, faces)
+    normals = core.face_normals(points, faces)
     cosine = np.einsum("ij,ij->i", normals[owner[shared]], normals[owner[shared + 1]])
     return keys[shared][cosine < math.cos(math.radians(degrees))]
 
@@ -71,7 +71,7 @@ def render(arrays, output, samples):
     diagonal = float(np.linalg.norm(clean.max(axis=0) - clean.min(axis=0)))
     layout = (np.arange(len(faces) + 1) * 3, faces.ravel())
     surface = scene_setup.CleanSurface(clean, layout)
-    clean_volume = core.mesh.metrics.enclosed_volume(clean, faces)
+    clean_volume = core.enclosed_volume(clean, faces)
     creases = _crease_keys(clean, faces)
     panels = []
     titles = (
@@ -92,7 +92,7 @@ def render(arrays, output, samples):
         mesh.attributes.new("sharp_edge", "BOOLEAN", "EDGE").data.foreach_set("value", sharp)
         signed = surface.signed_distance(points)
         scene_setup.set_point_attribute(obj, scene_setup.ERROR_ATTRIBUTE, 100 * signed / diagonal)
-        volume = core.mesh.metrics.enclosed_volume(points, faces) / clean_volume - 1
+        volume = core.enclosed_volume(points, faces) / clean_volume - 1
         rms = 100 * float(np.sqrt(np.mean(signed**2))) / diagonal
         label = f"{title}\nvolume {100 * volume:+.2f} %\nRMS distance {rms:.3f} %"
         panels.append((obj, label))

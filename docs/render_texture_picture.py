@@ -269,11 +269,10 @@ def meshes(peer_python):
     """(arrays, titles): the clean, noisy and smoothed positions with the triangles and UVs, and each panel's
     (key, label), the label with the texture shift, which is also printed."""
     import core
-    from core.geometry import vertex_normals
 
     clean, triangles, uvs = clean_suzanne()
     diagonal = float(np.linalg.norm(clean.max(axis=0) - clean.min(axis=0)))
-    normals = vertex_normals(clean, triangles)
+    normals = core.vertex_normals(clean, triangles)
     noisy = clean + normals * np.random.default_rng(SEED).normal(0.0, NOISE * diagonal, (len(clean), 1))
     edges = edges_of(triangles)
     sliding = core.smooth_mesh(noisy, edges, faces=triangles, weld=True, keep_in_place=False)
