@@ -454,8 +454,9 @@ class MeshSmoother:
         if self.faces is not None:
             asked, kept = noise.noisy, 0.0
             if residual == "correlation":  # HC: as its correlation rule, big scans are not asked (a pass of normals)
-                asked = asked & (np.bincount(noise.part_of_vertex, minlength=parts.size) < collapse.PATCH_FROM)
-                kept = np.where(noise.light, self.kept, 0.0)  # the trace's bound where the estimate holds
+                asked = np.bincount(noise.part_of_vertex, minlength=parts.size) < collapse.PATCH_FROM
+                # the trace's bound on light-noise and quiet parts (core.mesh.collapse), where the estimate holds
+                kept = np.where(noise.light | ~noise.noisy, self.kept, 0.0)
             sigma = noise.sigma if noise.floor is None else noise.floor
             parts |= collapse.moved_beyond_noise(
                 self.positions, result, self.faces, noise.part_of_vertex, sigma, asked, kept, residual == "move"
