@@ -22,8 +22,11 @@ from .files import FileError
 def smooth_mesh_file(outcome, plan, settings, console):
     limit = plan.memory_limit or tiled.default_memory_limit()
     if tiled.needs_tiles(outcome.source, limit) and tiles_apply(outcome, plan, limit):
-        smooth_tiled_file(outcome, plan, settings, console, limit)
-        return
+        try:
+            smooth_tiled_file(outcome, plan, settings, console, limit)
+            return
+        except tiled.FormatError as error:  # found by the index pass, before anything is written
+            not_tiled(outcome, plan, limit, f"it cannot be smoothed in tiles: {error}")
     console.stage(outcome, "reading", outcome.source)
     mesh = files.read_mesh(outcome.source)
     console.stage(outcome, "smoothing", outcome.source)
@@ -38,20 +41,25 @@ def smooth_mesh_file(outcome, plan, settings, console):
 
 
 def tiles_apply(outcome, plan, limit):
-    """Whether a file too big for ``limit`` goes in tiles: a binary PLY mesh does; anything else runs whole,
-    with a warning, or fails when the limit was given (--memory-limit)."""
-    problem = None
+    """Whether a file too big for ``limit`` goes in tiles: a binary PLY or OBJ mesh does (an OBJ's layout is
+    checked by the tiled run's first pass); anything else runs whole, with a warning, or fails when the limit
+    was given (--memory-limit)."""
+    ext = os.path.splitext(outcome.source)[1].lower()
     if plan.points:
-        problem = "point clouds are smoothed whole"
-    elif os.path.splitext(outcome.source)[1].lower() != ".ply":
-        problem = "only binary PLY meshes are smoothed in tiles"
-    else:
+        return not_tiled(outcome, plan, limit, "point clouds are smoothed whole")
+    if ext == ".stl":
+        return not_tiled(outcome, plan, limit, tiled.STL_REFUSAL)
+    if ext == ".ply":
         try:
             tiled.PlyBlocks(outcome.source)
         except (tiled.FormatError, OSError) as error:
-            problem = f"it cannot be smoothed in tiles: {error}"
-    if problem is None:
-        return True
+            return not_tiled(outcome, plan, limit, f"it cannot be smoothed in tiles: {error}")
+    return True
+
+
+def not_tiled(outcome, plan, limit, problem):
+    """A file too big for ``limit`` that cannot run tiled for ``problem``: it fails when the limit was given,
+    else it runs whole with a warning (returns False)."""
     needed = tiled.size_words(tiled.in_core_bytes(tiled.estimated_vertices(outcome.source)))
     if plan.memory_limit:
         raise FileError(
@@ -62,16 +70,25 @@ def tiles_apply(outcome, plan, limit):
 
 
 def smooth_tiled_file(outcome, plan, settings, console, limit):
-    """A binary PLY file larger than the memory limit, smoothed in tiles straight into its target (cli/tiled.py)."""
+    """A binary PLY or OBJ file larger than the memory limit, smoothed in tiles straight into its target
+    (cli/tiled.py)."""
     console.stage(outcome, "smoothing", outcome.source)
     name = os.path.splitext(os.path.basename(outcome.source))[0]
-    if os.path.splitext(outcome.target)[1].lower() != ".ply":
-        raise FileError("a scan smoothed in tiles is written as it is read (binary PLY): --format cannot convert it")
+    ext = os.path.splitext(outcome.source)[1].lower()
+    if os.path.splitext(outcome.target)[1].lower() != ext:
+        raise FileError(
+            f"a scan smoothed in tiles is written as it is read ({ext[1:].upper()}): --format cannot convert it"
+        )
     if plan.settings.deviation_map:
         raise FileError(
             "--deviation-attribute adds a value to every vertex record, which a scan smoothed in tiles cannot"
         )
     for group in (plan.settings.vertex_group, plan.settings.influence_group):
+        if group and ext == ".obj":
+            raise FileError(
+                "--fixed-group and --influence-group read an OBJ's groups over the whole file: they cannot run in "
+                "tiles (raise --memory-limit to smooth it whole)"
+            )
         group_mask(name, {}, group, False, 0)  # a PLY file has no vertex groups: the whole route's message
     options = mesh_jobs.core_options(settings, plan.given)
     run = tiled.smooth_file(outcome.source, outcome.target, options, limit, say=lambda text: console.say(f"  {text}"))

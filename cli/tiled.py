@@ -1,8 +1,11 @@
-"""Scans larger than memory: a binary PLY file smoothed in spatial tiles (core.tile_boxes), read and written
-in blocks (cli/formats/ply_blocks.py). No Blender here: NumPy, SciPy and core.
+"""Scans larger than memory: a binary PLY or an OBJ file smoothed in spatial tiles (core.tile_boxes), read
+and written in blocks (cli/formats/ply_blocks.py, cli/formats/obj_blocks.py). No Blender here: NumPy, SciPy
+and core. STL is refused (``STL_REFUSAL``).
 
 The route, for a file whose whole run would not fit in the memory limit (``needs_tiles``):
 
+0. An OBJ file is indexed first: one pass over its text writes its positions and faces into scratch files
+   beside the target, which the passes below read as they read a binary PLY's records.
 1. One pass over the vertices (bounds, an even sample, finite coordinates) and one over the faces (their
    corners checked, the longest edge).
 2. With the Automatic Amount, the amount is chosen once, on a region of about REGION_VERTICES vertices
@@ -12,16 +15,18 @@ The route, for a file whose whole run would not fit in the memory limit (``needs
    halo), at most as many vertices as the limit leaves room for.
 4. The input is copied to a hidden temporary file beside the target; each tile is read (a pass over the
    vertices, one over the faces), smoothed with its vertices in the file's order, and its own vertices'
-   positions (and the normals the file stores) written into the copy in place; the copy replaces the
-   target only once every tile is written (cli/files.py), so an interrupt or a failure leaves no output.
+   positions (and the normals the file stores per vertex) written into the copy in place; the copy replaces
+   the target only once every tile is written (cli/files.py), so an interrupt or a failure leaves no output.
+   An OBJ's tiles write into a scratch copy of its positions instead; a last pass writes the output text
+   (obj_blocks.ObjOutput), its `vn` normals recomputed from the whole result.
 
 Memory: a tile's run, plus one index per vertex (4 bytes; 8 beyond 2**31 vertices) to number a tile's
 vertices and a sample of at most SAMPLE_POINTS positions. Reading goes through the page cache, not
 through arrays of the whole file.
 """
 
+import contextlib
 import os
-import shutil
 import time
 from dataclasses import dataclass, field
 
@@ -30,8 +35,8 @@ import numpy as np
 from .. import core
 from . import files
 from .formats import normals as normal_maths
-from .formats.ply import NORMALS
-from .formats.ply_blocks import PlyBlocks, write_columns
+from .formats.obj_blocks import ObjBlocks
+from .formats.ply_blocks import PlyBlocks
 from .formats.tokens import FormatError
 
 # What a whole (in-core) run of the command line takes per vertex, file included, at most (measured:
@@ -148,21 +153,22 @@ class TiledRun:
     change: object = None  # core.Change from the tiles' sums (no volume: see docs/large_scans.md)
     notes: list = field(default_factory=list)
     kept_in_place: bool = False
+    options: dict = field(default_factory=dict)  # core.MeshSmoother's options every tile ran
 
 
 def blocks(count, size=BLOCK):
     return ((start, min(start + size, count)) for start in range(0, count, size))
 
 
-def scan(ply):
+def scan(mesh):
     """One pass over the vertices and one over the faces (``Scan``); raises FormatError for a coordinate that
     is not finite or a face that names a vertex the file does not have."""
-    n = ply.vertex_count
+    n = mesh.vertex_count
     stride = max(1, -(-n // SAMPLE_POINTS))
     low, high = np.full(3, np.inf), np.full(3, -np.inf)
     sample, picked = [], []
     for start, stop in blocks(n):
-        points = ply.positions(start, stop)
+        points = mesh.positions(start, stop)
         bad = ~np.isfinite(points).all(axis=1)
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
@@ -174,18 +180,17 @@ def scan(ply):
         first = -start % stride
         sample.append(points[first::stride].astype(np.float64))
         picked.append(np.arange(start + first, stop, stride))
-    records = ply.memmap_vertices()
-    columns = [records[axis] for axis in "xyz"]  # strided views: a gather reads only the coordinates
     longest = 0.0
-    for start, stop in blocks(ply.face_count):
-        corners = ply.faces(start, stop)
+    for start, stop in blocks(mesh.face_count):
+        corners = mesh.faces(start, stop)
         squares = np.zeros(corners.shape)
-        for column in columns:
+        # strided views of a map made for this block: a gather reads only the coordinates, and only this
+        # block's pages stay resident
+        for column in mesh.coordinates():
             at = column[corners].astype(np.float64)
             squares += (at - np.roll(at, -1, axis=1)) ** 2
         if squares.size:
             longest = max(longest, float(np.sqrt(squares.max())))
-    del records, columns
     return Scan(low, high, longest, np.concatenate(sample), np.concatenate(picked))
 
 
@@ -200,12 +205,12 @@ class Tile:
     corners: np.ndarray
 
 
-def read_tile(ply, reaches, owns, lookup):
+def read_tile(mesh, reaches, owns, lookup):
     """The Tile of the vertices ``reaches(points)`` selects (``owns(points)`` its own), with the faces whose
     corners all lie among them. ``lookup`` ((n,) -1 everywhere) numbers them meanwhile and is reset."""
     vertices, positions, own = [], [], []
-    for start, stop in blocks(ply.vertex_count):
-        points = ply.positions(start, stop)
+    for start, stop in blocks(mesh.vertex_count):
+        points = mesh.positions(start, stop)
         inside = np.flatnonzero(reaches(points))
         vertices.append(start + inside)
         positions.append(points[inside])
@@ -214,8 +219,8 @@ def read_tile(ply, reaches, owns, lookup):
     lookup[vertices] = np.arange(len(vertices), dtype=lookup.dtype)
     try:
         corners = []
-        for start, stop in blocks(ply.face_count):
-            local = lookup[ply.faces(start, stop)]
+        for start, stop in blocks(mesh.face_count):
+            local = lookup[mesh.faces(start, stop)]
             inside = local[:, 0] >= 0
             for column in range(1, local.shape[1]):
                 inside &= local[:, column] >= 0
@@ -235,8 +240,30 @@ def index_dtype(n):
     return np.int32 if n < np.iinfo(np.int32).max else np.int64
 
 
+STL_REFUSAL = (
+    "an STL file is a triangle soup: its vertices are made by welding equal corners across the whole file, which "
+    "tiles cannot do; STL files are smoothed whole (raise --memory-limit)"
+)
+
+
+@contextlib.contextmanager
+def mesh_blocks(source, temporary):
+    """The mesh file ``source`` read in blocks: PlyBlocks (binary PLY), ObjBlocks (OBJ, indexed into scratch files
+    beside ``temporary`` and removed afterwards); raises FormatError for any other file."""
+    ext = os.path.splitext(source)[1].lower()
+    if ext == ".ply":
+        yield PlyBlocks(source)
+    elif ext == ".obj":
+        with ObjBlocks(source, lambda: files.temporary_path(temporary) + ".tmp") as obj:
+            yield obj
+    elif ext == ".stl":
+        raise FormatError(STL_REFUSAL)
+    else:
+        raise FormatError(f"a {ext or 'file without extension'} file cannot be smoothed in tiles (PLY or OBJ)")
+
+
 def smooth_file(source, target, options, limit, say=None, capacity=None):
-    """Smooth the binary PLY ``source`` into ``target`` in tiles within about ``limit`` bytes; ``options``
+    """Smooth the binary PLY or OBJ ``source`` into ``target`` in tiles within about ``limit`` bytes; ``options``
     are core.MeshSmoother's (the operators' core_options): where they leave alpha and iterations to the
     Automatic Amount, it chooses them once (``choose_on_region``). ``say(text)`` hears each tile's progress;
     ``capacity``: the vertices a tile may hold (default: what ``limit`` leaves room for). Returns a TiledRun;
@@ -245,58 +272,32 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
     problem = core.tiled_problem(options)
     if problem:
         raise ValueError(f"{problem}; smooth it whole (a larger --memory-limit) or leave the option out")
-    ply = PlyBlocks(source)
-    n = ply.vertex_count
-    if capacity is None and tile_capacity(limit, n) < min(SMALLEST_TILE, n):
-        raise ValueError(
-            f"--memory-limit {size_words(limit)} leaves no room for a tile of this scan's {n} vertices "
-            f"(at least {size_words(BASE_BYTES + SMALLEST_TILE * TILE_BYTES_PER_VERTEX + 4 * n)})"
-        )
-    capacity = capacity or tile_capacity(limit, n)
     started = time.perf_counter()
-    found = scan(ply)
-    run = TiledRun(vertices=n)
-    lookup = np.full(n, -1, dtype=index_dtype(n))
-    if core.tiles_choose(options):
-        chosen = choose_on_region(ply, found, options, lookup)
-        options, run.amount = chosen.options, chosen.amount
-        run.notes.append(
-            f"the Automatic Amount chose {chosen.amount.iterations} iterations on a region of {chosen.region} vertices "
-            f"and ran them on every tile (deviation limit {chosen.limit:.3g}); a tiled run gives no closed part its "
-            "volume back, holds or gives back no part, and Keep in Place's fold guard and its rule for open outlines "
-            "judge each tile on its own (docs/large_scans.md)"
-        )
-    method, iterations = options.get("method", "hc"), options["iterations"]
-    kept = bool(options.get("keep_in_place")) and options.get("keep_in_place") != core.AUTO
-    run.rings = core.tile_rings(method, iterations, kept, ply.has_normals)
-    run.margin = core.tile_margin(run.rings, found.longest_edge)
-    run.iterations, run.kept_in_place = iterations, kept
-    scale = n / len(found.sample)
-    try:
-        boxes = core.tile_boxes(found.sample, scale, found.low, found.high, run.margin, 0.9 * capacity)
-    except ValueError as error:
-        raise ValueError(
-            f"{error}: {run.rings} rings of halo ({iterations} iterations, the longest edge {found.longest_edge:.3g}) "
-            f"need more room than --memory-limit {size_words(limit)} leaves; raise it, or run fewer iterations"
-        ) from None
-    run.tiles = len(boxes)
-    totals = Totals()
-    with files.written(target) as temporary:
-        shutil.copyfile(source, temporary)
-        output = ply.memmap_vertices("r+", temporary)
-        try:
-            for number, box in enumerate(boxes, 1):
-                tick = time.perf_counter()
-                tile = read_tile(ply, lambda p, box=box: box.reaches(p, run.margin), box.owns, lookup)
-                run.largest_tile = max(run.largest_tile, len(tile.vertices))
-                smooth_tile(tile, options, ply, output, totals)
-                say(
-                    f"tile {number} of {len(boxes)}: {len(tile.vertices)} vertices, {int(tile.own.sum())} its own, "
-                    f"{time.perf_counter() - tick:.1f} s"
-                )
-            output.flush()
-        finally:
-            del output  # the map closed: the temporary can be moved or removed (on Windows too)
+    with files.written(target) as temporary, mesh_blocks(source, temporary) as mesh:
+        n = mesh.vertex_count
+        if capacity is None and tile_capacity(limit, n) < min(SMALLEST_TILE, n):
+            raise ValueError(
+                f"--memory-limit {size_words(limit)} leaves no room for a tile of this scan's {n} vertices "
+                f"(at least {size_words(BASE_BYTES + SMALLEST_TILE * TILE_BYTES_PER_VERTEX + 4 * n)})"
+            )
+        capacity = capacity or tile_capacity(limit, n)
+        found = scan(mesh)
+        run = TiledRun(vertices=n)
+        lookup = np.full(n, -1, dtype=index_dtype(n))
+        boxes = plan_tiles(mesh, found, options, lookup, capacity, limit, run)
+        options = run.options
+        totals = Totals()
+        output = mesh.output(temporary)
+        for number, box in enumerate(boxes, 1):
+            tick = time.perf_counter()
+            tile = read_tile(mesh, lambda p, box=box: box.reaches(p, run.margin), box.owns, lookup)
+            run.largest_tile = max(run.largest_tile, len(tile.vertices))
+            smooth_tile(tile, options, mesh, output, totals)
+            say(
+                f"tile {number} of {len(boxes)}: {len(tile.vertices)} vertices, {int(tile.own.sum())} its own, "
+                f"{time.perf_counter() - tick:.1f} s"
+            )
+        output.finish()
     run.change = totals.change(found)
     run.notes.insert(
         0,
@@ -306,8 +307,39 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
     return run
 
 
-def smooth_tile(tile, options, ply, output, totals):
-    """Smooth a tile and write its own vertices' moved positions (and the normals they touch) into ``output``."""
+def plan_tiles(mesh, found, options, lookup, capacity, limit, run):
+    """The boxes of the tiles; ``run`` takes the options every tile runs (``run.options``: the Automatic
+    Amount's choice, made here, where it is asked for), the rings of halo and the margin."""
+    if core.tiles_choose(options):
+        chosen = choose_on_region(mesh, found, options, lookup)
+        options, run.amount = chosen.options, chosen.amount
+        run.notes.append(
+            f"the Automatic Amount chose {chosen.amount.iterations} iterations on a region of {chosen.region} vertices "
+            f"and ran them on every tile (deviation limit {chosen.limit:.3g}); a tiled run gives no closed part its "
+            "volume back, holds or gives back no part, and Keep in Place's fold guard and its rule for open outlines "
+            "judge each tile on its own (docs/large_scans.md)"
+        )
+    method, iterations = options.get("method", "hc"), options["iterations"]
+    kept = bool(options.get("keep_in_place")) and options.get("keep_in_place") != core.AUTO
+    run.options = options
+    run.rings = core.tile_rings(method, iterations, kept, mesh.normals_per_vertex)
+    run.margin = core.tile_margin(run.rings, found.longest_edge)
+    run.iterations, run.kept_in_place = iterations, kept
+    scale = mesh.vertex_count / len(found.sample)
+    try:
+        boxes = core.tile_boxes(found.sample, scale, found.low, found.high, run.margin, 0.9 * capacity)
+    except ValueError as error:
+        raise ValueError(
+            f"{error}: {run.rings} rings of halo ({iterations} iterations, the longest edge {found.longest_edge:.3g}) "
+            f"need more room than --memory-limit {size_words(limit)} leaves; raise it, or run fewer iterations"
+        ) from None
+    run.tiles = len(boxes)
+    return boxes
+
+
+def smooth_tile(tile, options, mesh, output, totals):
+    """Smooth a tile and write its own vertices' moved positions (and the normals they touch, where the file
+    stores one per vertex) into ``output``."""
     sizes = np.full(len(tile.corners), tile.corners.shape[1] if tile.corners.size else 3, dtype=np.int64)
     corners = tile.corners.ravel()
     edges, triangles = surface_arrays(corners, sizes)
@@ -316,13 +348,13 @@ def smooth_tile(tile, options, ply, output, totals):
     moved = np.any(result != tile.positions, axis=1)
     own = np.flatnonzero(tile.own)
     rows = own[moved[own]]
-    write_columns(output, tile.vertices[rows], result[rows], "xyz")
-    if ply.has_normals and len(sizes):
+    output.write_positions(tile.vertices[rows], result[rows])
+    if mesh.normals_per_vertex and len(sizes):
         starts = np.cumsum(sizes) - sizes
         new, used = normal_maths.stored_normals(result, corners, starts, sizes, corners, len(result))
         touched = normal_maths.touched(moved, corners, starts, sizes, corners, len(result))
         rows = own[(used & touched)[own]]
-        write_columns(output, tile.vertices[rows], new[rows].astype(np.float32), NORMALS)
+        output.write_normals(tile.vertices[rows], new[rows])
     totals.add(tile.positions[own], result[own])
 
 
@@ -366,12 +398,12 @@ class Totals:
         )
 
 
-def choose_on_region(ply, found, options, lookup):
+def choose_on_region(mesh, found, options, lookup):
     """core.region_amount on boxes around REGION_PLACES vertices spread evenly over the file, each box
     holding about REGION_VERTICES / REGION_PLACES vertices (by the sample)."""
     sample = found.sample
     places = sample[np.linspace(0, len(sample) - 1, REGION_PLACES).round().astype(np.int64)]
-    share = REGION_VERTICES / REGION_PLACES / ply.vertex_count * len(sample)
+    share = REGION_VERTICES / REGION_PLACES / mesh.vertex_count * len(sample)
     boxes = [_box_around(sample, place, share, found.diagonal) for place in places]
 
     def reaches(points):
@@ -380,10 +412,10 @@ def choose_on_region(ply, found, options, lookup):
             inside |= ((points >= low) & (points <= high)).all(axis=1)
         return inside
 
-    region = read_tile(ply, reaches, reaches, lookup)
+    region = read_tile(mesh, reaches, reaches, lookup)
     sizes = np.full(len(region.corners), region.corners.shape[1] if region.corners.size else 3, dtype=np.int64)
     edges, triangles = surface_arrays(region.corners.ravel(), sizes)
-    return core.region_amount(region.positions, edges, triangles, options, ply.vertex_count)
+    return core.region_amount(region.positions, edges, triangles, options, mesh.vertex_count)
 
 
 def _box_around(sample, place, count, diagonal):

@@ -16,36 +16,14 @@ class ObjFile:
     precision = np.float64  # text: as many digits as the writer gave (georeferenced scans need doubles)
 
     def __init__(self, data):
-        if b"\\\n" in data or b"\\\r\n" in data:
-            raise FormatError("OBJ line continuations (a line ending in a backslash) are not supported")
+        check_continuations(data)
         self.data = data
         self.tokens = tokens = Tokens(data)
-        count = len(tokens)
-        lines = tokens.lines
-        first = np.ones(count, dtype=bool)
-        first[1:] = lines[1:] != lines[:-1]
-        # A token starting with # and everything after it on its line is a comment.
-        hashes = tokens.bytes[tokens.starts] == ord("#") if count else np.zeros(0, bool)
-        line_start = np.maximum.accumulate(np.where(first, np.arange(count), 0)) if count else np.zeros(0, int)
-        last_hash = np.maximum.accumulate(np.where(hashes, np.arange(count), -1)) if count else np.zeros(0, int)
-        live = last_hash < line_start
-        keyword = first & live
-        # Tokens per line that are not comments, counted from each keyword.
-        statement = np.flatnonzero(keyword)
-        live_count = np.bincount(lines[live], minlength=int(lines[-1]) + 1 if count else 0)
-        arguments = live_count[lines[statement]] - 1
-        self.v = statement[tokens.is_word(statement, b"v")]
-        self.vn = statement[tokens.is_word(statement, b"vn")]
-        f = statement[tokens.is_word(statement, b"f")]
-        v_args = arguments[np.searchsorted(statement, self.v)]
-        if np.any(v_args < 3):
-            raise FormatError(f"OBJ line {lines[self.v[v_args < 3][0]] + 1}: a vertex needs x, y and z")
-        if np.any(arguments[np.searchsorted(statement, self.vn)] < 3):
-            raise FormatError("OBJ: a vn line needs x, y and z")
+        statement, arguments = statements(tokens)
+        self.v, self.vn, f, self.sizes = elements(tokens, statement, arguments)
         self.positions = tokens.numbers(self.v[:, None] + np.arange(1, 4), "OBJ vertex")
         self.has_normals = len(self.vn) > 0
         self.normals = tokens.numbers(self.vn[:, None] + np.arange(1, 4), "OBJ vn") if self.has_normals else None
-        self.sizes = arguments[np.searchsorted(statement, f)]
         self._faces(f)
         self._f = f
         g = statement[tokens.is_word(statement, b"g")]
@@ -53,24 +31,12 @@ class ObjFile:
 
     def _faces(self, f):
         tokens = self.tokens
-        corner = np.repeat(f + 1, self.sizes) + (
-            np.arange(int(self.sizes.sum())) - np.repeat(np.cumsum(self.sizes) - self.sizes, self.sizes)
-        )
+        corner = corner_tokens(f, self.sizes)
         if corner.size == 0:
             self.corners = np.zeros(0, np.int64)
             self.corner_normals = np.zeros(0, np.int64)
             return
-        text = tokens.text(corner)
-        # v, v/vt, v//vn, v/vt/vn: one to three numbers per corner, an empty vt read as 0.
-        slashes = np.frombuffer(text, np.uint8) == ord("/")
-        per_corner = np.add.reduceat(
-            slashes, np.concatenate(([0], np.cumsum(tokens.ends[corner] - tokens.starts[corner] + 1)[:-1]))
-        )
-        values = integers(
-            parse_numbers(text.replace(b"//", b"/0/").replace(b"/", b" "), int((per_corner + 1).sum()), "OBJ face"),
-            "OBJ face",
-        )
-        first = np.cumsum(per_corner + 1) - (per_corner + 1)
+        values, first, per_corner = face_numbers(tokens, corner)
         line_of = np.repeat(tokens.lines[f], self.sizes)
         # Negative indices count back from the last v (vn) before the face's line.
         vertices = _absolute(values[first], np.searchsorted(tokens.lines[self.v], line_of), len(self.v), "vertex")
@@ -101,17 +67,82 @@ class ObjFile:
 
     def write(self, updates):
         """The file's bytes with ``updates`` ({"v" or "vn": (rows, values)}) written in."""
-        starts, ends, texts = [], [], []
-        for name, (rows, values) in updates.items():
-            where = (self.v if name == "v" else self.vn)[rows][:, None] + np.arange(1, 4)
-            starts.append(self.tokens.starts[where].ravel())
-            ends.append(self.tokens.ends[where].ravel())
-            texts += number_texts(
-                np.asarray(values).ravel(), values.dtype if values.dtype == np.float64 else np.float32
-            )
-        if not starts:
-            return bytes(self.data)
-        return splice(self.data, np.concatenate(starts), np.concatenate(ends), texts)
+        return rewritten(
+            self.data,
+            self.tokens,
+            [(self.v if name == "v" else self.vn, rows, values) for name, (rows, values) in updates.items()],
+        )
+
+
+def rewritten(data, tokens, updates):
+    """``data`` with, for each (keywords, rows, values) of ``updates``, the three numbers after the keyword
+    tokens ``keywords[rows]`` replaced by ``values`` (float64 as such, anything else as float32)."""
+    starts, ends, texts = [], [], []
+    for keywords, rows, values in updates:
+        where = keywords[rows][:, None] + np.arange(1, 4)
+        starts.append(tokens.starts[where].ravel())
+        ends.append(tokens.ends[where].ravel())
+        texts += number_texts(np.asarray(values).ravel(), values.dtype if values.dtype == np.float64 else np.float32)
+    if not starts:
+        return bytes(data)
+    return splice(data, np.concatenate(starts), np.concatenate(ends), texts)
+
+
+def check_continuations(data):
+    if b"\\\n" in data or b"\\\r\n" in data:
+        raise FormatError("OBJ line continuations (a line ending in a backslash) are not supported")
+
+
+def elements(tokens, statement, arguments, first_line=0):
+    """(v, vn, f, sizes): the tokens of the `v`, `vn` and `f` keywords among ``statements``, and each face's
+    corner count; raises FormatError for a v or vn line of fewer than three numbers (its line counted from
+    ``first_line``)."""
+    v = statement[tokens.is_word(statement, b"v")]
+    vn = statement[tokens.is_word(statement, b"vn")]
+    f = statement[tokens.is_word(statement, b"f")]
+    v_args = arguments[np.searchsorted(statement, v)]
+    if np.any(v_args < 3):
+        raise FormatError(f"OBJ line {first_line + tokens.lines[v[v_args < 3][0]] + 1}: a vertex needs x, y and z")
+    if np.any(arguments[np.searchsorted(statement, vn)] < 3):
+        raise FormatError("OBJ: a vn line needs x, y and z")
+    return v, vn, f, arguments[np.searchsorted(statement, f)]
+
+
+def statements(tokens):
+    """(statements, arguments): the first token of each line that is not a comment, and how many tokens
+    follow it on its line before a comment (a token starting with # and everything after it on its line)."""
+    count = len(tokens)
+    lines = tokens.lines
+    first = np.ones(count, dtype=bool)
+    first[1:] = lines[1:] != lines[:-1]
+    hashes = tokens.bytes[tokens.starts] == ord("#") if count else np.zeros(0, bool)
+    line_start = np.maximum.accumulate(np.where(first, np.arange(count), 0)) if count else np.zeros(0, int)
+    last_hash = np.maximum.accumulate(np.where(hashes, np.arange(count), -1)) if count else np.zeros(0, int)
+    live = last_hash < line_start
+    statement = np.flatnonzero(first & live)
+    live_count = np.bincount(lines[live], minlength=int(lines[-1]) + 1 if count else 0)
+    return statement, live_count[lines[statement]] - 1
+
+
+def corner_tokens(f, sizes):
+    """The tokens of the corners of the faces whose `f` tokens are ``f`` (with ``sizes`` corners each)."""
+    return np.repeat(f + 1, sizes) + (np.arange(int(sizes.sum())) - np.repeat(np.cumsum(sizes) - sizes, sizes))
+
+
+def face_numbers(tokens, corner):
+    """(values, first, per_corner) of the face corner tokens ``corner`` (v, v/vt, v//vn, v/vt/vn): their
+    numbers in a row (an empty vt read as 0), where each corner's first number lies, and its slashes."""
+    text = tokens.text(corner)
+    slashes = np.frombuffer(text, np.uint8) == ord("/")
+    per_corner = np.add.reduceat(
+        slashes, np.concatenate(([0], np.cumsum(tokens.ends[corner] - tokens.starts[corner] + 1)[:-1]))
+    )
+    values = integers(
+        parse_numbers(text.replace(b"//", b"/0/").replace(b"/", b" "), int((per_corner + 1).sum()), "OBJ face"),
+        "OBJ face",
+    )
+    first = np.cumsum(per_corner + 1) - (per_corner + 1)
+    return values, first, per_corner
 
 
 def _absolute(given, before, total, what):

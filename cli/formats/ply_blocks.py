@@ -10,6 +10,7 @@ by the pass that reads them (``faces`` checks each block) and refused with a mes
 """
 
 import os
+import shutil
 
 import numpy as np
 
@@ -180,11 +181,49 @@ class PlyBlocks:
             )
         return corners
 
+    @property
+    def normals_per_vertex(self):
+        """Whether each tile writes its vertices' normals (the halo reaching one ring further)."""
+        return self.has_normals
+
+    def coordinates(self):
+        """The x, y and z columns of the vertex records, as strided views of a memory map."""
+        records = self.memmap_vertices()
+        return [records[axis] for axis in "xyz"]
+
+    def output(self, target):
+        """Where the tiles write their results: ``target``, a copy of this file written into (``PlyOutput``)."""
+        return PlyOutput(self, target)
+
     def memmap_vertices(self, mode="r", path=None):
         """The vertex records as a memory map (of ``path``, a copy of this file, if given)."""
         return np.memmap(
             path or self.path, dtype=self.vertex_dtype, mode=mode, offset=self.vertex_offset, shape=(self.vertex_count,)
         )
+
+
+class PlyOutput:
+    """A copy of the file at ``target`` whose vertex records the tiles write into in place; each write
+    maps the file for itself, so that only a tile's pages stay resident (and none once it is done)."""
+
+    def __init__(self, ply, target):
+        self.ply, self.target = ply, target
+        shutil.copyfile(ply.path, target)
+
+    def _write(self, rows, values, names):
+        records = self.ply.memmap_vertices("r+", self.target)
+        write_columns(records, rows, values, names)
+        records.flush()
+        del records  # the map closed: the file can be moved or removed (on Windows too)
+
+    def write_positions(self, rows, values):
+        self._write(rows, values, "xyz")
+
+    def write_normals(self, rows, values):
+        self._write(rows, values.astype(np.float32), NORMALS)
+
+    def finish(self):
+        """Nothing left to write: the records are in place."""
 
 
 def positions_of(records, precision):
