@@ -11,11 +11,15 @@ under /usr/bin/time -v: its peak memory is that process's maximum resident set, 
   per vertex of each (medians of ``--repeats``).
 * ``--big 30M``: the tiled run alone within ``--memory-limit`` (the whole run would not fit beside the
   other work on this machine); its peak memory and time per vertex.
+* ``--obj 2M``: the same torus as an OBJ file (`v` lines of six decimals, a `vn` per vertex, faces
+  `a//a b//b c//c`), run whole and tiled within ``--obj-limit``, as ``--compare`` does (its own report,
+  bench_tiled_obj).
 
 The generated files are deleted afterwards (they take about 30 bytes per vertex, twice: input and output).
 
     .envs/bench/bin/python bench/run.py tiled --compare 5M --compare-limit 2G --repeats 3
     .envs/bench/bin/python bench/run.py tiled --big 30M --memory-limit 4G --big-repeats 1
+    .envs/bpy45/bin/python bench/run.py tiled --obj 2M --obj-limit 1G --repeats 3
 """
 
 import os
@@ -36,37 +40,71 @@ FACE = np.dtype([("count", "u1"), ("corners", "<i4", (3,))])
 ROWS = 256  # torus rows (around the axis) per block written
 
 
+def torus_rows(vertices, noise, seed):
+    """(rows, tube, blocks): the noisy torus of about ``vertices`` vertices, ``blocks`` yielding (first row, points
+    (m, 3), normals (m, 3)) of ROWS rows at a time, and its faces' blocks (``torus_faces``)."""
+    tube = max(3, int(round(np.sqrt(vertices / RATIO))))
+    rows = max(3, int(round(vertices / tube)))
+    edge = 2 * np.pi * MINOR / tube
+    v = np.linspace(0.0, 2.0 * np.pi, tube, endpoint=False)[None, :]
+    rng = np.random.default_rng(seed)
+
+    def blocks():
+        for first in range(0, rows, ROWS):
+            u = (2.0 * np.pi * np.arange(first, min(first + ROWS, rows)) / rows)[:, None]
+            ring = RATIO * MINOR + MINOR * np.cos(v)
+            points = np.stack(np.broadcast_arrays(ring * np.cos(u), ring * np.sin(u), MINOR * np.sin(v)), -1)
+            normals = np.stack(np.broadcast_arrays(np.cos(u) * np.cos(v), np.sin(u) * np.cos(v), np.sin(v)), -1)
+            yield points.reshape(-1, 3) + rng.normal(0.0, noise * edge, (points.size // 3, 3)), normals.reshape(-1, 3)
+
+    return rows, tube, blocks()
+
+
+def torus_faces(rows, tube):
+    """The torus's triangles, ROWS rows at a time."""
+    for first in range(0, rows, ROWS):
+        i, j = np.meshgrid(np.arange(first, min(first + ROWS, rows)), np.arange(tube), indexing="ij")
+        a, b = i * tube + j, ((i + 1) % rows) * tube + j
+        c, d = ((i + 1) % rows) * tube + (j + 1) % tube, i * tube + (j + 1) % tube
+        yield np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+
+
+def write_torus_obj(path, vertices, noise=0.2, seed=0):
+    """The noisy torus of ``write_torus`` as OBJ text: `v` (six decimals), then `vn`, then `f a//a b//b c//c`;
+    returns the vertex count."""
+    rows, tube, blocks = torus_rows(vertices, noise, seed)
+    normals = []
+    with open(path, "w") as file:
+        file.write("# noisy torus of bench_tiled.py\n")
+        for points, unit in blocks:
+            file.write("".join("v %.6f %.6f %.6f\n" % tuple(row) for row in points.tolist()))
+            normals.append(unit.astype(np.float32))
+        for unit in normals:
+            file.write("".join("vn %.4f %.4f %.4f\n" % tuple(row) for row in unit.tolist()))
+        for triangles in torus_faces(rows, tube):
+            file.write("".join("f %d//%d %d//%d %d//%d\n" % (a, a, b, b, c, c) for a, b, c in (triangles + 1).tolist()))
+    return rows * tube
+
+
 def write_torus(path, vertices, noise=0.2, seed=0):
     """A noisy torus of about ``vertices`` vertices as binary PLY (noise: Gaussian, ``noise`` x the edge length
     per coordinate); returns (vertex count, face count)."""
-    tube = max(3, int(round(np.sqrt(vertices / RATIO))))
-    rows = max(3, int(round(vertices / tube)))
+    rows, tube, blocks = torus_rows(vertices, noise, seed)
     n, faces = rows * tube, 2 * rows * tube
-    edge = 2 * np.pi * MINOR / tube
     header = (
         "ply\nformat binary_little_endian 1.0\ncomment noisy torus of bench_tiled.py\n"
         f"element vertex {n}\nproperty float x\nproperty float y\nproperty float z\n"
         "property uchar red\nproperty uchar green\nproperty uchar blue\n"
         f"element face {faces}\nproperty list uchar int vertex_indices\nend_header\n"
     )
-    v = np.linspace(0.0, 2.0 * np.pi, tube, endpoint=False)[None, :]
-    rng = np.random.default_rng(seed)
     with open(path, "wb") as file:
         file.write(header.encode())
-        for first in range(0, rows, ROWS):
-            u = (2.0 * np.pi * np.arange(first, min(first + ROWS, rows)) / rows)[:, None]
-            ring = RATIO * MINOR + MINOR * np.cos(v)
-            points = np.stack(np.broadcast_arrays(ring * np.cos(u), ring * np.sin(u), MINOR * np.sin(v)), -1)
-            points = points.reshape(-1, 3) + rng.normal(0.0, noise * edge, (points.size // 3, 3))
+        for points, _ in blocks:
             records = np.zeros(len(points), VERTEX)
             records["x"], records["y"], records["z"] = points.T
             records["red"] = np.arange(len(points)) % 251
             file.write(records.tobytes())
-        for first in range(0, rows, ROWS):
-            i, j = np.meshgrid(np.arange(first, min(first + ROWS, rows)), np.arange(tube), indexing="ij")
-            a, b = i * tube + j, ((i + 1) % rows) * tube + j
-            c, d = ((i + 1) % rows) * tube + (j + 1) % tube, i * tube + (j + 1) % tube
-            triangles = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+        for triangles in torus_faces(rows, tube):
             records = np.zeros(len(triangles), FACE)
             records["count"], records["corners"] = 3, triangles
             file.write(records.tobytes())
@@ -128,6 +166,8 @@ def same_bytes(a, b):
 PARAMETERS = (
     Parameter("compare", None, "vertices of the mesh run whole and tiled", count),
     Parameter("big", None, "vertices of the mesh run tiled only", count),
+    Parameter("obj", None, "vertices of the OBJ file run whole and tiled (its own report)", count),
+    Parameter("obj_limit", "1G", "the --obj tiled run's --memory-limit"),
     Parameter("memory_limit", "4G", "the --big run's --memory-limit"),
     Parameter("compare_limit", "2G", "the --compare tiled run's --memory-limit"),
     Parameter("iterations", 10),
@@ -138,11 +178,18 @@ PARAMETERS = (
 QUICK = {"compare": "200k", "compare_limit": "380M", "iterations": 2, "repeats": 1}
 
 
+def report_name(args):
+    return "bench_tiled_obj" if args.obj else "bench_tiled"
+
+
 def run(args, out):
     folder = tempfile.mkdtemp(prefix="bench_tiled_", dir=args.folder)
     try:
         out(f"Noisy torus (noise 0.2 edge lengths), {args.iterations} iterations.")
         out()
+        if args.obj:
+            obj(args, folder, out)
+            return out.rows
         whole = compare(args, folder, out) if args.compare else None
         if args.big:
             big(args, folder, out, whole)
@@ -201,3 +248,27 @@ def big(args, folder, out, whole):
     if whole:
         words += f", time per vertex {seconds / n / whole:.2f}x the whole run's at {args.compare:,} vertices"
     out(words + ".")
+
+
+def obj(args, folder, out):
+    """The --obj runs: whole and tiled on one OBJ file, medians of --repeats; whether the files are the same."""
+    source = os.path.join(folder, "scan.obj")
+    n = write_torus_obj(source, args.obj)
+    out(f"OBJ file of {n:,} vertices, {os.path.getsize(source) / 2**20:.0f} MB.")
+    out()
+    table = header(out)
+    whole = [command_run(source, os.path.join(folder, "whole"), args.iterations) for _ in range(args.repeats)]
+    limit = args.obj_limit
+    tiled = [command_run(source, os.path.join(folder, "tiled"), args.iterations, limit) for _ in range(args.repeats)]
+    time_whole = statistics.median(r[0] for r in whole)
+    time_tiled = statistics.median(r[0] for r in tiled)
+    row(table, "whole", n, time_whole, max(r[1] for r in whole), None)
+    row(table, f"tiled, --memory-limit {limit}", n, time_tiled, max(r[1] for r in tiled), tiled[0][2])
+    a, b = os.path.join(folder, "whole", "scan.obj"), os.path.join(folder, "tiled", "scan.obj")
+    out()
+    out(
+        f"Tiled against whole at {n:,} vertices (OBJ): files "
+        f"{'byte for byte the same' if same_bytes(a, b) else 'differ'}; "
+        f"time per vertex {time_tiled / time_whole:.2f}x the whole run's, peak memory "
+        f"{max(r[1] for r in tiled) / max(r[1] for r in whole):.2f}x (medians of {args.repeats})."
+    )

@@ -1,7 +1,8 @@
-"""`hc_smooth --memory-limit`: a binary PLY whose whole run would not fit is smoothed in tiles, into the same
-bytes as the whole run; what cannot go in tiles says so (cli/tiled.py; the tiling itself is tested without
+"""`hc_smooth --memory-limit`: a binary PLY or OBJ whose whole run would not fit is smoothed in tiles, into the
+same bytes as the whole run; what cannot go in tiles says so (cli/tiled.py; the tiling itself is tested without
 Blender in tests/core/test_tiled.py)."""
 
+import os
 import sys
 
 import numpy as np
@@ -62,16 +63,35 @@ def test_what_cannot_go_in_tiles_says_so(cli, capsys, tmp_path):
     assert not (tmp_path / "out").exists()
 
 
-def test_other_formats_above_the_limit(cli, capsys, tmp_path, monkeypatch):
-    torus_ply(tmp_path / "scan.ply", rows=100, tube=60)
+def test_an_obj_above_the_limit_goes_in_tiles_into_the_same_bytes(cli, capsys, tmp_path):
+    torus_ply(tmp_path / "scan.ply")
     assert (
-        cli.main([str(tmp_path / "scan.ply"), "-o", str(tmp_path / "obj"), "--iterations", "2", "--format", "obj"]) == 0
+        cli.main([str(tmp_path / "scan.ply"), "-o", str(tmp_path / "obj"), "--iterations", "0", "--format", "obj"]) == 0
     )
     source = tmp_path / "obj" / "scan.obj"
+    whole, tiles = tmp_path / "whole", tmp_path / "tiles"
+    assert cli.main([str(source), "-o", str(whole), "--iterations", "4"]) == 0
+    capsys.readouterr()
+    assert cli.main([str(source), "-o", str(tiles), "--iterations", "4", "--memory-limit", "350M"]) == 0
+    out = capsys.readouterr().out
+    assert "tile 1 of " in out and "smoothed in " in out and "100000 vertices, 4 iterations" in out
+    assert (tiles / "scan.obj").read_bytes() == (whole / "scan.obj").read_bytes()
+    assert os.listdir(tiles) == ["scan.obj"]  # no scratch file left
+    assert cli.main([str(source), "-o", str(tmp_path / "out"), "--fixed-group", "g", "--memory-limit", "350M"]) == 1
+    assert "--fixed-group and --influence-group read an OBJ's groups over the whole file" in capsys.readouterr().out
+
+
+def test_stl_above_the_limit(cli, capsys, tmp_path, monkeypatch):
+    torus_ply(tmp_path / "scan.ply", rows=100, tube=60)
+    assert (
+        cli.main([str(tmp_path / "scan.ply"), "-o", str(tmp_path / "stl"), "--iterations", "2", "--format", "stl"]) == 0
+    )
+    source = tmp_path / "stl" / "scan.stl"
     capsys.readouterr()
     argv = [str(source), "-o", str(tmp_path / "out"), "--iterations", "2"]
     assert cli.main([*argv, "--memory-limit", "1M"]) == 1  # a limit given: refused
-    assert "above --memory-limit 1 MB, and only binary PLY meshes are smoothed in tiles" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "above --memory-limit 1 MB, and an STL file is a triangle soup" in out and "smoothed whole" in out
     assert not (tmp_path / "out").exists()
     monkeypatch.setattr(sys.modules[ADDON + ".cli.tiled"], "default_memory_limit", lambda: 1 << 20)
     assert cli.main(argv) == 0  # the default limit: smoothed whole, with a warning
