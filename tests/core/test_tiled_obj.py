@@ -14,6 +14,7 @@ core = load("core")
 tiled = load("cli.tiled")
 formats = load("cli.formats")
 obj_blocks = load("cli.formats.obj_blocks")
+files = load("cli.files")
 FormatError = formats.FormatError
 
 
@@ -135,11 +136,16 @@ def test_a_run_stopped_midway_leaves_nothing(tmp_path, monkeypatch, stop):
         return real(*args)
 
     monkeypatch.setattr(tiled, "smooth_tile", failing)
+    made, close = [], obj_blocks.ObjBlocks.close
+    monkeypatch.setattr(obj_blocks.ObjBlocks, "close", lambda self: made.extend(self._made) or close(self))
     (tmp_path / "out").mkdir()
     target.write_bytes(b"an earlier result")
     with pytest.raises(stop):
         tiled.smooth_file(str(source), str(target), EXPLICIT, 8 << 30, capacity=12_000)
     assert os.listdir(tmp_path / "out") == ["scan.obj"] and target.read_bytes() == b"an earlier result"
+    # The scratch files lay beside the target, named so that a later run removes them should this one be killed.
+    assert len(made) >= 4 and {os.path.dirname(path) for path in made} == {str(tmp_path / "out")}
+    assert all(files.TEMPORARY.match(os.path.basename(path)) for path in made)
 
 
 def test_faces_of_different_sizes_are_refused(tmp_path):
