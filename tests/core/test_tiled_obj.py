@@ -19,7 +19,7 @@ FormatError = formats.FormatError
 
 
 def numbers(rows):
-    return [b" ".join(b"%r" % value for value in row) for row in rows]
+    return [b" ".join(b"%r" % value for value in row) for row in np.asarray(rows).tolist()]
 
 
 def obj_text(points, faces, corners="v", normals="none", layout="plain"):
