@@ -266,6 +266,19 @@ METHODS = {  # key in a cell's "measures" -> column title
 }
 
 
+def input_folded(case):
+    """The share of the noisy input's triangles that face away from their clean triangle (shadow along its
+    normal not positive): a layout folded by noise along the surface, which no result can keep in place
+    without keeping the folds (core.mesh.in_place unfolds them by giving back slide)."""
+    triangles = np.asarray(core.fan_triangles(case.faces))
+
+    def normals(points):
+        a, b, c = (points[triangles[:, k]] for k in range(3))
+        return np.cross(b - a, c - a)
+
+    return float(np.mean(np.einsum("ij,ij->i", normals(case.noisy), normals(case.clean)) <= 0.0))
+
+
 def measure_cell(mesh, set_name, kind, sigma, seed, reference="scan"):
     case = make_case(mesh, kind, sigma, seed, reference)
     normals = inputs.vertex_normals(case.clean, case.faces)
@@ -294,6 +307,7 @@ def measure_cell(mesh, set_name, kind, sigma, seed, reference="scan"):
         "closed": case.closed,
         "border": border_share(case.faces, len(case.noisy)),
         "border_vertices": int(border.vertices.size),
+        "input_folded": input_folded(case),
     }
 
     def vertex(positions):
@@ -597,6 +611,10 @@ def in_place_summary(name, cells, out):
             median = np.median([v[0] for _, v in iso])
             text += f"; iso (reported only): median {median:.2f}×, worst {value:.2f}× ({cell_name(c)})"
         out(text)
+    slides = [c for c in cells if "input_folded" in c and not in_place_checks(c)["slide_sliding"][1]]
+    if slides:
+        folded = ", ".join(f"{cell_name(c)} {100 * c['input_folded']:.0f} %" for c in slides)
+        out(f"- the input's layout folded by its noise (triangles facing away), where slide ≤ 0.4× missed: {folded}")
     pulls = [c["measures"]["default"]["pull_sigma"] for c in cells if "pull_sigma" in c["measures"]["default"]]
     if pulls:
         out(f"- border pull-in of the default, σ: from {min(pulls):+.2f} to {max(pulls):+.2f}")
