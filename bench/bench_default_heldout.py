@@ -273,28 +273,30 @@ def best_curve(case, border):
     """What 1-D smoothing reaches on an open mesh's border: the smallest RMS distance of the border vertices
     to the clean border curve (fraction of the diagonal) when the noisy border alone is smoothed as curves
     (HC on the border edges, the surface's other vertices left out), over the grid's alphas, betas and
-    iterations; with its (alpha, beta, iterations)."""
+    iterations (each path run once, read at its checkpoints); with its (alpha, beta, iterations)."""
     local = np.searchsorted(border.vertices, border.edges)
-    curve = case.noisy[border.vertices]
     positions = case.noisy.copy()
     best = (np.inf, None)
     for alpha in ALPHAS:
         for beta in BETAS:
+            run = quality.quiet(
+                core.Smoothing, case.noisy[border.vertices], local, alpha=alpha, beta=beta, iterations=CHECKPOINTS[-1]
+            )
+            done = 0
             for iterations in CHECKPOINTS:
-                positions[border.vertices] = quality.quiet(
-                    core.hc_smooth, curve, local, alpha=alpha, beta=beta, iterations=iterations
-                )
+                quality.quiet(run.advance, iterations - done)
+                done = iterations
+                positions[border.vertices] = run.result().positions
                 distance = border.measure(positions)[0] / case.diagonal
                 if distance < best[0]:
                     best = (distance, {"alpha": alpha, "beta": beta, "iterations": iterations})
     return {"border": float(best[0]), "params": best[1]}
 
 
-def input_folded(case):
+def input_folded(case, triangles):
     """The share of the noisy input's triangles that face away from their clean triangle (shadow along its
     normal not positive): a layout folded by noise along the surface, which no result can keep in place
     without keeping the folds (core.mesh.in_place unfolds them by giving back slide)."""
-    triangles = np.asarray(core.fan_triangles(case.faces))
 
     def normals(points):
         a, b, c = (points[triangles[:, k]] for k in range(3))
@@ -305,6 +307,7 @@ def input_folded(case):
 
 def measure_cell(mesh, set_name, kind, sigma, seed, reference="scan"):
     case = make_case(mesh, kind, sigma, seed, reference)
+    triangles = np.asarray(core.fan_triangles(case.faces))
     normals = inputs.vertex_normals(case.clean, case.faces)
     border = CleanBorder(case.clean, case.faces)
     start = time.perf_counter()
@@ -331,13 +334,11 @@ def measure_cell(mesh, set_name, kind, sigma, seed, reference="scan"):
         "closed": case.closed,
         "border": border_share(case.faces, len(case.noisy)),
         "border_vertices": int(border.vertices.size),
-        "input_folded": input_folded(case),
+        "input_folded": input_folded(case, triangles),
     }
 
     def vertex(positions):
         return float(np.sqrt(np.mean(np.sum((positions - case.clean) ** 2, axis=1))) / case.diagonal)
-
-    triangles = np.asarray(core.fan_triangles(case.faces))
 
     def in_place(positions):
         return case.rms(keep_in_place(case.noisy, positions, triangles))
