@@ -66,6 +66,7 @@ from bench import bench_quality as quality
 from bench import bench_quality_inputs as inputs
 from bench import meshes
 from bench.common import ROOT, Parameter
+from core.mesh.in_place import keep_in_place
 
 SIGMAS = "0.001,0.0025,0.005"
 ALPHAS = (0.0, 0.05, 0.1, 0.2)
@@ -135,24 +136,26 @@ def make_case(mesh, kind, sigma, seed, reference="scan"):
     return quality.Case(mesh, kind, sigma, clean, faces, noisy)
 
 
-def hc_grid(case, border="free", vertex=None):
+def hc_grid(case, border="free", vertex=None, in_place=None):
     """RMS at every (alpha, beta, checkpoint) of the grid (NaN past a path's end), under the open-border
     rule ``border``. Returns (grid, best {params, rms}); with ``vertex`` (a function of the positions: the
     RMS distance of each vertex to its own clean position) also (that measure's grid, its best {params,
-    vertex})."""
+    vertex}); with ``in_place`` too (a function of the positions: the surface distance of the run kept in
+    place), its best {params, surface} last."""
     if vertex is None:
         grid = quality.walk_grid(case, ALPHAS, BETAS, CHECKPOINTS, border=border)
-    else:
-        grid, extra = quality.walk_grid(case, ALPHAS, BETAS, CHECKPOINTS, border=border, measures={"vertex": vertex})
+        return grid, _best(grid, "rms")
+    extra = {"vertex": vertex} if in_place is None else {"vertex": vertex, "in_place": in_place}
+    grid, values = quality.walk_grid(case, ALPHAS, BETAS, CHECKPOINTS, border=border, measures=extra)
+    found = (grid, _best(grid, "rms"), values["vertex"], _best(values["vertex"], "vertex"))
+    return found if in_place is None else (*found, _best(values["in_place"], "surface"))
+
+
+def _best(grid, name):
+    """{params, name: value} of the grid's smallest value."""
     ia, ib, ic = np.unravel_index(np.nanargmin(grid), grid.shape)
     params = {"alpha": ALPHAS[ia], "beta": BETAS[ib], "iterations": CHECKPOINTS[ic]}
-    best = {"params": params, "rms": float(grid[ia, ib, ic])}
-    if vertex is None:
-        return grid, best
-    values = extra["vertex"]
-    ia, ib, ic = np.unravel_index(np.nanargmin(values), values.shape)
-    params = {"alpha": ALPHAS[ia], "beta": BETAS[ib], "iterations": CHECKPOINTS[ic]}
-    return grid, best, values, {"params": params, "vertex": float(values[ia, ib, ic])}
+    return {"params": params, name: float(grid[ia, ib, ic])}
 
 
 def meshlab_taubin(case):
@@ -266,8 +269,45 @@ METHODS = {  # key in a cell's "measures" -> column title
 }
 
 
+def best_curve(case, border):
+    """What 1-D smoothing reaches on an open mesh's border: the smallest RMS distance of the border vertices
+    to the clean border curve (fraction of the diagonal) when the noisy border alone is smoothed as curves
+    (HC on the border edges, the surface's other vertices left out), over the grid's alphas, betas and
+    iterations (each path run once, read at its checkpoints); with its (alpha, beta, iterations)."""
+    local = np.searchsorted(border.vertices, border.edges)
+    positions = case.noisy.copy()
+    best = (np.inf, None)
+    for alpha in ALPHAS:
+        for beta in BETAS:
+            run = quality.quiet(
+                core.Smoothing, case.noisy[border.vertices], local, alpha=alpha, beta=beta, iterations=CHECKPOINTS[-1]
+            )
+            done = 0
+            for iterations in CHECKPOINTS:
+                quality.quiet(run.advance, iterations - done)
+                done = iterations
+                positions[border.vertices] = run.result().positions
+                distance = border.measure(positions)[0] / case.diagonal
+                if distance < best[0]:
+                    best = (distance, {"alpha": alpha, "beta": beta, "iterations": iterations})
+    return {"border": float(best[0]), "params": best[1]}
+
+
+def input_folded(case, triangles):
+    """The share of the noisy input's triangles that face away from their clean triangle (shadow along its
+    normal not positive): a layout folded by noise along the surface, which no result can keep in place
+    without keeping the folds (core.mesh.in_place unfolds them by giving back slide)."""
+
+    def normals(points):
+        a, b, c = (points[triangles[:, k]] for k in range(3))
+        return np.cross(b - a, c - a)
+
+    return float(np.mean(np.einsum("ij,ij->i", normals(case.noisy), normals(case.clean)) <= 0.0))
+
+
 def measure_cell(mesh, set_name, kind, sigma, seed, reference="scan"):
     case = make_case(mesh, kind, sigma, seed, reference)
+    triangles = np.asarray(core.fan_triangles(case.faces))
     normals = inputs.vertex_normals(case.clean, case.faces)
     border = CleanBorder(case.clean, case.faces)
     start = time.perf_counter()
@@ -294,15 +334,22 @@ def measure_cell(mesh, set_name, kind, sigma, seed, reference="scan"):
         "closed": case.closed,
         "border": border_share(case.faces, len(case.noisy)),
         "border_vertices": int(border.vertices.size),
+        "input_folded": input_folded(case, triangles),
     }
 
     def vertex(positions):
         return float(np.sqrt(np.mean(np.sum((positions - case.clean) ** 2, axis=1))) / case.diagonal)
 
-    grid, best, vertex_grid, best_vertex = hc_grid(case, vertex=vertex)
+    def in_place(positions):
+        return case.rms(keep_in_place(case.noisy, positions, triangles))
+
+    grid, best, vertex_grid, best_vertex, best_in_place = hc_grid(case, vertex=vertex, in_place=in_place)
+    cell["best_in_place"] = best_in_place
     results["best"] = quality.hc_fixed(case, best["params"])
     results["best_vertex"] = quality.hc_fixed(case, best_vertex["params"])
     cell["measures"] = {name: measures(case, normals, border, positions) for name, positions in results.items()}
+    if border:
+        cell["best_curve"] = best_curve(case, border)
     m = cell["measures"]
     cell.update(
         {
@@ -597,6 +644,23 @@ def in_place_summary(name, cells, out):
             median = np.median([v[0] for _, v in iso])
             text += f"; iso (reported only): median {median:.2f}×, worst {value:.2f}× ({cell_name(c)})"
         out(text)
+    curves = [c for c in cells if "best_curve" in c and not in_place_checks(c).get("border", (0, True))[1]]
+    if curves:
+        reach = ", ".join(
+            f"{cell_name(c)} {c['best_curve']['border'] / c['measures']['input']['border']:.2f}×" for c in curves
+        )
+        out(f"- what 1-D smoothing reaches (the best HC on the border curves alone / the input), where missed: {reach}")
+    surfaces = [c for c in cells if "best_in_place" in c and not in_place_checks(c)["surface_sliding"][1]]
+    if surfaces:
+        reach = ", ".join(
+            f"{cell_name(c)} {c['best_in_place']['surface'] / c['measures']['sliding']['surface']:.2f}×"
+            for c in surfaces
+        )
+        out(f"- the best HC setting kept in place, surface over the sliding default's, where missed: {reach}")
+    slides = [c for c in cells if "input_folded" in c and not in_place_checks(c)["slide_sliding"][1]]
+    if slides:
+        folded = ", ".join(f"{cell_name(c)} {100 * c['input_folded']:.0f} %" for c in slides)
+        out(f"- the input's layout folded by its noise (triangles facing away), where slide ≤ 0.4× missed: {folded}")
     pulls = [c["measures"]["default"]["pull_sigma"] for c in cells if "pull_sigma" in c["measures"]["default"]]
     if pulls:
         out(f"- border pull-in of the default, σ: from {min(pulls):+.2f} to {max(pulls):+.2f}")

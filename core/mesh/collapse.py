@@ -177,8 +177,9 @@ def residual_correlation(before, after, triangles, operator, part_of_vertex, par
 MOVED_IN_NOISE = math.sqrt(2.0)
 
 
-def moved_beyond_noise(before, after, triangles, part_of_vertex, sigma, noisy, kept=0.0, own_scale=False):
-    """(parts,) bool: the parts of at least SMOOTH_FROM vertices asked (``noisy``, (parts,) bool)
+def moved_beyond_noise(before, after, triangles, part_of_vertex, sigma, asked, kept=0.0, own_scale=False):
+    """(parts,) bool: the parts of at least SMOOTH_FROM vertices ``asked`` ((parts,) bool: those with noise
+    found, or as the caller chooses)
     whose RMS move along the result's normals, r_i = (y_i - x_i) . n_i (``before`` y, ``after`` x), exceeds
     MOVED_IN_NOISE times their noise ``sigma``, times sqrt(1 - ``kept``) where the run is a linear filter S
     whose trace ``kept`` = tr(S) / n is known (core.mesh.amount's t(k); 0: not known, the bound for any filter;
@@ -202,7 +203,7 @@ def moved_beyond_noise(before, after, triangles, part_of_vertex, sigma, noisy, k
     """
     parts = sigma.size
     counts = np.bincount(part_of_vertex, minlength=parts)
-    asked = noisy & (counts >= SMOOTH_FROM)
+    asked = asked & (counts >= SMOOTH_FROM)
     if not asked.any():
         return asked
     residual = _residual(before, after, _of_parts(triangles, asked, part_of_vertex))
