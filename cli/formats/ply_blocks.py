@@ -62,7 +62,7 @@ class PlyBlocks:
         header = read_header(path)
         self.format, elements, body = parse_header(header)
         if self.format == "ascii":
-            raise FormatError(f"an ASCII PLY file: {what} (binary PLY only; save the scan as binary PLY)")
+            raise FormatError(f"an ASCII PLY file: {what} (tiles read binary PLY or OBJ; save the scan as binary PLY)")
         order = FORMATS[self.format]
         names = [element.name for element in elements]
         if "vertex" not in names:

@@ -206,7 +206,7 @@ def test_unsupported_layouts_are_refused(tmp_path):
     path = tmp_path / "scan.ply"
     data = binary_ply(points, faces)
     path.write_bytes(data.replace(b"binary_little_endian", b"ascii", 1))
-    with pytest.raises(FormatError, match="binary PLY only"):
+    with pytest.raises(FormatError, match="tiles read binary PLY or OBJ"):
         tiled.PlyBlocks(str(path))
     # A quad among triangles: the faces' records are no longer of one size.
     mixed = bytearray(data)
