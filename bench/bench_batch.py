@@ -26,6 +26,10 @@ import numpy as np
 from bench.common import ROOT, Parameter, count, repeats
 
 SCRIPT = ROOT / "scripts" / "hc_smooth_files.py"
+# Every run gets the environment this process started with, as a user's shell has it: starting a LocalCluster
+# sets MALLOC_TRIM_THRESHOLD_ (Dask's nanny.pre-spawn-environ) in this process's os.environ for good, and a
+# serial run that inherited it would take about 1.7 times as long (cli/batch.py, heap_for_large_arrays).
+ENVIRONMENT = dict(os.environ)
 
 
 def torus_ply(path, vertices, seed):
@@ -54,7 +58,10 @@ def timed_run(scans, out, extra):
     shutil.rmtree(out, ignore_errors=True)
     start = time.perf_counter()
     completed = subprocess.run(
-        [sys.executable, str(SCRIPT), str(scans), "-o", str(out), *extra], capture_output=True, text=True
+        [sys.executable, str(SCRIPT), str(scans), "-o", str(out), *extra],
+        capture_output=True,
+        text=True,
+        env=ENVIRONMENT,
     )
     seconds = time.perf_counter() - start
     if completed.returncode != 0:
