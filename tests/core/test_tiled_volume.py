@@ -1,12 +1,15 @@
 """Closed parts' volume given back in a scan smoothed in tiles (core/mesh/tile_volume.py, cli/tiled.py): the
 offsets solved from the tiles' sums are the whole mesh's, and every closed part ends with the volume it had."""
 
+import os
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from test_cli_arguments import load
 from test_tiled import EXPLICIT, binary_ply, smooth_tiled, torus
+from test_tiled_obj import obj_text
 
 core = load("core")
 formats = load("cli.formats")
@@ -109,3 +112,23 @@ def test_parts_joined_piece_by_piece():
     pairs = np.unique(np.stack([roots, expected], axis=1), axis=0)  # the same partition: a one-to-one map
     assert len(pairs) == count
     assert np.all(roots <= np.arange(n)) and np.array_equal(roots[roots], roots)  # each part's lowest vertex
+
+
+def test_an_obj_file_gets_its_volume_back_in_tiles(tmp_path, monkeypatch):
+    points, faces = tori(8)
+    monkeypatch.setattr(mesh_amount, "WORK_BUDGET", 4 * len(points))
+    data = obj_text(points, faces, corners="v//vn", normals="vertex")
+    options = {**AUTOMATIC, "keep_in_place": False}
+    run, got = smooth_tiled(tmp_path, data, options, capacity=10_000, name="scan.obj")
+    assert run.tiles >= 4 and "63 closed parts got their volume back" in run.notes[-1]
+    assert os.listdir(tmp_path / "out") == ["scan.obj"]  # the scratch copies are gone
+    mesh = formats.parse(data, ".obj")
+    edges, triangles = tiled.surface_arrays(mesh.corners, mesh.sizes)
+    smoothed = core.MeshSmoother(mesh.positions, edges, faces=triangles, **run.options).run()
+    restored, _ = volume.restore_volume(mesh.positions, smoothed, triangles, limit=run.amount.sigma)
+    geometry.project_rows_within(restored, mesh.positions, run.options["max_deviation"])
+    result = formats.parse(got, ".obj").positions
+    diagonal = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
+    assert np.abs(result - restored).max() <= 1e-6 * diagonal
+    volumes = [metrics.enclosed_volume(p, faces[: 960 * 5]) for p in (mesh.positions, smoothed, result)]
+    assert (volumes[0] - volumes[1]) / volumes[0] > 0.01 and abs(volumes[2] - volumes[0]) <= 1e-4 * volumes[0]
