@@ -51,6 +51,7 @@ SAMPLE_POINTS = 1 << 20  # vertices sampled for the boxes
 REGION_VERTICES = 1_000_000  # about this many vertices for the Automatic Amount's choice ...
 REGION_PLACES = 8  # ... in boxes around this many places spread over the file's vertices
 SMALLEST_TILE = 10_000  # a limit leaving room for fewer vertices per tile is refused
+PIECE_SHARE = 0.1  # of the limit, the most the volume restore's sums per piece of a part may take (core.TiledVolume)
 
 
 def default_memory_limit():
@@ -144,6 +145,7 @@ class TiledRun:
     """What a tiled run did: the counts the command line reports and the sentences it says."""
 
     vertices: int = 0
+    limit: int = 0  # bytes
     tiles: int = 0
     iterations: int = 0
     largest_tile: int = 0
@@ -284,7 +286,7 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
                 f"--memory-limit {size_words(limit)} leaves no room for a tile of this scan's {n} vertices "
                 f"(at least {size_words(BASE_BYTES + SMALLEST_TILE * TILE_BYTES_PER_VERTEX + 4 * n)})"
             )
-        run = TiledRun(vertices=n)
+        run = TiledRun(vertices=n, limit=limit)
         restoring = core.tiles_choose(options)  # the Automatic Amount gives closed parts their volume back
         if restoring and capacity is None and tile_capacity(limit, n, parts=True) < min(SMALLEST_TILE, n):
             restoring = False
@@ -332,8 +334,9 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
 def tiled_volume(run, found, options):
     """The core.TiledVolume of a run whose Automatic Amount chose ``run.amount``: offsets bounded by its noise,
     the moved vertices kept within the deviation limit, as the whole run bounds and keeps them."""
-    deviation = options.get("max_deviation", 0.0)
-    return core.TiledVolume(run.vertices, run.amount.sigma, deviation, 0.5 * (found.low + found.high))
+    deviation, centre = options.get("max_deviation", 0.0), 0.5 * (found.low + found.high)
+    most = int(PIECE_SHARE * run.limit) // core.TiledVolume.PIECE_BYTES
+    return core.TiledVolume(run.vertices, run.amount.sigma, deviation, centre, most_pieces=most)
 
 
 def restore_tiles(mesh, found, options, boxes, lookup, volume, smoothed, output, totals, run, say):
@@ -354,7 +357,12 @@ def restore_tiles(mesh, found, options, boxes, lookup, volume, smoothed, output,
             del smoother
         write_tile(tile, after, mesh, output, totals)
         say(f"volume: tile {number} of {len(boxes)}, {len(tile.vertices)} vertices")
-    if volume.restored_parts:
+    if volume.too_many:
+        run.notes.append(
+            f"the scan has more than {volume.most_pieces} pieces of parts, whose sums do not fit in --memory-limit "
+            f"{size_words(run.limit)} beside a tile: no closed part got its volume back (raise --memory-limit)"
+        )
+    elif volume.restored_parts:
         words = f"{volume.restored_parts} closed part{'s' if volume.restored_parts > 1 else ''}"
         run.notes.append(
             f"{words} got {'their' if volume.restored_parts > 1 else 'its'} volume back (largest offset "

@@ -31,9 +31,6 @@ from ..geometry import index_dtype, normals_and_measures, project_rows_within
 from ..slices import to_end
 from . import topology, volume
 
-# What a piece of a part costs to keep until the offsets are solved (its vertex, flags, counts, sums, boxes).
-PIECE_BYTES = 8 + 2 + 8 + 6 * 8 + 12 * 8
-
 
 class PartUnion:
     """The parts of a mesh of ``n`` vertices, joined piece by piece (``join``): a union-find over the
@@ -101,9 +98,16 @@ class TiledVolume:
     ``add_tile`` after each tile's smoothing, ``solve`` once, ``restored`` for each tile of the second pass.
     ``noise``: the noise the Automatic Amount found (the offsets reach at most core.mesh.volume.NOISE_OFFSETS
     times it, as in the mesh pipeline), ``deviation``: the run's deviation limit, which the moved vertices
-    keep to as the whole run's do; ``centre``: where the volumes are measured from (a point near the mesh)."""
+    keep to as the whole run's do; ``centre``: where the volumes are measured from (a point near the mesh);
+    ``most_pieces``: the most pieces of parts kept (PIECE_BYTES each) before the restore gives up (``too_many``:
+    no offsets then, each tile stays as smoothed)."""
 
-    def __init__(self, n, noise, deviation, centre):
+    # What a piece of a part costs until the offsets are solved (its vertex, flags, count, sums, boxes), twice
+    # while they are joined.
+    PIECE_BYTES = 2 * (8 + 2 + 8 + 6 * 8 + 12 * 8)
+
+    def __init__(self, n, noise, deviation, centre, most_pieces=None):
+        self.most_pieces, self.too_many = most_pieces, False
         self.union = PartUnion(n)
         self.limit = volume.NOISE_OFFSETS * float(noise)
         self.deviation, self.centre = deviation, np.asarray(centre, np.float64)
@@ -114,7 +118,7 @@ class TiledVolume:
     def add_tile(self, run, vertices, own):
         """Add a smoothed tile: ``run`` the core.MeshSmoother that smoothed it (its welding, faces and fixed
         vertices), ``vertices`` its vertices' indices in the mesh, ``own`` which are the tile's own."""
-        if run.faces is None or len(run.faces) == 0:
+        if self.too_many or run.faces is None or len(run.faces) == 0:
             return
         welded = len(run.positions)
         first = run.welding.first if run.welding is not None else np.arange(welded)
@@ -156,11 +160,13 @@ class TiledVolume:
             )
         )
         self.piece_count += len(keep)
+        if self.most_pieces is not None and self.piece_count > self.most_pieces:
+            self.too_many, self.pieces = True, []
 
     def solve(self):
         """Each part's offset from the sums of its pieces (core.mesh.volume's rules and bounds); returns the
         largest offset (0: none)."""
-        if not self.pieces:
+        if self.too_many or not self.pieces:
             self.roots, self.offsets = np.zeros(0, dtype=np.int64), np.zeros(0)
             return 0.0
         pieces = _Pieces(*(np.concatenate([getattr(p, name) for p in self.pieces]) for name in _Pieces.__annotations__))

@@ -132,3 +132,23 @@ def test_an_obj_file_gets_its_volume_back_in_tiles(tmp_path, monkeypatch):
     assert np.abs(result - restored).max() <= 1e-6 * diagonal
     volumes = [metrics.enclosed_volume(p, faces[: 960 * 5]) for p in (mesh.positions, smoothed, result)]
     assert (volumes[0] - volumes[1]) / volumes[0] > 0.01 and abs(volumes[2] - volumes[0]) <= 1e-4 * volumes[0]
+
+
+def test_parts_beyond_the_memory_limit_are_said_and_skipped(tmp_path, monkeypatch):
+    points, faces = tori(6)
+    monkeypatch.setattr(mesh_amount, "WORK_BUDGET", 4 * len(points))
+    source, target = tmp_path / "scan.ply", tmp_path / "out" / "scan.ply"
+    source.write_bytes(binary_ply(points, faces))
+    n = len(points)
+    # Room for a tile of the whole scan beside the lookup, not beside the parts' index too (4 bytes a vertex).
+    monkeypatch.setattr(tiled, "SMALLEST_TILE", n)
+    limit = tiled.BASE_BYTES + 4 * n + 24 * n + tiled.TILE_BYTES_PER_VERTEX * n + 100
+    run = tiled.smooth_file(str(source), str(target), AUTOMATIC, limit)
+    assert not run.restoring and "no closed part gets its volume back (raise --memory-limit)" in run.notes[1]
+    # Too many pieces of parts for the share of the limit their sums may take: said, and the tiles as smoothed.
+    monkeypatch.setattr(tiled, "PIECE_SHARE", 1e-9)
+    options = {**AUTOMATIC, "keep_in_place": False}
+    run, got = smooth_tiled(tmp_path, binary_ply(points, faces), options, capacity=12_000)
+    assert run.restoring and "no closed part got its volume back (raise --memory-limit)" in run.notes[-1]
+    _, _, smoothed, _ = in_core(binary_ply(points, faces), run.options, run.amount.sigma)
+    assert np.array_equal(ply.PlyFile(got).positions, smoothed)
