@@ -19,9 +19,12 @@ The route, for a file whose whole run would not fit in the memory limit (``needs
    the target only once every tile is written (cli/files.py), so an interrupt or a failure leaves no output.
    An OBJ's tiles write into a scratch copy of its positions instead; a last pass writes the output text
    (obj_blocks.ObjOutput), its `vn` normals recomputed from the whole result.
+5. With the Automatic Amount, closed parts get their volume back (core.TiledVolume): the tiles of step 4
+   add their sums and keep their results in a scratch copy (``SmoothedCopy``) instead; the offsets are
+   solved once, and a second pass over the tiles moves their vertices and writes them (``restore_tiles``).
 
 Memory: a tile's run, plus one index per vertex (4 bytes; 8 beyond 2**31 vertices) to number a tile's
-vertices and a sample of at most SAMPLE_POINTS positions. Reading goes through the page cache, not
+vertices (and one for the parts, with the volume restore) and a sample of at most SAMPLE_POINTS positions. Reading goes through the page cache, not
 through arrays of the whole file.
 """
 
