@@ -24,8 +24,8 @@ The route, for a file whose whole run would not fit in the memory limit (``needs
    solved once, and a second pass over the tiles moves their vertices and writes them (``restore_tiles``).
 
 Memory: a tile's run, plus one index per vertex (4 bytes; 8 beyond 2**31 vertices) to number a tile's
-vertices (and one for the parts, with the volume restore) and a sample of at most SAMPLE_POINTS positions. Reading goes through the page cache, not
-through arrays of the whole file.
+vertices (and one for the parts, with the volume restore) and a sample of at most SAMPLE_POINTS positions.
+Reading goes through the page cache, not through arrays of the whole file.
 """
 
 import contextlib
