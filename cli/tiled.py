@@ -155,7 +155,7 @@ class TiledRun:
     margin: float = 0.0
     rings: int = 0
     amount: object = None  # core.MeshAmount chosen on a region (Automatic Amount), else None
-    change: object = None  # core.Change from the tiles' sums (no volume figures: see docs/large_scans.md)
+    change: object = None  # core.Change from the tiles' sums (the volume where the restore's pass measured it)
     notes: list = field(default_factory=list)
     kept_in_place: bool = False
     options: dict = field(default_factory=dict)  # core.MeshSmoother's options every tile ran
@@ -344,11 +344,11 @@ def tiled_volume(run, found, options):
 
 def restore_tiles(mesh, found, options, boxes, lookup, volume, smoothed, output, totals, run, say):
     """The volume restore's pass: the offsets solved from the tiles' sums, then each tile, read with a halo of
-    the rings its vertices' normals read (two where the file stores normals, else one), moved along its
-    normals from the smoothed positions and written into ``output``."""
+    two rings (the normals of its vertices' 1-rings), moved along its normals from the smoothed positions
+    and written into ``output``; ``totals`` take its volumes before and after for the report."""
     tick = time.perf_counter()
     largest = volume.solve()
-    margin = core.tile_margin(2 if mesh.normals_per_vertex else 1, found.longest_edge)
+    margin = core.tile_margin(2, found.longest_edge)  # the corners of a tile's own triangles, and their normals
     for number, box in enumerate(boxes, 1):
         tile = read_tile(mesh, lambda p, box=box: box.reaches(p, margin), box.owns, lookup)
         edges, triangles = tile_surface(tile)
@@ -359,6 +359,7 @@ def restore_tiles(mesh, found, options, boxes, lookup, volume, smoothed, output,
             after = volume.restored(smoother, after, tile.vertices)
             del smoother
         write_tile(tile, after, mesh, output, totals)
+        totals.add_volume(*core.tile_volumes(tile.positions, after, triangles, tile.own, volume.centre))
         say(f"volume: tile {number} of {len(boxes)}, {len(tile.vertices)} vertices")
     if volume.too_many:
         run.notes.append(
@@ -487,6 +488,12 @@ class Totals:
         self.count = self.moved = 0
         self.sum = self.squares = self.largest = 0.0
         self.low, self.high = np.full(3, np.inf), np.full(3, -np.inf)
+        self.volumes, self.open = None, False  # (before, after) times 6, where every tile adds them
+
+    def add_volume(self, before, after, open_):
+        """A tile's volumes before and after (times 6) and whether it found the mesh open."""
+        self.volumes = np.add(self.volumes if self.volumes is not None else 0.0, [before, after])
+        self.open = self.open or open_
 
     def add(self, before, after):
         moves = np.asarray(after, np.float64) - np.asarray(before, np.float64)
@@ -513,11 +520,16 @@ class Totals:
             bbox_diagonal_before=diagonal,
             bbox_diagonal_after=after,
             bbox_change=(after - diagonal) / diagonal if diagonal else 0.0,
-            closed=False,
-            volume_before=None,
-            volume_after=None,
-            volume_change=None,
+            **self._volume(),
         )
+
+    def _volume(self):
+        """The Change's volume fields: measured where every tile added its volumes and none found the mesh open."""
+        if self.volumes is None or self.open:
+            return {"closed": False, "volume_before": None, "volume_after": None, "volume_change": None}
+        before, after = self.volumes / 6.0
+        change = (after - before) / abs(before) if before else None
+        return {"closed": True, "volume_before": before, "volume_after": after, "volume_change": change}
 
 
 def choose_on_region(mesh, found, options, lookup):

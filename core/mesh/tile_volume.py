@@ -241,6 +241,32 @@ class TiledVolume:
         return result if run.welding is None else run.welding.scatter(result)
 
 
+def tile_volumes(before, after, triangles, own, centre):
+    """(volume before, volume after, open) of a tile's own triangles (their first corner its own; times 6,
+    about ``centre``) on (m, 3) positions ``before`` and ``after``, and whether one of its ``own`` vertices
+    has a half-edge without its single reverse (the mesh is open): summed over the tiles, what the whole
+    run's report measures of the whole mesh (core.measure_change).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core.mesh.tile_volume import tile_volumes
+    >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])  # a tetrahedron, owned in two tiles
+    >>> halves = [tile_volumes(positions, 2 * positions, triangles, own, np.zeros(3))
+    ...           for own in ([1, 1, 0, 0], [0, 0, 1, 1])]
+    >>> [float(sum(half[k] for half in halves)) for k in (0, 1)], any(half[2] for half in halves)
+    ([1.0, 8.0], False)
+    """
+    own = np.asarray(own, bool)
+    if len(triangles) == 0:
+        return 0.0, 0.0, False
+    label = np.where(own, 0, 1).astype(np.int32)
+    volumes = [to_end(volume.volume_steps(volume._planar(p), triangles, label, 2, centre))[0] for p in (before, after)]
+    unmatched = topology.surface(triangles, len(own)).unmatched
+    return float(volumes[0]), float(volumes[1]), bool(np.any(unmatched & own))
+
+
 def _movable(run):
     """The welded vertices the restore moves: neither fixed (the border rule's too) nor of influence 0."""
     return ~run.fixed if run.influence is None else ~run.fixed & (run.influence > 0.0)

@@ -170,7 +170,11 @@ def test_the_amount_chosen_once_runs_on_every_tile(tmp_path, monkeypatch):
     chosen["max_deviation"] = 4.0 * run.amount.sigma
     whole = ply.PlyFile(whole_bytes(data, chosen)).positions
     diagonal = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
-    assert np.abs(ply.PlyFile(got).positions - whole).max() <= 1e-6 * diagonal
+    result = ply.PlyFile(got).positions
+    assert np.abs(result - whole).max() <= 1e-6 * diagonal
+    # The report measures the volume of the closed torus, as the whole run's report does.
+    measured = core.measure_change(points.astype(np.float32), result, faces)
+    assert run.change.closed and run.change.volume_change == pytest.approx(measured.volume_change, abs=1e-6)
 
 
 class Stop(Exception):
