@@ -138,41 +138,44 @@ class TiledVolume:
 
     def add_tile(self, run, vertices, own):
         """Add a smoothed tile: ``run`` the core.MeshSmoother that smoothed it (its welding, faces and fixed
-        vertices), ``vertices`` its vertices' indices in the mesh, ``own`` which are the tile's own."""
+        vertices), ``vertices`` its vertices' indices in the mesh, ``own`` which are the tile's own. Only the
+        triangles around its own vertices and around the corners of its own triangles are read."""
         if self.too_many or run.faces is None or len(run.faces) == 0:
             return
         welded = len(run.positions)
         first = run.welding.first if run.welding is not None else np.arange(welded)
         label = run.welding.label if run.welding is not None else np.arange(welded)
-        triangles, after = run.faces, run.result[first]
-        surface = topology.surface(triangles, welded)
-        own = np.asarray(own)[first]
+        own = np.asarray(own, bool)[first]
+        near, triangles = _around_own(run.faces, own)
+        at = np.full(welded, -1, dtype=np.int64)
+        at[near] = np.arange(len(near))
+        own, movable, copies = own[near], _movable(run)[near], np.flatnonzero(at[label] >= 0)
+        surface = topology.surface(triangles, len(near))
         parts, part_of_vertex = surface.parts, surface.part_of_vertex
         owned = own & surface.used
         counted = np.bincount(part_of_vertex[owned], minlength=parts) > 0  # the pieces this tile adds
-        joined = counted[part_of_vertex[label]]
-        self.union.join(vertices[joined], part_of_vertex[label][joined])
-        owner = np.where(
-            own, part_of_vertex, parts
-        )  # only own triangles and vertices count: the rest is part ``parts``
-        planar_before, planar_after = volume._planar(run.positions), volume._planar(after)
+        groups = part_of_vertex[at[label[copies]]]
+        self.union.join(vertices[copies[counted[groups]]], groups[counted[groups]])
+        owner = np.where(own, part_of_vertex, parts)  # only own triangles and vertices count: the rest is ``parts``
+        planar_before, planar_after = volume._planar(run.positions[near]), volume._planar(run.result[first[near]])
         target = to_end(volume.volume_steps(planar_before, triangles, owner, parts + 1, self.centre))
         normals, (c0, area) = to_end(
             normals_and_measures(planar_after, triangles, owner, parts + 1, self.centre, volume._BLOCK)
         )
-        movable = _movable(run)
         normals *= movable
-        cubic = to_end(volume._cubic_steps(planar_after, normals, triangles, owner, parts + 1, self.centre))
+        mine = triangles[own[triangles[:, 0]]]  # the cubic's terms of the other triangles go to part ``parts``
+        cubic = to_end(volume._cubic_steps(planar_after, normals, mine, owner, parts + 1, self.centre))
+        rows = np.flatnonzero(owned)
         boxes = [
-            *volume._boxes(planar_before, owner, owned, parts + 1),
-            *volume._boxes(planar_after, owner, owned, parts + 1),
+            *volume._boxes(planar_before[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
+            *volume._boxes(planar_after[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
         ]
-        lowest = np.full(parts, welded, dtype=np.int64)
-        np.minimum.at(lowest, part_of_vertex, np.arange(welded))
+        lowest = np.full(parts, len(near), dtype=np.int64)
+        np.minimum.at(lowest, part_of_vertex, np.arange(len(near)))
         keep = np.flatnonzero(counted)
         self.pieces.append(
             _Pieces(
-                vertex=vertices[first[lowest[keep]]],
+                vertex=vertices[first[near[lowest[keep]]]],
                 unmatched=(np.bincount(owner[surface.unmatched & own], minlength=parts + 1) > 0)[keep],
                 movable=(np.bincount(owner[owned & movable], minlength=parts + 1) > 0)[keep],
                 sizes=np.bincount(owner[owned], minlength=parts + 1)[keep],
@@ -265,6 +268,17 @@ def tile_volumes(before, after, triangles, own, centre):
     volumes = [to_end(volume.volume_steps(volume._planar(p), triangles, label, 2, centre))[0] for p in (before, after)]
     unmatched = topology.surface(triangles, len(own)).unmatched
     return float(volumes[0]), float(volumes[1]), bool(np.any(unmatched & own))
+
+
+def _around_own(triangles, own):
+    """(near, triangles): the (t, 3) ``triangles`` that touch an ``own`` vertex or a corner of a triangle whose
+    first corner is own (so that those vertices' normals are whole), renumbered onto ``near``, the vertices
+    they use (increasing: their order kept)."""
+    corner = own.copy()
+    corner[triangles[own[triangles[:, 0]]]] = True
+    needed = triangles[corner[triangles].any(axis=1)]
+    near = np.unique(needed)
+    return near, np.searchsorted(near, needed).astype(triangles.dtype)
 
 
 def _movable(run):
