@@ -19,10 +19,13 @@ The route, for a file whose whole run would not fit in the memory limit (``needs
    the target only once every tile is written (cli/files.py), so an interrupt or a failure leaves no output.
    An OBJ's tiles write into a scratch copy of its positions instead; a last pass writes the output text
    (obj_blocks.ObjOutput), its `vn` normals recomputed from the whole result.
+5. With the Automatic Amount, closed parts get their volume back (core.TiledVolume): the tiles of step 4
+   add their sums and keep their results in a scratch copy (``SmoothedCopy``) instead; the offsets are
+   solved once, and a second pass over the tiles moves their vertices and writes them (``restore_tiles``).
 
 Memory: a tile's run, plus one index per vertex (4 bytes; 8 beyond 2**31 vertices) to number a tile's
-vertices and a sample of at most SAMPLE_POINTS positions. Reading goes through the page cache, not
-through arrays of the whole file.
+vertices (and one for the parts, with the volume restore) and a sample of at most SAMPLE_POINTS positions.
+Reading goes through the page cache, not through arrays of the whole file.
 """
 
 import contextlib
@@ -51,6 +54,7 @@ SAMPLE_POINTS = 1 << 20  # vertices sampled for the boxes
 REGION_VERTICES = 1_000_000  # about this many vertices for the Automatic Amount's choice ...
 REGION_PLACES = 8  # ... in boxes around this many places spread over the file's vertices
 SMALLEST_TILE = 10_000  # a limit leaving room for fewer vertices per tile is refused
+PIECE_SHARE = 0.1  # of the limit, the most the volume restore's sums per piece of a part may take (core.TiledVolume)
 
 
 def default_memory_limit():
@@ -144,16 +148,19 @@ class TiledRun:
     """What a tiled run did: the counts the command line reports and the sentences it says."""
 
     vertices: int = 0
+    limit: int = 0  # bytes
     tiles: int = 0
     iterations: int = 0
     largest_tile: int = 0
     margin: float = 0.0
     rings: int = 0
     amount: object = None  # core.MeshAmount chosen on a region (Automatic Amount), else None
-    change: object = None  # core.Change from the tiles' sums (no volume: see docs/large_scans.md)
+    change: object = None  # core.Change from the tiles' sums (the volume where the restore's pass measured it)
     notes: list = field(default_factory=list)
     kept_in_place: bool = False
     options: dict = field(default_factory=dict)  # core.MeshSmoother's options every tile ran
+    restoring: bool = False  # the closed parts' volume given back (core.TiledVolume): the Automatic Amount's
+    volume_offset: float = 0.0  # the largest offset that gave a closed part its volume back
 
 
 def blocks(count, size=BLOCK):
@@ -230,9 +237,11 @@ def read_tile(mesh, reaches, owns, lookup):
     return Tile(vertices, np.concatenate(positions), np.concatenate(own), np.concatenate(corners).astype(np.int64))
 
 
-def tile_capacity(limit, n):
-    """The vertices a tile may hold within ``limit`` bytes, beside the per-vertex lookup and the sample."""
-    spare = limit - BASE_BYTES - np.dtype(index_dtype(n)).itemsize * n - 24 * min(n, SAMPLE_POINTS)
+def tile_capacity(limit, n, parts=False):
+    """The vertices a tile may hold within ``limit`` bytes, beside the per-vertex lookup and the sample (and
+    with ``parts`` the volume restore's index of the parts, core.TiledVolume)."""
+    lookups = 2 if parts else 1
+    spare = limit - BASE_BYTES - lookups * np.dtype(index_dtype(n)).itemsize * n - 24 * min(n, SAMPLE_POINTS)
     return int(spare // TILE_BYTES_PER_VERTEX)
 
 
@@ -280,23 +289,41 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
                 f"--memory-limit {size_words(limit)} leaves no room for a tile of this scan's {n} vertices "
                 f"(at least {size_words(BASE_BYTES + SMALLEST_TILE * TILE_BYTES_PER_VERTEX + 4 * n)})"
             )
-        capacity = capacity or tile_capacity(limit, n)
+        run = TiledRun(vertices=n, limit=limit)
+        restoring = core.tiles_choose(options)  # the Automatic Amount gives closed parts their volume back
+        if restoring and capacity is None and tile_capacity(limit, n, parts=True) < min(SMALLEST_TILE, n):
+            restoring = False
+            run.notes.append(
+                f"the parts of the whole mesh ({np.dtype(index_dtype(n)).itemsize} bytes a vertex) leave no room "
+                f"for a tile within --memory-limit {size_words(limit)}: no closed part gets its volume back "
+                "(raise --memory-limit)"
+            )
+        capacity = capacity or tile_capacity(limit, n, parts=restoring)
         found = scan(mesh)
-        run = TiledRun(vertices=n)
         lookup = np.full(n, -1, dtype=index_dtype(n))
-        boxes = plan_tiles(mesh, found, options, lookup, capacity, limit, run)
+        boxes = plan_tiles(mesh, found, options, lookup, capacity, limit, run, restoring)
         options = run.options
         totals = Totals()
         output = mesh.output(temporary)
-        for number, box in enumerate(boxes, 1):
-            tick = time.perf_counter()
-            tile = read_tile(mesh, lambda p, box=box: box.reaches(p, run.margin), box.owns, lookup)
-            run.largest_tile = max(run.largest_tile, len(tile.vertices))
-            smooth_tile(tile, options, mesh, output, totals)
-            say(
-                f"tile {number} of {len(boxes)}: {len(tile.vertices)} vertices, {int(tile.own.sum())} its own, "
-                f"{time.perf_counter() - tick:.1f} s"
-            )
+        with smoothed_copy(temporary, n, run.restoring) as smoothed:
+            volume = tiled_volume(run, found, options) if run.restoring else None
+            for number, box in enumerate(boxes, 1):
+                tick = time.perf_counter()
+                tile = read_tile(mesh, lambda p, box=box: box.reaches(p, run.margin), box.owns, lookup)
+                run.largest_tile = max(run.largest_tile, len(tile.vertices))
+                result, smoother = smooth_tile(tile, options)
+                if volume is None:
+                    write_tile(tile, result, mesh, output, totals)
+                else:  # the whole smoothed mesh is kept aside: the restore's pass reads it around each tile
+                    smoothed.write(tile.vertices[tile.own], result[tile.own])
+                    volume.add_tile(smoother, tile.vertices, tile.own)
+                del smoother
+                say(
+                    f"tile {number} of {len(boxes)}: {len(tile.vertices)} vertices, {int(tile.own.sum())} its own, "
+                    f"{time.perf_counter() - tick:.1f} s"
+                )
+            if volume is not None:
+                restore_tiles(mesh, found, options, boxes, lookup, volume, smoothed, output, totals, run, say)
         output.finish()
     run.change = totals.change(found)
     run.notes.insert(
@@ -307,22 +334,108 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
     return run
 
 
-def plan_tiles(mesh, found, options, lookup, capacity, limit, run):
+def tiled_volume(run, found, options):
+    """The core.TiledVolume of a run whose Automatic Amount chose ``run.amount``: offsets bounded by its noise,
+    the moved vertices kept within the deviation limit, as the whole run bounds and keeps them."""
+    deviation, centre = options.get("max_deviation", 0.0), 0.5 * (found.low + found.high)
+    most = int(PIECE_SHARE * run.limit) // core.TiledVolume.PIECE_BYTES
+    return core.TiledVolume(run.vertices, run.amount.sigma, deviation, centre, most_pieces=most)
+
+
+def restore_tiles(mesh, found, options, boxes, lookup, volume, smoothed, output, totals, run, say):
+    """The volume restore's pass: the offsets solved from the tiles' sums, then each tile, read with a halo of
+    two rings (the normals of its vertices' 1-rings), moved along its normals from the smoothed positions
+    and written into ``output``; ``totals`` take its volumes before and after for the report."""
+    tick = time.perf_counter()
+    largest = volume.solve()
+    margin = core.tile_margin(2, found.longest_edge)  # the corners of a tile's own triangles, and their normals
+    for number, box in enumerate(boxes, 1):
+        tile = read_tile(mesh, lambda p, box=box: box.reaches(p, margin), box.owns, lookup)
+        edges, triangles = tile_surface(tile)
+        after = smoothed.read(tile.vertices).astype(tile.positions.dtype)
+        if len(triangles):  # else nothing of it lies on a surface: it stays as smoothed
+            smoother = core.MeshSmoother(tile.positions, edges, faces=triangles, **options)
+            smoother.still()  # welded, the border rule applied: as the smoothing found the tile
+            after = volume.restored(smoother, after, tile.vertices)
+            del smoother
+        write_tile(tile, after, mesh, output, totals)
+        totals.add_volume(*core.tile_volumes(tile.positions, after, triangles, tile.own, volume.centre))
+        say(f"volume: tile {number} of {len(boxes)}, {len(tile.vertices)} vertices")
+    if volume.too_many:
+        run.notes.append(
+            f"the scan has more than {volume.most_pieces} pieces of parts, whose sums do not fit in --memory-limit "
+            f"{size_words(run.limit)} beside a tile: no closed part got its volume back (raise --memory-limit)"
+        )
+    elif volume.restored_parts:
+        words = f"{volume.restored_parts} closed part{'s' if volume.restored_parts > 1 else ''}"
+        run.notes.append(
+            f"{words} got {'their' if volume.restored_parts > 1 else 'its'} volume back (largest offset "
+            f"{largest:.3g}), from sums over every tile and a pass over the tiles, {time.perf_counter() - tick:.1f} s"
+        )
+    else:
+        run.notes.append("no closed part needed its volume back (the tiles' sums found none)")
+    run.volume_offset = largest
+
+
+class SmoothedCopy:
+    """The smoothed positions of every vertex (float64), in a scratch file beside the target: the volume
+    restore's pass reads each tile's halo from it while it writes the output (each access maps the file for
+    itself: only a tile's pages stay resident)."""
+
+    def __init__(self, path, n):
+        self.path, self.n = path, n
+        with open(path, "wb") as file:
+            file.truncate(24 * n)
+
+    def _map(self, mode):
+        return np.memmap(self.path, dtype=np.float64, mode=mode, shape=(self.n, 3))
+
+    def write(self, rows, values):
+        positions = self._map("r+")
+        positions[rows] = values
+        positions.flush()
+        del positions
+
+    def read(self, rows):
+        positions = self._map("r")
+        values = np.asarray(positions[rows])
+        del positions
+        return values
+
+
+@contextlib.contextmanager
+def smoothed_copy(temporary, n, wanted):
+    """A SmoothedCopy of ``n`` vertices beside ``temporary`` (removed afterwards, however the run ends), or
+    None when not ``wanted``."""
+    if not wanted:
+        yield None
+        return
+    path = files.temporary_path(temporary) + ".tmp"
+    try:
+        yield SmoothedCopy(path, n)
+    finally:
+        with contextlib.suppress(OSError):
+            os.remove(path)
+
+
+def plan_tiles(mesh, found, options, lookup, capacity, limit, run, restoring=False):
     """The boxes of the tiles; ``run`` takes the options every tile runs (``run.options``: the Automatic
-    Amount's choice, made here, where it is asked for), the rings of halo and the margin."""
+    Amount's choice, made here, where it is asked for), the rings of halo and the margin, and whether the
+    tiles add the volume restore's sums (``run.restoring``: ``restoring`` asked, and iterations to run)."""
     if core.tiles_choose(options):
         chosen = choose_on_region(mesh, found, options, lookup)
         options, run.amount = chosen.options, chosen.amount
         run.notes.append(
             f"the Automatic Amount chose {chosen.amount.iterations} iterations on a region of {chosen.region} vertices "
-            f"and ran them on every tile (deviation limit {chosen.limit:.3g}); a tiled run gives no closed part its "
-            "volume back, holds or gives back no part, and Keep in Place's fold guard and its rule for open outlines "
-            "judge each tile on its own (docs/large_scans.md)"
+            f"and ran them on every tile (deviation limit {chosen.limit:.3g}); a tiled run holds or gives back no "
+            "part, and Keep in Place's fold guard and its rule for open outlines judge each tile on its own "
+            "(docs/large_scans.md)"
         )
     method, iterations = options.get("method", "hc"), options["iterations"]
     kept = bool(options.get("keep_in_place")) and options.get("keep_in_place") != core.AUTO
     run.options = options
-    run.rings = core.tile_rings(method, iterations, kept, mesh.normals_per_vertex)
+    run.restoring = bool(restoring and run.amount is not None and iterations > 0)
+    run.rings = core.tile_rings(method, iterations, kept, mesh.normals_per_vertex, volume=run.restoring)
     run.margin = core.tile_margin(run.rings, found.longest_edge)
     run.iterations, run.kept_in_place = iterations, kept
     scale = mesh.vertex_count / len(found.sample)
@@ -337,14 +450,24 @@ def plan_tiles(mesh, found, options, lookup, capacity, limit, run):
     return boxes
 
 
-def smooth_tile(tile, options, mesh, output, totals):
-    """Smooth a tile and write its own vertices' moved positions (and the normals they touch, where the file
-    stores one per vertex) into ``output``."""
+def tile_surface(tile):
+    """(edges, triangles) of a tile's faces (``surface_arrays``)."""
+    sizes = np.full(len(tile.corners), tile.corners.shape[1] if tile.corners.size else 3, dtype=np.int64)
+    return surface_arrays(tile.corners.ravel(), sizes)
+
+
+def smooth_tile(tile, options):
+    """(result, the core.MeshSmoother that ran) of a tile smoothed with ``options``."""
+    edges, triangles = tile_surface(tile)
+    run = core.MeshSmoother(tile.positions, edges, faces=triangles if len(triangles) else None, **options)
+    return run.run(), run
+
+
+def write_tile(tile, result, mesh, output, totals):
+    """Write a tile's own vertices' moved positions (and the normals they touch, where the file stores one per
+    vertex) into ``output``, and count their moves into ``totals``."""
     sizes = np.full(len(tile.corners), tile.corners.shape[1] if tile.corners.size else 3, dtype=np.int64)
     corners = tile.corners.ravel()
-    edges, triangles = surface_arrays(corners, sizes)
-    run = core.MeshSmoother(tile.positions, edges, faces=triangles if len(triangles) else None, **options)
-    result = run.run()
     moved = np.any(result != tile.positions, axis=1)
     own = np.flatnonzero(tile.own)
     rows = own[moved[own]]
@@ -365,6 +488,12 @@ class Totals:
         self.count = self.moved = 0
         self.sum = self.squares = self.largest = 0.0
         self.low, self.high = np.full(3, np.inf), np.full(3, -np.inf)
+        self.volumes, self.open = None, False  # (before, after) times 6, where every tile adds them
+
+    def add_volume(self, before, after, open_):
+        """A tile's volumes before and after (times 6) and whether it found the mesh open."""
+        self.volumes = np.add(self.volumes if self.volumes is not None else 0.0, [before, after])
+        self.open = self.open or open_
 
     def add(self, before, after):
         moves = np.asarray(after, np.float64) - np.asarray(before, np.float64)
@@ -391,11 +520,16 @@ class Totals:
             bbox_diagonal_before=diagonal,
             bbox_diagonal_after=after,
             bbox_change=(after - diagonal) / diagonal if diagonal else 0.0,
-            closed=False,
-            volume_before=None,
-            volume_after=None,
-            volume_change=None,
+            **self._volume(),
         )
+
+    def _volume(self):
+        """The Change's volume fields: measured where every tile added its volumes and none found the mesh open."""
+        if self.volumes is None or self.open:
+            return {"closed": False, "volume_before": None, "volume_after": None, "volume_change": None}
+        before, after = self.volumes / 6.0
+        change = (after - before) / abs(before) if before else None
+        return {"closed": True, "volume_before": before, "volume_after": after, "volume_change": change}
 
 
 def choose_on_region(mesh, found, options, lookup):

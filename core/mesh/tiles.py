@@ -19,10 +19,10 @@ The boxes cut space where the vertices are (``tile_boxes``): a k-d split of an e
 each box cut at the median along its longest side until its tile (box and halo) holds at most the
 vertices a tile may hold.
 
-What needs a whole part at once cannot run tiled: the Automatic Amount's choice (made once, on a region,
-and run on every tile with the numbers it chose), the volume restore of closed parts, the parts it
-holds or gives back (core.mesh.collapse), Keep Sharp Edges, Gauss-Seidel order and an early stop on the
-largest move (``tiled_problem``).
+What needs a whole part at once cannot run tiled as it is: the Automatic Amount's choice (made once, on
+a region, and run on every tile with the numbers it chose), the volume restore of closed parts (its sums
+gathered tile by tile: core.mesh.tile_volume), the parts it holds or gives back (core.mesh.collapse),
+Keep Sharp Edges, Gauss-Seidel order and an early stop on the largest move (``tiled_problem``).
 """
 
 from dataclasses import dataclass, replace
@@ -39,20 +39,24 @@ MOST_TILES = 4096  # more boxes than this: the halo is most of every tile (``til
 _SLACK = 1e-9  # relative: the margin covers the rounding of the lengths it is made of
 
 
-def tile_rings(method, iterations, keep_in_place=False, normals=False):
+def tile_rings(method, iterations, keep_in_place=False, normals=False, volume=False):
     """The rings around a vertex that its result reads (see the module docstring): the halo a tile needs.
-    ``normals``: the result's vertex normals are written too.
+    ``normals``: the result's vertex normals are written too; ``volume``: the tile adds its sums for the
+    volume restore (core.mesh.tile_volume), whose triangles' corners lie a ring out and read the normals
+    there: two rings more (its normals are written by the restore's own pass).
 
     Examples
     --------
     >>> import core
     >>> core.tile_rings("hc", 10), core.tile_rings("plain", 10), core.tile_rings("hc", 10, normals=True)
     (20, 10, 21)
+    >>> core.tile_rings("hc", 10, normals=True, volume=True)
+    22
     """
     rings = (2 if method == "hc" else 1) * int(iterations)
     if keep_in_place:
         rings += 1 + UNFOLD_ROUNDS
-    return rings + (1 if normals else 0)
+    return rings + (2 if volume else 1 if normals else 0)
 
 
 def tile_margin(rings, longest_edge):

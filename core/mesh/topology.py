@@ -118,6 +118,10 @@ class Surface:
         and its reverse once (a part without triangles counts as closed: it has nothing open).
     border : (m, 2) int ndarray
         The edges in exactly one triangle, as (low, high) pairs, sorted.
+    unmatched : (n,) bool ndarray
+        The vertices with a half-edge out or in that has no single reverse: a part is closed where it has
+        none. A vertex's own triangles decide it, so a tile of a mesh answers it for the vertices whose
+        triangles it holds (core.mesh.tile_volume).
     """
 
     parts: int
@@ -125,6 +129,7 @@ class Surface:
     used: np.ndarray
     closed: np.ndarray
     border: np.ndarray
+    unmatched: np.ndarray
 
 
 def surface(triangles, n_vertices):
@@ -190,7 +195,7 @@ def surface_steps(triangles, n_vertices):
             bad[np.repeat(rows, counts)[wrong]] = True
     closed = np.bincount(part_of_vertex[bad], minlength=parts) == 0
     border = _border(np.flatnonzero(bad), indptr, tails, into, heads, n).astype(index)
-    return Surface(parts, part_of_vertex, degree > 0, closed, border)
+    return Surface(parts, part_of_vertex, degree > 0, closed, border, bad)
 
 
 def _border(rows, indptr, tails, into, heads, n):

@@ -68,13 +68,20 @@ def _before_steps(before, triangles, surface):
     planar = _planar(before)
     low, high = _boxes(planar, surface.part_of_vertex, surface.used, surface.parts)
     centre = _centre(before)
-    volumes = np.zeros(surface.parts)
+    volumes = yield from volume_steps(planar, triangles, surface.part_of_vertex, surface.parts, centre)
+    return Before(centre, volumes, low, high)
+
+
+def volume_steps(planar, triangles, part_of_vertex, parts, centre):
+    """Per part (parts,) the volume its triangles enclose about ``centre``, times 6, of (3, n) planar
+    positions (a triangle counts to its first corner's part), in slices (yields between blocks)."""
+    volumes = np.zeros(parts)
     for start in range(0, len(triangles), _BLOCK):
         block = np.ascontiguousarray(triangles[start : start + _BLOCK].T, dtype=index_dtype(planar.shape[1]))
         a, b, c = corner_rows(planar, block, centre)
-        volumes += part_sums([dot(a, cross(b, c))], surface.part_of_vertex, block, surface.parts)[0]
+        volumes += part_sums([dot(a, cross(b, c))], part_of_vertex, block, parts)[0]
         yield
-    return Before(centre, volumes, low, high)
+    return volumes
 
 
 def _planar(points):
@@ -166,26 +173,55 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
     measuring = normals_and_measures(planar_after, triangles, part_of_vertex, parts, centre, _BLOCK)
     normals, (c0, area) = yield from measuring
     normals *= movable
-    # An offset d moves every vertex by at most |d|: outwards, each side of the box grows by at most 2 d.
-    # Inwards the box does not grow; there half the part's thinnest side bounds d (it would turn inside out).
-    outward = np.maximum(((1.0 + GROWTH) * extent - (high_after - low_after)).min(axis=1), 0.0) / 2.0
-    inward = (high_after - low_after).min(axis=1) / 2.0
+    outward, inward = offset_bounds(extent, high_after - low_after, limit)
+    has_movable = np.bincount(part_of_vertex[movable & used], minlength=parts) > 0
+    eligible = eligible_parts(closed & has_movable, sizes, target, extent, c0, area, limit)
+    if not eligible.any():
+        return np.array(after, dtype=dtype), np.zeros(parts)
+    c1, c2, c3 = yield from _cubic_steps(planar_after, normals, triangles, part_of_vertex, parts, centre)
+    del planar_after
+    offsets = solve_offsets(target, (c0, c1, c2, c3), eligible, inward, outward)
+    result = np.empty((n, 3), dtype=dtype)
+    for start in range(0, n, _VERTEX_BLOCK):
+        rows = slice(start, start + _VERTEX_BLOCK)
+        result[rows] = moved_along(after[rows], normals[:, rows], offsets[part_of_vertex[rows]])
+    return result, offsets
+
+
+def offset_bounds(extent, extent_after, limit=None):
+    """(outward, inward): per part the largest offset each way, of its (parts, 3) bounding-box sides before
+    (``extent``) and after smoothing. An offset d moves every vertex by at most |d|: outwards, each side of
+    the box grows by at most 2 d; inwards the box does not grow, and half the part's thinnest side bounds d
+    (it would turn inside out). ``limit`` bounds both."""
+    outward = np.maximum(((1.0 + GROWTH) * extent - extent_after).min(axis=1), 0.0) / 2.0
+    inward = extent_after.min(axis=1) / 2.0
     if limit is not None:
         outward, inward = np.minimum(outward, float(limit)), np.minimum(inward, float(limit))
-    has_movable = np.bincount(part_of_vertex[movable & used], minlength=parts) > 0
-    eligible = closed & (sizes > DEGENERATE) & has_movable
+    return outward, inward
+
+
+def eligible_parts(candidates, sizes, target, extent, c0, area, limit=None):
+    """(parts,) bool: the parts whose volume is given back, of the ``candidates`` (closed, with a movable
+    vertex), their used vertices ``sizes``, volumes before (``target``) and after (``c0``), times 6, box
+    sides before and areas (times 2): more than DEGENERATE vertices, a volume, kept more than KEPT of it,
+    and an offset that is not negligible against ``limit``."""
+    eligible = candidates & (sizes > DEGENERATE)
     eligible &= np.abs(target) > 6.0 * _FLAT * np.linalg.norm(extent, axis=1) ** 3
     # Smoothing that took more than half the volume collapsed the part (or turned it inside out): no
     # uniform offset mends that, and one that tried would balloon it. (Same sign as target: c0 / target.)
     eligible &= c0 * np.sign(target) > KEPT * np.abs(target)
     if limit is not None:  # the offset that gives the volume back, about its change over the area, is negligible
         eligible &= np.abs(target - c0) > NEGLIGIBLE * float(limit) * 3.0 * area
-    if not eligible.any():
-        return np.array(after, dtype=dtype), np.zeros(parts)
-    c1, c2, c3 = yield from _cubic_steps(planar_after, normals, triangles, part_of_vertex, parts, centre)
-    del planar_after
-    eligible &= c1 > 0.0  # the volume grows as the surface moves along its normals
-    offsets = np.zeros(parts)
+    return eligible
+
+
+def solve_offsets(target, cubic, eligible, inward, outward):
+    """(parts,) offsets: per ``eligible`` part the root of target = c0 + c1 d + c2 d^2 + c3 d^3 (``cubic``:
+    (c0, c1, c2, c3)) by Newton steps from 0, clipped to [-inward, outward]; 0 where the volume does not
+    grow along the normals or Newton does not settle near a root."""
+    c0, c1, c2, c3 = cubic
+    eligible = eligible & (c1 > 0.0)  # the volume grows as the surface moves along its normals
+    offsets = np.zeros(len(target))
     for _ in range(_NEWTON_STEPS):
         d = offsets
         missing = target - (c0 + d * (c1 + d * (c2 + d * c3)))
@@ -198,13 +234,12 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
     missing = target - (c0 + offsets * (c1 + offsets * (c2 + offsets * c3)))
     # A root is sensible where Newton settled near it (the volume a cubic: from 0 it takes two or three steps).
     sensible = eligible & np.isfinite(offsets) & (np.abs(missing) <= _SETTLED * np.abs(target))
-    offsets = np.where(sensible, np.clip(offsets, -inward, outward), 0.0)
-    result = np.empty((n, 3), dtype=dtype)
-    for start in range(0, n, _VERTEX_BLOCK):
-        rows = slice(start, start + _VERTEX_BLOCK)
-        moved = np.asarray(after[rows], dtype=np.float64) + normals[:, rows].T * offsets[part_of_vertex[rows]][:, None]
-        result[rows] = moved
-    return result, offsets
+    return np.where(sensible, np.clip(offsets, -inward, outward), 0.0)
+
+
+def moved_along(after, normals, offsets):
+    """(m, 3) float64: (m, 3) positions ``after`` moved by ``offsets`` (m,) along their (3, m) ``normals``."""
+    return np.asarray(after, dtype=np.float64) + normals.T * offsets[:, None]
 
 
 def _centre(points):

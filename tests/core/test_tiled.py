@@ -96,7 +96,7 @@ def smooth_tiled(tmp_path, data, options, capacity, name="scan.ply"):
     source.write_bytes(data)
     lines = []
     run = tiled.smooth_file(str(source), str(target), options, 8 << 30, say=lines.append, capacity=capacity)
-    assert len(lines) == run.tiles  # a line per tile
+    assert len(lines) == run.tiles * (2 if run.restoring else 1)  # a line per tile (and pass)
     return run, target.read_bytes()
 
 
@@ -163,13 +163,18 @@ def test_the_amount_chosen_once_runs_on_every_tile(tmp_path, monkeypatch):
     automatic.update(max_deviation=core.AUTO, keep_in_place=core.AUTO)
     run, got = smooth_tiled(tmp_path, data, automatic, capacity=45_000)
     assert run.tiles >= 4 and run.amount.iterations == 4 and run.amount.capped and run.kept_in_place
-    assert "volume" in run.notes[-1] and "fold guard" in run.notes[-1] and "outlines" in run.notes[-1]
+    assert "fold guard" in run.notes[1] and "outlines" in run.notes[1] and "volume" not in run.notes[1]
+    assert run.restoring and "volume back" in run.notes[-1]  # its volume change is negligible: no offset
     # Every tile ran the numbers chosen: the whole mesh run with them, within a millionth of its size.
     chosen = {**EXPLICIT, "alpha": 0.0, "beta": run.amount.beta, "iterations": 4, "keep_in_place": True}
     chosen["max_deviation"] = 4.0 * run.amount.sigma
     whole = ply.PlyFile(whole_bytes(data, chosen)).positions
     diagonal = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
-    assert np.abs(ply.PlyFile(got).positions - whole).max() <= 1e-6 * diagonal
+    result = ply.PlyFile(got).positions
+    assert np.abs(result - whole).max() <= 1e-6 * diagonal
+    # The report measures the volume of the closed torus, as the whole run's report does.
+    measured = core.measure_change(points.astype(np.float32), result, faces)
+    assert run.change.closed and run.change.volume_change == pytest.approx(measured.volume_change, abs=1e-6)
 
 
 class Stop(Exception):
