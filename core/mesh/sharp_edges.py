@@ -49,8 +49,9 @@ Everything runs on all faces or vertices at once: the face rings are one sparse 
 sharing a vertex with each face, about 13: the corners' pattern times the incidence), built once per run
 in blocks of rows, and every pass over it works a chunk of rows at a time (its gathers in cache), the
 chunks shared out over the threads (core.parallel). The guided filter keeps one single-precision weight
-a pair for its passes; the plain one weighs each chunk as it sums it. A fitting pass gathers each
-triangle's corners and sums around each vertex (one product with the incidence).
+a pair for its passes; the plain one weighs each chunk as it sums it. A fitting pass sums each
+triangle's corners (one product with the corners' pattern) and sums around each vertex (one product
+with the incidence).
 Fixed vertices never move (their positions still place their faces' planes); ``influence`` scales each
 step's move, as core.smoothing scales an iteration's.
 """
@@ -152,13 +153,15 @@ class FaceRings:
     ----------
     triangles : (t, 3) the triangles; corners : (3, t) the same, a corner at a time (intp).
     incidence : (n, t) CSR, 1 where vertex i is a corner of triangle f.
+    vertex_blocks, corner_blocks : core.parallel.RowBlocks of the incidence's pattern and of its transpose's
+        (each triangle's corners, in order: a product sums them).
     indptr, indices, counts : the faces sharing a vertex with each face, itself included: a CSR pattern
         of (t, t), columns increasing, without values (each pass reads it with weights of its own).
     chunks : (first, end) row ranges of that pattern with about ``_BLOCK`` entries each: a pass works a
         chunk at a time, so its gathers stay in cache, and the chunks are shared out over the threads.
     faces_at : (n,) the number of triangles around each vertex, |F_i|.
     border : (n,) bool, the vertices on an edge of one triangle.
-    across : (t, 3) the triangle across each triangle's edge from corner k to corner k + 1 (itself on an
+    across : (3, t) the triangle across each triangle's edge from corner k to corner k + 1 (itself on an
         open border; one of them where more than two triangles share the edge), intp.
     """
 
@@ -183,6 +186,9 @@ class FaceRings:
         self.incidence.data[:] = 1.0  # a triangle with a repeated corner counts once at that vertex
         self.faces_at = np.diff(self.incidence.indptr)
         self.vertex_blocks = parallel.RowBlocks(self.incidence.indptr, self.incidence.indices, t)
+        index = np.int32 if 3 * t < 2**31 else np.int64  # one type for both, as SciPy's kernels need
+        corner_indptr = np.arange(0, 3 * t + 1, 3, dtype=index)
+        self.corner_blocks = parallel.RowBlocks(corner_indptr, triangles.astype(index).ravel(), n_vertices)
         yield
         self.indptr, self.indices = yield from _ring_pattern(self.corners, self.incidence)
         self.counts = np.diff(self.indptr)
@@ -288,7 +294,7 @@ def _edge_neighbours(triangles, n_vertices):
     alone = ~(np.r_[same, False] | np.r_[False, same])
     border = np.zeros(n_vertices, dtype=bool)
     border[pairs[order[alone]].ravel()] = True
-    return across.reshape(t, 3), border
+    return np.ascontiguousarray(across.reshape(t, 3).T), border
 
 
 def _unit(vectors, good=None):
@@ -331,15 +337,19 @@ def guidance_normals(normals, rings):
     t = normals.shape[0]
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
     means = _unit_planar(rings.ring_sums(planar))
-    steep, summed = np.zeros(t), np.zeros(t)
-    for k in range(3):
-        other = rings.across[:, k]
-        step = np.zeros(t)
-        for c in range(3):
-            step += (planar[c] - planar[c].take(other)) ** 2
-        np.sqrt(step, out=step)
-        np.maximum(steep, step, out=steep)
-        summed += step
+    steep, summed = np.empty(t), np.empty(t)
+
+    def edge_steps(first, end):  # s_a and S_a over the three edges of triangles first:end
+        steep[first:end], summed[first:end] = 0.0, 0.0
+        for other in rings.across[:, first:end]:
+            step = np.zeros(end - first)
+            for c in range(3):
+                step += (planar[c, first:end] - planar[c].take(other)) ** 2
+            np.sqrt(step, out=step)
+            np.maximum(steep[first:end], step, out=steep[first:end])
+            summed[first:end] += step
+
+    parallel.run_chunks(edge_steps, t, _FACE_CHUNK)
     spread, steepest = np.empty(t), np.empty(t)
 
     def patches(first, end):  # max (1 - n_a . m) = 1 - min n_a . m
@@ -356,38 +366,47 @@ def guidance_normals(normals, rings):
 
     def most_consistent(first, end):
         columns, _ = rings.padded(first, end)
-        candidates = consistency.take(columns)
-        place = (candidates.argmin(axis=0), np.arange(end - first))  # the first on a tie
-        best[first:end], chosen[first:end] = candidates[place], columns[place]
+        place, best[first:end] = _first_smallest(consistency.take(columns))  # the first on a tie
+        chosen[first:end] = columns[place, np.arange(end - first)]
 
     rings.each_chunk(most_consistent)
-    guidance = means.T[chosen]
-    vertex_means, vertex_consistency = _vertex_ring_consistency(normals, rings, steep, summed)
-    corner_consistency = VERTEX_RING_WEIGHT * vertex_consistency[rings.triangles]
-    corner = np.argmin(corner_consistency, axis=1)
-    smaller = np.flatnonzero(np.take_along_axis(corner_consistency, corner[:, None], axis=1)[:, 0] < best)
-    guidance[smaller] = vertex_means[rings.triangles[smaller, corner[smaller]]]
-    return guidance
+    guidance = np.stack([row.take(chosen) for row in means])
+    vertex_means, vertex_consistency = _vertex_ring_consistency(normals, planar, rings, steep, summed)
+    at_corners = [VERTEX_RING_WEIGHT * vertex_consistency.take(corner) for corner in rings.corners]
+    lowest = np.minimum(np.minimum(at_corners[0], at_corners[1]), at_corners[2])
+    smaller = np.flatnonzero(lowest < best)
+    lowest = lowest[smaller]
+    corner = np.where(at_corners[0][smaller] == lowest, 0, np.where(at_corners[1][smaller] == lowest, 1, 2))
+    guidance[:, smaller] = vertex_means[:, rings.corners[corner, smaller]]  # the first corner on a tie
+    return guidance.T
 
 
-def _vertex_ring_consistency(normals, rings, steep, summed):
-    """The unit mean normal and the consistency H (``guidance_normals``) of each vertex's ring of faces;
-    H = inf for a vertex of no face."""
+def _vertex_ring_consistency(normals, planar, rings, steep, summed):
+    """The unit mean normals (3, n) and the consistency H (``guidance_normals``) of each vertex's ring of
+    faces; H = inf for a vertex of no face. ``planar``: the normals as (3, t) rows. A chunk of vertices at a
+    time."""
     incidence = rings.incidence
     n = incidence.shape[0]
-    means = _unit(incidence @ normals)
-    starts = incidence.indptr[:-1]
-    around = np.flatnonzero(rings.faces_at > 0)
-    rows = np.repeat(np.arange(n), rings.faces_at)
-    columns = incidence.indices.astype(np.intp)
-    cosine = normals[:, 0].take(columns) * means[:, 0].take(rows)
-    for c in (1, 2):
-        cosine += normals[:, c].take(columns) * means[:, c].take(rows)
+    planar_means = np.ascontiguousarray(_unit(incidence @ normals).T)
+    summed_around = incidence @ summed
     consistency = np.full(n, np.inf)
-    spread = np.maximum.reduceat(1.0 - cosine, starts[around])
-    steepest = np.maximum.reduceat(steep.take(columns), starts[around])
-    consistency[around] = spread * steepest / (1e-9 + (incidence @ summed)[around])
-    return means, consistency
+
+    def chunk(first, end):  # max (1 - n_a . m) = 1 - min n_a . m
+        counts = rings.faces_at[first:end]
+        starts = incidence.indptr[first:end] - incidence.indptr[first]
+        columns = incidence.indices[incidence.indptr[first] : incidence.indptr[end]].astype(np.intp)
+        if columns.size == 0:
+            return
+        cosine = planar[0].take(columns) * np.repeat(planar_means[0, first:end], counts)
+        for c in (1, 2):
+            cosine += planar[c].take(columns) * np.repeat(planar_means[c, first:end], counts)
+        around = np.flatnonzero(counts > 0)
+        spread = 1.0 - np.minimum.reduceat(cosine, starts[around])
+        steepest = np.maximum.reduceat(steep.take(columns), starts[around])
+        consistency[first + around] = spread * steepest / (1e-9 + summed_around[first + around])
+
+    parallel.run_chunks(chunk, n, _FACE_CHUNK)
+    return planar_means, consistency
 
 
 def nearest_plane_normals(points, normals, rings):
@@ -396,56 +415,52 @@ def nearest_plane_normals(points, normals, rings):
     on a tie). Where filtering leaves a row of faces along a crease between the two sides' normals,
     these faces take the side their corners lie on: the crease stays one edge, not a rounded strip.
 
-    With face i's centroid c_i and the second moment C_i = sum_k (x_k - c_i)(x_k - c_i)^T of its corners
-    about it, that sum is n_j^T C_i n_j + 3 (n_j . c_i - n_j . c_j)^2: per pair the candidate's normal and
-    offset, the rest is face i's. Positions about their mean: the offsets stay of the mesh's size. A chunk
-    of the ring pattern's rows at a time (``FaceRings.padded``)."""
+    The sum is taken as sum_k (n_j . x_k - o_j)^2 with o_j = n_j . c_j: per pair the candidate's normal and
+    offset (gathered), face i's corners broadcast. Positions about their mean: the offsets stay of the
+    mesh's size. A chunk of the ring pattern's rows at a time (``FaceRings.padded``)."""
     t = normals.shape[0]
     x = np.ascontiguousarray(points.T, dtype=np.float64)
     x = x - x.mean(axis=1, keepdims=True)
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
-    centroids = np.empty((3, t))
-    parallel.run_chunks(lambda a, b: _centroids(x, rings.corners[:, a:b], centroids[:, a:b]), t, _FACE_CHUNK)
-    offsets = np.einsum("kt,kt->t", planar, centroids)  # n_j . c_j
+    offsets = np.empty(t)  # n_j . c_j
+
+    def plane_offsets(faces, corner_sums):
+        corner_sums /= 3.0
+        offsets[faces] = np.einsum("kt,kt->t", planar[:, faces], corner_sums)
+
+    rings.corner_blocks.run(lambda block: block.neighbour_sums(x, plane_offsets))
     chosen = np.empty(t, dtype=np.intp)
 
     def nearest(first, end):
         columns, _ = rings.padded(first, end)
-        moments = _corner_moments(x, rings.corners[:, first:end], centroids[:, first:end])
         candidate = [row.take(columns) for row in planar]
-        distance = candidate[0] * centroids[0, first:end] - offsets.take(columns)
-        for c in (1, 2):
-            distance += candidate[c] * centroids[c, first:end]
-        cost = 3.0 * distance * distance
-        for moment, (a, b) in zip(moments, _MOMENT_PAIRS):
-            cost += (moment if a == b else 2.0 * moment) * candidate[a] * candidate[b]
-        chosen[first:end] = columns[cost.argmin(axis=0), np.arange(end - first)]  # the first on a tie
+        offset = offsets.take(columns)
+        cost, residual = np.zeros(columns.shape), np.empty(columns.shape)
+        for corner in rings.corners[:, first:end]:
+            np.multiply(candidate[0], x[0].take(corner), out=residual)
+            for c in (1, 2):
+                residual += candidate[c] * x[c].take(corner)
+            residual -= offset
+            residual *= residual
+            cost += residual
+        chosen[first:end] = columns[_first_smallest(cost)[0], np.arange(end - first)]
 
     rings.each_chunk(nearest)
     return normals[chosen]
 
 
 _FACE_CHUNK = 1 << 15  # triangles per chunk of the per-triangle work: its temporaries stay in cache
-_MOMENT_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the coordinates of C's six entries
+_MOMENT_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the entries of a symmetric 3 x 3
 
 
-def _centroids(x, corners, out):
-    """``out`` (3, k) = the centroids of the triangles of ``corners`` (3, k) on planar positions ``x``."""
-    for c in range(3):
-        np.add(x[c].take(corners[0]), x[c].take(corners[1]), out=out[c])
-        out[c] += x[c].take(corners[2])
-        out[c] /= 3.0
-    return out
-
-
-def _corner_moments(x, corners, centroids):
-    """(6, k): the entries ``_MOMENT_PAIRS`` of sum_k (x_k - c)(x_k - c)^T over each triangle's corners."""
-    moments = np.zeros((6, corners.shape[1]))
-    for corner in corners:
-        away = [x[c].take(corner) - centroids[c] for c in range(3)]
-        for moment, (a, b) in zip(moments, _MOMENT_PAIRS):
-            moment += away[a] * away[b]
-    return moments
+def _first_smallest(values):
+    """(the index along the first axis of each column's smallest of ``values`` (K, m), the first on a tie;
+    that smallest): ``values.argmin(axis=0)`` without its transposed copy (a smallest, a comparison, a
+    largest rank)."""
+    smallest = values.min(axis=0)
+    rank = np.arange(values.shape[0], 0, -1, dtype=np.min_scalar_type(values.shape[0]))[:, None]
+    found = np.multiply(values == smallest, rank, dtype=rank.dtype).max(axis=0, initial=1)
+    return values.shape[0] - found.astype(np.intp), smallest
 
 
 def _row_blocks(indptr, t):
@@ -564,7 +579,8 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     over the triangles f around i (``step_share``: (n,) 0 for vertices that stay, else the influence).
 
     That is share_i / |F_i| (sum_f n_f (n_f . c_f) - M_i x_i) with M_i = sum_f n_f n_f^T, fixed for the
-    step: a pass gathers each triangle's corners for its offset n_f . c_f, sums n_f times it around each
+    step: a pass sums each triangle's corners for its offset n_f . c_f (one product with the corners'
+    pattern), sums n_f times it around each
     vertex (one product with the incidence) and subtracts M_i x_i, on the threads. A generator: yields once
     the M_i are made and after every ``FIT_SLICE`` passes but the last, returns the positions."""
     n, t = points.shape[0], normals.shape[0]
@@ -576,10 +592,10 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     moved, pulled = np.empty_like(x), np.empty((3, t))
     yield  # making the M_i takes as long as a few passes
 
-    def offsets(first, end):  # pulled = n_f (n_f . c_f) for triangles first:end
-        centroid = _centroids(x, rings.corners[:, first:end], pulled[:, first:end])
-        offset = np.einsum("kt,kt->t", planar[:, first:end], centroid)
-        np.multiply(planar[:, first:end], offset, out=pulled[:, first:end])
+    def offsets(faces, corner_sums):  # pulled = n_f (n_f . c_f) on a chunk of triangles
+        corner_sums /= 3.0
+        offset = np.einsum("kt,kt->t", planar[:, faces], corner_sums)
+        np.multiply(planar[:, faces], offset, out=pulled[:, faces])
 
     def update(rows, sums):  # moved = x + share / |F| (sums - M x) on a chunk of vertices
         here, m = x[:, rows], tensor[:, rows]
@@ -589,7 +605,7 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
         np.add(here, scale[rows] * sums, out=moved[:, rows])
 
     for done in range(1, iterations + 1):
-        parallel.run_chunks(offsets, t, _FACE_CHUNK)
+        rings.corner_blocks.run(lambda block, x=x: block.neighbour_sums(x, offsets))
         rings.vertex_blocks.run(lambda block: block.neighbour_sums(pulled, update))
         x, moved = moved, x
         if done % FIT_SLICE == 0 and done < iterations:
