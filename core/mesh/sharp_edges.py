@@ -158,7 +158,8 @@ class FaceRings:
     indptr, indices, counts : the faces sharing a vertex with each face, itself included: a CSR pattern
         of (t, t), columns increasing, without values (each pass reads it with weights of its own).
     chunks : (first, end) row ranges of that pattern with about ``_BLOCK`` entries each: a pass works a
-        chunk at a time, so its gathers stay in cache, and the chunks are shared out over the threads.
+        chunk at a time, so its gathers stay in cache, and the chunks are shared out over the threads;
+        chunk_indptrs : each chunk's indptr, from 0.
     faces_at : (n,) the number of triangles around each vertex, |F_i|.
     border : (n,) bool, the vertices on an edge of one triangle.
     across : (3, t) the triangle across each triangle's edge from corner k to corner k + 1 (itself on an
@@ -193,6 +194,8 @@ class FaceRings:
         self.indptr, self.indices = yield from _ring_pattern(self.corners, self.incidence)
         self.counts = np.diff(self.indptr)
         self.chunks = _row_blocks(self.indptr, t)
+        rebased = (self.indptr[a : b + 1] - self.indptr[a] for a, b in self.chunks)
+        self.chunk_indptrs = [part.astype(self.indices.dtype) for part in rebased]
         self.blocks = parallel.RowBlocks(self.indptr, self.indices, t)
         self.threads = parallel.thread_count() if self.indices.size >= parallel.MIN_WORK else 1
         yield
@@ -209,6 +212,11 @@ class FaceRings:
         """``task(first, end)`` for every chunk of rows, the chunks shared out over the threads in runs."""
         runs = np.array_split(np.arange(len(self.chunks)), self.threads)
         parallel.run_all([lambda run=run: [task(*self.chunks[i]) for i in run] for run in runs if run.size])
+
+    def each_chunk_index(self, task):
+        """``task(index)`` for every chunk's index in ``chunks``, the chunks shared out over the threads in runs."""
+        runs = np.array_split(np.arange(len(self.chunks)), self.threads)
+        parallel.run_all([lambda run=run: [task(i) for i in run] for run in runs if run.size])
 
     def ring_sums(self, values):
         """(k, t) sums over each face's ring of planar ``values`` (k, t) (or (t,) to (t,))."""
@@ -493,80 +501,112 @@ def filter_steps(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS, gu
     and the fitting needs their directions to far fewer digits than positions."""
     planar = np.ascontiguousarray(normals.T, dtype=FILTER_DTYPE)
     total = np.empty_like(planar)
-    weights = lonely = None
     if guidance is not None:
         weights = np.empty(rings.indices.size, dtype=FILTER_DTYPE)
         judged = np.ascontiguousarray(guidance.T, dtype=FILTER_DTYPE)
-        lonely = _filter_pass(rings, cos_threshold, judged=judged, keep=weights)
+        lonely = _lonely_rings(rings, _fixed_weights(rings, cos_threshold, judged, weights))
     for _ in range(iterations):
         if guidance is None:
-            lonely = _filter_pass(rings, cos_threshold, planar, total, judged=planar)
+            lonely = _lonely_rings(rings, _filter_pass(rings, cos_threshold, planar, total))
         else:
-            _filter_pass(rings, cos_threshold, planar, total, weights=weights)
-        if lonely.size:
-            _ring_means(total, planar, rings, lonely)
-        lengths = np.sqrt(np.einsum("kt,kt->t", total, total))
-        good = lengths > 0.0  # else the face keeps its normal
-        np.divide(1.0, lengths, out=lengths, where=good)
-        total *= lengths
-        if not good.all():
-            total[:, ~good] = planar[:, ~good]
+            _weighted_pass(rings, weights, planar, total)
+        _finish_pass(total, planar, lonely)
         planar, total = total, planar
         yield
     return np.ascontiguousarray(planar.T, dtype=np.float64)
 
 
-def _filter_pass(rings, cos_threshold, planar=None, total=None, judged=None, weights=None, keep=None):
-    """``total`` (3, t) = W ``planar`` over the face rings (if given), W's weights read from ``weights`` or
-    computed from the cosines of ``judged`` (3, t) and kept in ``keep`` (if given). With ``judged``, returns
-    the lonely faces: at most one positive weight in their row (``filter_steps``)."""
-    t = rings.counts.size
-    positive = None if judged is None else np.empty(t, dtype=np.intp)
+def _fixed_weights(rings, cos_threshold, judged, out):
+    """``out`` (the pattern's entries) = the weights (g_i . g_j - T)^2 where positive, else 0, from the
+    cosines of ``judged`` (3, t), a chunk of rows at a time in the pattern's order; returns the lonely
+    faces: at most one positive weight in their row (``filter_steps``)."""
+    lonely = [None] * len(rings.chunks)
 
-    def chunk(first, end):
-        if judged is None:
-            pairs = slice(rings.indptr[first], rings.indptr[end])
-            _weighted_rows(weights[pairs], rings.indices[pairs], rings.counts[first:end], planar, total[:, first:end])
-            return
-        columns, real = rings.padded(first, end)
-        gathered = [row.take(columns) for row in judged]
-        chunk_weights = judged[0, first:end] * gathered[0]
+    def chunk(index):
+        first, end = rings.chunks[index]
+        pairs = slice(rings.indptr[first], rings.indptr[end])
+        columns, counts = rings.indices[pairs].astype(np.intp), rings.counts[first:end]
+        weights = np.repeat(judged[0, first:end], counts) * judged[0].take(columns)
         for k in (1, 2):
-            chunk_weights += judged[k, first:end] * gathered[k]
+            weights += np.repeat(judged[k, first:end], counts) * judged[k].take(columns)
+        weights -= cos_threshold
+        np.maximum(weights, 0.0, out=weights)
+        weights *= weights
+        out[pairs] = weights
+        positive = np.add.reduceat(weights != 0.0, rings.chunk_indptrs[index][:-1], dtype=np.intp)
+        lonely[index] = first + np.flatnonzero(positive <= 1)
+
+    rings.each_chunk_index(chunk)
+    return np.concatenate(lonely)
+
+
+def _weighted_pass(rings, weights, planar, total):
+    """``total`` (3, t) = W ``planar`` (3, t) over the face rings, W's entries ``weights``, a chunk at a time."""
+
+    def chunk(index):
+        first, end = rings.chunks[index]
+        pairs = slice(rings.indptr[first], rings.indptr[end])
+        _weighted_rows(weights[pairs], rings.indices[pairs], rings.chunk_indptrs[index], planar, total[:, first:end])
+
+    rings.each_chunk_index(chunk)
+
+
+def _filter_pass(rings, cos_threshold, planar, total):
+    """``total`` (3, t) = W ``planar`` (3, t) over the face rings with Sun et al.'s weights from the cosines
+    of ``planar`` itself, computed and used a chunk at a time (the gathered normals serve both); returns
+    the lonely faces: at most one positive weight in their row (``filter_steps``)."""
+    lonely = [None] * len(rings.chunks)
+
+    def chunk(index):
+        first, end = rings.chunks[index]
+        columns, real = rings.padded(first, end)
+        gathered = [row.take(columns) for row in planar]
+        chunk_weights = planar[0, first:end] * gathered[0]
+        for k in (1, 2):
+            chunk_weights += planar[k, first:end] * gathered[k]
         chunk_weights -= cos_threshold
         np.maximum(chunk_weights, 0.0, out=chunk_weights)
         chunk_weights *= chunk_weights
         chunk_weights *= real  # the repeated columns past each row's end weigh nothing
-        positive[first:end] = np.count_nonzero(chunk_weights, axis=0)
-        if keep is not None:
-            keep[rings.indptr[first] : rings.indptr[end]] = chunk_weights.T[real.T]
-        if total is not None:  # the weights of the normals themselves: their gathers serve twice
-            for k, values in enumerate(gathered if planar is judged else (row.take(columns) for row in planar)):
-                np.sum(chunk_weights * values, axis=0, out=total[k, first:end])
+        lonely[index] = first + np.flatnonzero(np.count_nonzero(chunk_weights, axis=0) <= 1)
+        for k, values in enumerate(gathered):
+            np.sum(chunk_weights * values, axis=0, out=total[k, first:end])
 
-    rings.each_chunk(chunk)
-    return None if judged is None else np.flatnonzero(positive <= 1)
+    rings.each_chunk_index(chunk)
+    return np.concatenate(lonely)
 
 
-def _weighted_rows(weights, columns, counts, planar, out):
-    """``out`` (3, rows) = the rows' weighted sums of planar (3, t) ``planar`` (a CSR chunk of the rings)."""
-    local = np.zeros(counts.size + 1, dtype=columns.dtype)
-    np.cumsum(counts, out=local[1:])
+def _lonely_rings(rings, lonely):
+    """(the ``lonely`` faces, their rings' columns, counts and starts: ``FaceRings.rows_of``)."""
+    return (lonely, *rings.rows_of(lonely))
+
+
+def _finish_pass(total, planar, lonely):
+    """The weighted sums ``total`` (3, t) made the pass's normals, in place: the lonely faces' ring means of
+    ``planar`` where at least a tenth of a unit long (``lonely``: ``_lonely_rings``), then unit length; a
+    face whose sum vanishes keeps its normal."""
+    faces, columns, counts, starts = lonely
+    if faces.size:
+        mean = np.add.reduceat(planar[:, columns], starts, axis=1) / counts
+        agree = np.einsum("kt,kt->t", mean, mean) >= 0.01  # a ring that is no corner of its own
+        total[:, faces[agree]] = mean[:, agree]
+    lengths = np.sqrt(np.einsum("kt,kt->t", total, total))
+    good = lengths > 0.0  # else the face keeps its normal
+    np.divide(1.0, lengths, out=lengths, where=good)
+    total *= lengths
+    if not good.all():
+        total[:, ~good] = planar[:, ~good]
+
+
+def _weighted_rows(weights, columns, indptr, planar, out):
+    """``out`` (3, rows) = the rows' weighted sums of planar (3, t) ``planar`` (a CSR chunk of the rings,
+    ``indptr`` its own, from 0)."""
     if _csr_matvec is None:  # the public product
-        out[...] = (sp.csr_matrix((weights, columns, local), shape=(counts.size, planar.shape[1])) @ planar.T).T
+        out[...] = (sp.csr_matrix((weights, columns, indptr), shape=(indptr.size - 1, planar.shape[1])) @ planar.T).T
         return
     out[...] = 0.0
     for k in range(3):
-        _csr_matvec(counts.size, planar.shape[1], local, columns, weights, planar[k], out[k])
-
-
-def _ring_means(total, planar, rings, lonely):
-    """Set, in place, the ``lonely`` faces' columns of ``total`` to the mean of their ring's ``planar``
-    normals where that mean is at least a tenth of a unit long."""
-    columns, counts, starts = rings.rows_of(lonely)
-    mean = np.add.reduceat(planar[:, columns], starts, axis=1) / counts
-    agree = np.einsum("kt,kt->t", mean, mean) >= 0.01  # a ring that is no corner of its own
-    total[:, lonely[agree]] = mean[:, agree]
+        _csr_matvec(indptr.size - 1, planar.shape[1], indptr, columns, weights, planar[k], out[k])
 
 
 def fit_vertices(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
