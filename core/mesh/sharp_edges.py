@@ -163,7 +163,7 @@ class FaceRings:
     faces_at : (n,) the number of triangles around each vertex, |F_i|.
     border : (n,) bool, the vertices on an edge of one triangle.
     across : (3, t) the triangle across each triangle's edge from corner k to corner k + 1 (itself on an
-        open border; one of them where more than two triangles share the edge), intp.
+        open border; one of them where more than two triangles share the edge).
     """
 
     def __init__(self, triangles, n_vertices):
@@ -302,7 +302,8 @@ def _edge_neighbours(triangles, n_vertices):
     alone = ~(np.r_[same, False] | np.r_[False, same])
     border = np.zeros(n_vertices, dtype=bool)
     border[pairs[order[alone]].ravel()] = True
-    return np.ascontiguousarray(across.reshape(t, 3).T), border
+    index = np.int32 if t < 2**31 else np.int64
+    return np.ascontiguousarray(across.reshape(t, 3).T, dtype=index), border
 
 
 def _unit(vectors, good=None):
@@ -501,12 +502,15 @@ def filter_steps(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS, gu
     and the fitting needs their directions to far fewer digits than positions."""
     planar = np.ascontiguousarray(normals.T, dtype=FILTER_DTYPE)
     total = np.empty_like(planar)
+    weights = None
     if guidance is not None:
         weights = np.empty(rings.indices.size, dtype=FILTER_DTYPE)
         judged = np.ascontiguousarray(guidance.T, dtype=FILTER_DTYPE)
+        del guidance  # the caller's may go: the weights are what the passes need
         lonely = _lonely_rings(rings, _fixed_weights(rings, cos_threshold, judged, weights))
+        del judged
     for _ in range(iterations):
-        if guidance is None:
+        if weights is None:
             lonely = _lonely_rings(rings, _filter_pass(rings, cos_threshold, planar, total))
         else:
             _weighted_pass(rings, weights, planar, total)
@@ -626,8 +630,17 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     n, t = points.shape[0], normals.shape[0]
     scale = np.divide(step_share, rings.faces_at, out=np.zeros(n), where=rings.faces_at > 0)
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
-    outer = np.stack([planar[a] * planar[b] for a, b in _MOMENT_PAIRS], axis=1)
-    tensor = np.ascontiguousarray((rings.incidence @ outer).T)  # (6, n): M_i's entries _MOMENT_PAIRS
+    tensor = np.empty((len(_MOMENT_PAIRS), n))  # M_i's entries _MOMENT_PAIRS
+
+    def moments(k, a, b):
+        def combine(rows, sums):
+            tensor[k, rows] = sums
+
+        products = planar[a] * planar[b]
+        rings.vertex_blocks.run(lambda block: block.neighbour_sums(products, combine))
+
+    for k, (a, b) in enumerate(_MOMENT_PAIRS):
+        moments(k, a, b)
     x = np.array(points.T, dtype=np.float64, order="C")  # coordinate rows: 1-D gathers
     moved, pulled = np.empty_like(x), np.empty((3, t))
     yield  # making the M_i takes as long as a few passes
@@ -639,10 +652,14 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
 
     def update(rows, sums):  # moved = x + share / |F| (sums - M x) on a chunk of vertices
         here, m = x[:, rows], tensor[:, rows]
-        sums[0] -= m[0] * here[0] + m[3] * here[1] + m[4] * here[2]
-        sums[1] -= m[3] * here[0] + m[1] * here[1] + m[5] * here[2]
-        sums[2] -= m[4] * here[0] + m[5] * here[1] + m[2] * here[2]
-        np.add(here, scale[rows] * sums, out=moved[:, rows])
+        product, term = np.empty((2, sums.shape[1]))
+        for k, entries in enumerate(((0, 3, 4), (3, 1, 5), (4, 5, 2))):  # row k of M, as _MOMENT_PAIRS
+            np.multiply(m[entries[0]], here[0], out=product)
+            for c in (1, 2):
+                product += np.multiply(m[entries[c]], here[c], out=term)
+            sums[k] -= product
+        sums *= scale[rows]
+        np.add(here, sums, out=moved[:, rows])
 
     for done in range(1, iterations + 1):
         rings.corner_blocks.run(lambda block, x=x: block.neighbour_sums(x, offsets))
@@ -796,6 +813,7 @@ class SharpSmoothing:
             guidance = guidance_normals(normals, self.rings)
             yield next(slices)
         filtering = filter_steps(normals, self.rings, self.cos_threshold, NORMAL_ITERATIONS, guidance)
+        del guidance  # the filter keeps its weights instead
         normals = yield from _counted(filtering, slices)
         if self.guided:
             normals = nearest_plane_normals(start, normals, self.rings)
