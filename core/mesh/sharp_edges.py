@@ -49,8 +49,9 @@ Everything runs on all faces or vertices at once: the face rings are one sparse 
 sharing a vertex with each face, about 13: the corners' pattern times the incidence), built once per run
 in blocks of rows, and every pass over it works a chunk of rows at a time (its gathers in cache), the
 chunks shared out over the threads (core.parallel). The guided filter keeps one single-precision weight
-a pair for its passes; the plain one weighs each chunk as it sums it. A fitting pass gathers each
-triangle's corners and sums around each vertex (one product with the incidence).
+a pair for its passes; the plain one weighs each chunk as it sums it. A fitting pass sums each
+triangle's corners (one product with the corners' pattern) and sums around each vertex (one product
+with the incidence).
 Fixed vertices never move (their positions still place their faces' planes); ``influence`` scales each
 step's move, as core.smoothing scales an iteration's.
 """
@@ -152,14 +153,17 @@ class FaceRings:
     ----------
     triangles : (t, 3) the triangles; corners : (3, t) the same, a corner at a time (intp).
     incidence : (n, t) CSR, 1 where vertex i is a corner of triangle f.
+    vertex_blocks, corner_blocks : core.parallel.RowBlocks of the incidence's pattern and of its transpose's
+        (each triangle's corners, in order: a product sums them).
     indptr, indices, counts : the faces sharing a vertex with each face, itself included: a CSR pattern
         of (t, t), columns increasing, without values (each pass reads it with weights of its own).
     chunks : (first, end) row ranges of that pattern with about ``_BLOCK`` entries each: a pass works a
-        chunk at a time, so its gathers stay in cache, and the chunks are shared out over the threads.
+        chunk at a time, so its gathers stay in cache, and the chunks are shared out over the threads;
+        chunk_indptrs : each chunk's indptr, from 0.
     faces_at : (n,) the number of triangles around each vertex, |F_i|.
     border : (n,) bool, the vertices on an edge of one triangle.
-    across : (t, 3) the triangle across each triangle's edge from corner k to corner k + 1 (itself on an
-        open border; one of them where more than two triangles share the edge), intp.
+    across : (3, t) the triangle across each triangle's edge from corner k to corner k + 1 (itself on an
+        open border; one of them where more than two triangles share the edge).
     """
 
     def __init__(self, triangles, n_vertices):
@@ -183,10 +187,15 @@ class FaceRings:
         self.incidence.data[:] = 1.0  # a triangle with a repeated corner counts once at that vertex
         self.faces_at = np.diff(self.incidence.indptr)
         self.vertex_blocks = parallel.RowBlocks(self.incidence.indptr, self.incidence.indices, t)
+        index = np.int32 if 3 * t < 2**31 else np.int64  # one type for both, as SciPy's kernels need
+        corner_indptr = np.arange(0, 3 * t + 1, 3, dtype=index)
+        self.corner_blocks = parallel.RowBlocks(corner_indptr, triangles.astype(index).ravel(), n_vertices)
         yield
         self.indptr, self.indices = yield from _ring_pattern(self.corners, self.incidence)
         self.counts = np.diff(self.indptr)
         self.chunks = _row_blocks(self.indptr, t)
+        rebased = (self.indptr[a : b + 1] - self.indptr[a] for a, b in self.chunks)
+        self.chunk_indptrs = [part.astype(self.indices.dtype) for part in rebased]
         self.blocks = parallel.RowBlocks(self.indptr, self.indices, t)
         self.threads = parallel.thread_count() if self.indices.size >= parallel.MIN_WORK else 1
         yield
@@ -203,6 +212,11 @@ class FaceRings:
         """``task(first, end)`` for every chunk of rows, the chunks shared out over the threads in runs."""
         runs = np.array_split(np.arange(len(self.chunks)), self.threads)
         parallel.run_all([lambda run=run: [task(*self.chunks[i]) for i in run] for run in runs if run.size])
+
+    def each_chunk_index(self, task):
+        """``task(index)`` for every chunk's index in ``chunks``, the chunks shared out over the threads in runs."""
+        runs = np.array_split(np.arange(len(self.chunks)), self.threads)
+        parallel.run_all([lambda run=run: [task(i) for i in run] for run in runs if run.size])
 
     def ring_sums(self, values):
         """(k, t) sums over each face's ring of planar ``values`` (k, t) (or (t,) to (t,))."""
@@ -288,7 +302,8 @@ def _edge_neighbours(triangles, n_vertices):
     alone = ~(np.r_[same, False] | np.r_[False, same])
     border = np.zeros(n_vertices, dtype=bool)
     border[pairs[order[alone]].ravel()] = True
-    return across.reshape(t, 3), border
+    index = np.int32 if t < 2**31 else np.int64
+    return np.ascontiguousarray(across.reshape(t, 3).T, dtype=index), border
 
 
 def _unit(vectors, good=None):
@@ -331,15 +346,19 @@ def guidance_normals(normals, rings):
     t = normals.shape[0]
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
     means = _unit_planar(rings.ring_sums(planar))
-    steep, summed = np.zeros(t), np.zeros(t)
-    for k in range(3):
-        other = rings.across[:, k]
-        step = np.zeros(t)
-        for c in range(3):
-            step += (planar[c] - planar[c].take(other)) ** 2
-        np.sqrt(step, out=step)
-        np.maximum(steep, step, out=steep)
-        summed += step
+    steep, summed = np.empty(t), np.empty(t)
+
+    def edge_steps(first, end):  # s_a and S_a over the three edges of triangles first:end
+        steep[first:end], summed[first:end] = 0.0, 0.0
+        for other in rings.across[:, first:end]:
+            step = np.zeros(end - first)
+            for c in range(3):
+                step += (planar[c, first:end] - planar[c].take(other)) ** 2
+            np.sqrt(step, out=step)
+            np.maximum(steep[first:end], step, out=steep[first:end])
+            summed[first:end] += step
+
+    parallel.run_chunks(edge_steps, t, _FACE_CHUNK)
     spread, steepest = np.empty(t), np.empty(t)
 
     def patches(first, end):  # max (1 - n_a . m) = 1 - min n_a . m
@@ -356,38 +375,47 @@ def guidance_normals(normals, rings):
 
     def most_consistent(first, end):
         columns, _ = rings.padded(first, end)
-        candidates = consistency.take(columns)
-        place = (candidates.argmin(axis=0), np.arange(end - first))  # the first on a tie
-        best[first:end], chosen[first:end] = candidates[place], columns[place]
+        place, best[first:end] = _first_smallest(consistency.take(columns))  # the first on a tie
+        chosen[first:end] = columns[place, np.arange(end - first)]
 
     rings.each_chunk(most_consistent)
-    guidance = means.T[chosen]
-    vertex_means, vertex_consistency = _vertex_ring_consistency(normals, rings, steep, summed)
-    corner_consistency = VERTEX_RING_WEIGHT * vertex_consistency[rings.triangles]
-    corner = np.argmin(corner_consistency, axis=1)
-    smaller = np.flatnonzero(np.take_along_axis(corner_consistency, corner[:, None], axis=1)[:, 0] < best)
-    guidance[smaller] = vertex_means[rings.triangles[smaller, corner[smaller]]]
-    return guidance
+    guidance = np.stack([row.take(chosen) for row in means])
+    vertex_means, vertex_consistency = _vertex_ring_consistency(normals, planar, rings, steep, summed)
+    at_corners = [VERTEX_RING_WEIGHT * vertex_consistency.take(corner) for corner in rings.corners]
+    lowest = np.minimum(np.minimum(at_corners[0], at_corners[1]), at_corners[2])
+    smaller = np.flatnonzero(lowest < best)
+    lowest = lowest[smaller]
+    corner = np.where(at_corners[0][smaller] == lowest, 0, np.where(at_corners[1][smaller] == lowest, 1, 2))
+    guidance[:, smaller] = vertex_means[:, rings.corners[corner, smaller]]  # the first corner on a tie
+    return guidance.T
 
 
-def _vertex_ring_consistency(normals, rings, steep, summed):
-    """The unit mean normal and the consistency H (``guidance_normals``) of each vertex's ring of faces;
-    H = inf for a vertex of no face."""
+def _vertex_ring_consistency(normals, planar, rings, steep, summed):
+    """The unit mean normals (3, n) and the consistency H (``guidance_normals``) of each vertex's ring of
+    faces; H = inf for a vertex of no face. ``planar``: the normals as (3, t) rows. A chunk of vertices at a
+    time."""
     incidence = rings.incidence
     n = incidence.shape[0]
-    means = _unit(incidence @ normals)
-    starts = incidence.indptr[:-1]
-    around = np.flatnonzero(rings.faces_at > 0)
-    rows = np.repeat(np.arange(n), rings.faces_at)
-    columns = incidence.indices.astype(np.intp)
-    cosine = normals[:, 0].take(columns) * means[:, 0].take(rows)
-    for c in (1, 2):
-        cosine += normals[:, c].take(columns) * means[:, c].take(rows)
+    planar_means = np.ascontiguousarray(_unit(incidence @ normals).T)
+    summed_around = incidence @ summed
     consistency = np.full(n, np.inf)
-    spread = np.maximum.reduceat(1.0 - cosine, starts[around])
-    steepest = np.maximum.reduceat(steep.take(columns), starts[around])
-    consistency[around] = spread * steepest / (1e-9 + (incidence @ summed)[around])
-    return means, consistency
+
+    def chunk(first, end):  # max (1 - n_a . m) = 1 - min n_a . m
+        counts = rings.faces_at[first:end]
+        starts = incidence.indptr[first:end] - incidence.indptr[first]
+        columns = incidence.indices[incidence.indptr[first] : incidence.indptr[end]].astype(np.intp)
+        if columns.size == 0:
+            return
+        cosine = planar[0].take(columns) * np.repeat(planar_means[0, first:end], counts)
+        for c in (1, 2):
+            cosine += planar[c].take(columns) * np.repeat(planar_means[c, first:end], counts)
+        around = np.flatnonzero(counts > 0)
+        spread = 1.0 - np.minimum.reduceat(cosine, starts[around])
+        steepest = np.maximum.reduceat(steep.take(columns), starts[around])
+        consistency[first + around] = spread * steepest / (1e-9 + summed_around[first + around])
+
+    parallel.run_chunks(chunk, n, _FACE_CHUNK)
+    return planar_means, consistency
 
 
 def nearest_plane_normals(points, normals, rings):
@@ -396,56 +424,52 @@ def nearest_plane_normals(points, normals, rings):
     on a tie). Where filtering leaves a row of faces along a crease between the two sides' normals,
     these faces take the side their corners lie on: the crease stays one edge, not a rounded strip.
 
-    With face i's centroid c_i and the second moment C_i = sum_k (x_k - c_i)(x_k - c_i)^T of its corners
-    about it, that sum is n_j^T C_i n_j + 3 (n_j . c_i - n_j . c_j)^2: per pair the candidate's normal and
-    offset, the rest is face i's. Positions about their mean: the offsets stay of the mesh's size. A chunk
-    of the ring pattern's rows at a time (``FaceRings.padded``)."""
+    The sum is taken as sum_k (n_j . x_k - o_j)^2 with o_j = n_j . c_j: per pair the candidate's normal and
+    offset (gathered), face i's corners broadcast. Positions about their mean: the offsets stay of the
+    mesh's size. A chunk of the ring pattern's rows at a time (``FaceRings.padded``)."""
     t = normals.shape[0]
     x = np.ascontiguousarray(points.T, dtype=np.float64)
     x = x - x.mean(axis=1, keepdims=True)
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
-    centroids = np.empty((3, t))
-    parallel.run_chunks(lambda a, b: _centroids(x, rings.corners[:, a:b], centroids[:, a:b]), t, _FACE_CHUNK)
-    offsets = np.einsum("kt,kt->t", planar, centroids)  # n_j . c_j
+    offsets = np.empty(t)  # n_j . c_j
+
+    def plane_offsets(faces, corner_sums):
+        corner_sums /= 3.0
+        offsets[faces] = np.einsum("kt,kt->t", planar[:, faces], corner_sums)
+
+    rings.corner_blocks.run(lambda block: block.neighbour_sums(x, plane_offsets))
     chosen = np.empty(t, dtype=np.intp)
 
     def nearest(first, end):
         columns, _ = rings.padded(first, end)
-        moments = _corner_moments(x, rings.corners[:, first:end], centroids[:, first:end])
         candidate = [row.take(columns) for row in planar]
-        distance = candidate[0] * centroids[0, first:end] - offsets.take(columns)
-        for c in (1, 2):
-            distance += candidate[c] * centroids[c, first:end]
-        cost = 3.0 * distance * distance
-        for moment, (a, b) in zip(moments, _MOMENT_PAIRS):
-            cost += (moment if a == b else 2.0 * moment) * candidate[a] * candidate[b]
-        chosen[first:end] = columns[cost.argmin(axis=0), np.arange(end - first)]  # the first on a tie
+        offset = offsets.take(columns)
+        cost, residual = np.zeros(columns.shape), np.empty(columns.shape)
+        for corner in rings.corners[:, first:end]:
+            np.multiply(candidate[0], x[0].take(corner), out=residual)
+            for c in (1, 2):
+                residual += candidate[c] * x[c].take(corner)
+            residual -= offset
+            residual *= residual
+            cost += residual
+        chosen[first:end] = columns[_first_smallest(cost)[0], np.arange(end - first)]
 
     rings.each_chunk(nearest)
     return normals[chosen]
 
 
 _FACE_CHUNK = 1 << 15  # triangles per chunk of the per-triangle work: its temporaries stay in cache
-_MOMENT_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the coordinates of C's six entries
+_MOMENT_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the entries of a symmetric 3 x 3
 
 
-def _centroids(x, corners, out):
-    """``out`` (3, k) = the centroids of the triangles of ``corners`` (3, k) on planar positions ``x``."""
-    for c in range(3):
-        np.add(x[c].take(corners[0]), x[c].take(corners[1]), out=out[c])
-        out[c] += x[c].take(corners[2])
-        out[c] /= 3.0
-    return out
-
-
-def _corner_moments(x, corners, centroids):
-    """(6, k): the entries ``_MOMENT_PAIRS`` of sum_k (x_k - c)(x_k - c)^T over each triangle's corners."""
-    moments = np.zeros((6, corners.shape[1]))
-    for corner in corners:
-        away = [x[c].take(corner) - centroids[c] for c in range(3)]
-        for moment, (a, b) in zip(moments, _MOMENT_PAIRS):
-            moment += away[a] * away[b]
-    return moments
+def _first_smallest(values):
+    """(the index along the first axis of each column's smallest of ``values`` (K, m), the first on a tie;
+    that smallest): ``values.argmin(axis=0)`` without its transposed copy (a smallest, a comparison, a
+    largest rank)."""
+    smallest = values.min(axis=0)
+    rank = np.arange(values.shape[0], 0, -1, dtype=np.min_scalar_type(values.shape[0]))[:, None]
+    found = np.multiply(values == smallest, rank, dtype=rank.dtype).max(axis=0, initial=1)
+    return values.shape[0] - found.astype(np.intp), smallest
 
 
 def _row_blocks(indptr, t):
@@ -478,80 +502,115 @@ def filter_steps(normals, rings, cos_threshold, iterations=NORMAL_ITERATIONS, gu
     and the fitting needs their directions to far fewer digits than positions."""
     planar = np.ascontiguousarray(normals.T, dtype=FILTER_DTYPE)
     total = np.empty_like(planar)
-    weights = lonely = None
+    weights = None
     if guidance is not None:
         weights = np.empty(rings.indices.size, dtype=FILTER_DTYPE)
         judged = np.ascontiguousarray(guidance.T, dtype=FILTER_DTYPE)
-        lonely = _filter_pass(rings, cos_threshold, judged=judged, keep=weights)
+        del guidance  # the caller's may go: the weights are what the passes need
+        lonely = _lonely_rings(rings, _fixed_weights(rings, cos_threshold, judged, weights))
+        del judged
     for _ in range(iterations):
-        if guidance is None:
-            lonely = _filter_pass(rings, cos_threshold, planar, total, judged=planar)
+        if weights is None:
+            lonely = _lonely_rings(rings, _filter_pass(rings, cos_threshold, planar, total))
         else:
-            _filter_pass(rings, cos_threshold, planar, total, weights=weights)
-        if lonely.size:
-            _ring_means(total, planar, rings, lonely)
-        lengths = np.sqrt(np.einsum("kt,kt->t", total, total))
-        good = lengths > 0.0  # else the face keeps its normal
-        np.divide(1.0, lengths, out=lengths, where=good)
-        total *= lengths
-        if not good.all():
-            total[:, ~good] = planar[:, ~good]
+            _weighted_pass(rings, weights, planar, total)
+        _finish_pass(total, planar, lonely)
         planar, total = total, planar
         yield
     return np.ascontiguousarray(planar.T, dtype=np.float64)
 
 
-def _filter_pass(rings, cos_threshold, planar=None, total=None, judged=None, weights=None, keep=None):
-    """``total`` (3, t) = W ``planar`` over the face rings (if given), W's weights read from ``weights`` or
-    computed from the cosines of ``judged`` (3, t) and kept in ``keep`` (if given). With ``judged``, returns
-    the lonely faces: at most one positive weight in their row (``filter_steps``)."""
-    t = rings.counts.size
-    positive = None if judged is None else np.empty(t, dtype=np.intp)
+def _fixed_weights(rings, cos_threshold, judged, out):
+    """``out`` (the pattern's entries) = the weights (g_i . g_j - T)^2 where positive, else 0, from the
+    cosines of ``judged`` (3, t), a chunk of rows at a time in the pattern's order; returns the lonely
+    faces: at most one positive weight in their row (``filter_steps``)."""
+    lonely = [None] * len(rings.chunks)
 
-    def chunk(first, end):
-        if judged is None:
-            pairs = slice(rings.indptr[first], rings.indptr[end])
-            _weighted_rows(weights[pairs], rings.indices[pairs], rings.counts[first:end], planar, total[:, first:end])
-            return
-        columns, real = rings.padded(first, end)
-        gathered = [row.take(columns) for row in judged]
-        chunk_weights = judged[0, first:end] * gathered[0]
+    def chunk(index):
+        first, end = rings.chunks[index]
+        pairs = slice(rings.indptr[first], rings.indptr[end])
+        columns, counts = rings.indices[pairs].astype(np.intp), rings.counts[first:end]
+        weights = np.repeat(judged[0, first:end], counts) * judged[0].take(columns)
         for k in (1, 2):
-            chunk_weights += judged[k, first:end] * gathered[k]
+            weights += np.repeat(judged[k, first:end], counts) * judged[k].take(columns)
+        weights -= cos_threshold
+        np.maximum(weights, 0.0, out=weights)
+        weights *= weights
+        out[pairs] = weights
+        positive = np.add.reduceat(weights != 0.0, rings.chunk_indptrs[index][:-1], dtype=np.intp)
+        lonely[index] = first + np.flatnonzero(positive <= 1)
+
+    rings.each_chunk_index(chunk)
+    return np.concatenate(lonely)
+
+
+def _weighted_pass(rings, weights, planar, total):
+    """``total`` (3, t) = W ``planar`` (3, t) over the face rings, W's entries ``weights``, a chunk at a time."""
+
+    def chunk(index):
+        first, end = rings.chunks[index]
+        pairs = slice(rings.indptr[first], rings.indptr[end])
+        _weighted_rows(weights[pairs], rings.indices[pairs], rings.chunk_indptrs[index], planar, total[:, first:end])
+
+    rings.each_chunk_index(chunk)
+
+
+def _filter_pass(rings, cos_threshold, planar, total):
+    """``total`` (3, t) = W ``planar`` (3, t) over the face rings with Sun et al.'s weights from the cosines
+    of ``planar`` itself, computed and used a chunk at a time (the gathered normals serve both); returns
+    the lonely faces: at most one positive weight in their row (``filter_steps``)."""
+    lonely = [None] * len(rings.chunks)
+
+    def chunk(index):
+        first, end = rings.chunks[index]
+        columns, real = rings.padded(first, end)
+        gathered = [row.take(columns) for row in planar]
+        chunk_weights = planar[0, first:end] * gathered[0]
+        for k in (1, 2):
+            chunk_weights += planar[k, first:end] * gathered[k]
         chunk_weights -= cos_threshold
         np.maximum(chunk_weights, 0.0, out=chunk_weights)
         chunk_weights *= chunk_weights
         chunk_weights *= real  # the repeated columns past each row's end weigh nothing
-        positive[first:end] = np.count_nonzero(chunk_weights, axis=0)
-        if keep is not None:
-            keep[rings.indptr[first] : rings.indptr[end]] = chunk_weights.T[real.T]
-        if total is not None:  # the weights of the normals themselves: their gathers serve twice
-            for k, values in enumerate(gathered if planar is judged else (row.take(columns) for row in planar)):
-                np.sum(chunk_weights * values, axis=0, out=total[k, first:end])
+        lonely[index] = first + np.flatnonzero(np.count_nonzero(chunk_weights, axis=0) <= 1)
+        for k, values in enumerate(gathered):
+            np.sum(chunk_weights * values, axis=0, out=total[k, first:end])
 
-    rings.each_chunk(chunk)
-    return None if judged is None else np.flatnonzero(positive <= 1)
+    rings.each_chunk_index(chunk)
+    return np.concatenate(lonely)
 
 
-def _weighted_rows(weights, columns, counts, planar, out):
-    """``out`` (3, rows) = the rows' weighted sums of planar (3, t) ``planar`` (a CSR chunk of the rings)."""
-    local = np.zeros(counts.size + 1, dtype=columns.dtype)
-    np.cumsum(counts, out=local[1:])
+def _lonely_rings(rings, lonely):
+    """(the ``lonely`` faces, their rings' columns, counts and starts: ``FaceRings.rows_of``)."""
+    return (lonely, *rings.rows_of(lonely))
+
+
+def _finish_pass(total, planar, lonely):
+    """The weighted sums ``total`` (3, t) made the pass's normals, in place: the lonely faces' ring means of
+    ``planar`` where at least a tenth of a unit long (``lonely``: ``_lonely_rings``), then unit length; a
+    face whose sum vanishes keeps its normal."""
+    faces, columns, counts, starts = lonely
+    if faces.size:
+        mean = np.add.reduceat(planar[:, columns], starts, axis=1) / counts
+        agree = np.einsum("kt,kt->t", mean, mean) >= 0.01  # a ring that is no corner of its own
+        total[:, faces[agree]] = mean[:, agree]
+    lengths = np.sqrt(np.einsum("kt,kt->t", total, total))
+    good = lengths > 0.0  # else the face keeps its normal
+    np.divide(1.0, lengths, out=lengths, where=good)
+    total *= lengths
+    if not good.all():
+        total[:, ~good] = planar[:, ~good]
+
+
+def _weighted_rows(weights, columns, indptr, planar, out):
+    """``out`` (3, rows) = the rows' weighted sums of planar (3, t) ``planar`` (a CSR chunk of the rings,
+    ``indptr`` its own, from 0)."""
     if _csr_matvec is None:  # the public product
-        out[...] = (sp.csr_matrix((weights, columns, local), shape=(counts.size, planar.shape[1])) @ planar.T).T
+        out[...] = (sp.csr_matrix((weights, columns, indptr), shape=(indptr.size - 1, planar.shape[1])) @ planar.T).T
         return
     out[...] = 0.0
     for k in range(3):
-        _csr_matvec(counts.size, planar.shape[1], local, columns, weights, planar[k], out[k])
-
-
-def _ring_means(total, planar, rings, lonely):
-    """Set, in place, the ``lonely`` faces' columns of ``total`` to the mean of their ring's ``planar``
-    normals where that mean is at least a tenth of a unit long."""
-    columns, counts, starts = rings.rows_of(lonely)
-    mean = np.add.reduceat(planar[:, columns], starts, axis=1) / counts
-    agree = np.einsum("kt,kt->t", mean, mean) >= 0.01  # a ring that is no corner of its own
-    total[:, lonely[agree]] = mean[:, agree]
+        _csr_matvec(indptr.size - 1, planar.shape[1], indptr, columns, weights, planar[k], out[k])
 
 
 def fit_vertices(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
@@ -564,32 +623,46 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     over the triangles f around i (``step_share``: (n,) 0 for vertices that stay, else the influence).
 
     That is share_i / |F_i| (sum_f n_f (n_f . c_f) - M_i x_i) with M_i = sum_f n_f n_f^T, fixed for the
-    step: a pass gathers each triangle's corners for its offset n_f . c_f, sums n_f times it around each
+    step: a pass sums each triangle's corners for its offset n_f . c_f (one product with the corners'
+    pattern), sums n_f times it around each
     vertex (one product with the incidence) and subtracts M_i x_i, on the threads. A generator: yields once
     the M_i are made and after every ``FIT_SLICE`` passes but the last, returns the positions."""
     n, t = points.shape[0], normals.shape[0]
     scale = np.divide(step_share, rings.faces_at, out=np.zeros(n), where=rings.faces_at > 0)
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
-    outer = np.stack([planar[a] * planar[b] for a, b in _MOMENT_PAIRS], axis=1)
-    tensor = np.ascontiguousarray((rings.incidence @ outer).T)  # (6, n): M_i's entries _MOMENT_PAIRS
+    tensor = np.empty((len(_MOMENT_PAIRS), n))  # M_i's entries _MOMENT_PAIRS
+
+    def moments(k, a, b):
+        def combine(rows, sums):
+            tensor[k, rows] = sums
+
+        products = planar[a] * planar[b]
+        rings.vertex_blocks.run(lambda block: block.neighbour_sums(products, combine))
+
+    for k, (a, b) in enumerate(_MOMENT_PAIRS):
+        moments(k, a, b)
     x = np.array(points.T, dtype=np.float64, order="C")  # coordinate rows: 1-D gathers
     moved, pulled = np.empty_like(x), np.empty((3, t))
     yield  # making the M_i takes as long as a few passes
 
-    def offsets(first, end):  # pulled = n_f (n_f . c_f) for triangles first:end
-        centroid = _centroids(x, rings.corners[:, first:end], pulled[:, first:end])
-        offset = np.einsum("kt,kt->t", planar[:, first:end], centroid)
-        np.multiply(planar[:, first:end], offset, out=pulled[:, first:end])
+    def offsets(faces, corner_sums):  # pulled = n_f (n_f . c_f) on a chunk of triangles
+        corner_sums /= 3.0
+        offset = np.einsum("kt,kt->t", planar[:, faces], corner_sums)
+        np.multiply(planar[:, faces], offset, out=pulled[:, faces])
 
     def update(rows, sums):  # moved = x + share / |F| (sums - M x) on a chunk of vertices
         here, m = x[:, rows], tensor[:, rows]
-        sums[0] -= m[0] * here[0] + m[3] * here[1] + m[4] * here[2]
-        sums[1] -= m[3] * here[0] + m[1] * here[1] + m[5] * here[2]
-        sums[2] -= m[4] * here[0] + m[5] * here[1] + m[2] * here[2]
-        np.add(here, scale[rows] * sums, out=moved[:, rows])
+        product, term = np.empty((2, sums.shape[1]))
+        for k, entries in enumerate(((0, 3, 4), (3, 1, 5), (4, 5, 2))):  # row k of M, as _MOMENT_PAIRS
+            np.multiply(m[entries[0]], here[0], out=product)
+            for c in (1, 2):
+                product += np.multiply(m[entries[c]], here[c], out=term)
+            sums[k] -= product
+        sums *= scale[rows]
+        np.add(here, sums, out=moved[:, rows])
 
     for done in range(1, iterations + 1):
-        parallel.run_chunks(offsets, t, _FACE_CHUNK)
+        rings.corner_blocks.run(lambda block, x=x: block.neighbour_sums(x, offsets))
         rings.vertex_blocks.run(lambda block: block.neighbour_sums(pulled, update))
         x, moved = moved, x
         if done % FIT_SLICE == 0 and done < iterations:
@@ -740,6 +813,7 @@ class SharpSmoothing:
             guidance = guidance_normals(normals, self.rings)
             yield next(slices)
         filtering = filter_steps(normals, self.rings, self.cos_threshold, NORMAL_ITERATIONS, guidance)
+        del guidance  # the filter keeps its weights instead
         normals = yield from _counted(filtering, slices)
         if self.guided:
             normals = nearest_plane_normals(start, normals, self.rings)
