@@ -208,17 +208,27 @@ def row(table, label, n, seconds, peak, tiles):
     table.row(label, f"{n:,}", tiles, f"{seconds:.1f} s", f"{seconds / n * 1e6:.2f} us", f"{peak / 2**30:.2f} GiB")
 
 
+def whole_and_tiled(args, source, folder, n, table, whole_limit, limit):
+    """((median seconds, peak bytes) of the whole runs, the same of the tiled runs) of ``source``, --repeats of
+    each, into subfolders whole/ and tiled/ of ``folder``, each a row of ``table``; the whole runs with
+    ``whole_limit`` (None: the default) must not go in tiles."""
+    whole = [
+        command_run(source, os.path.join(folder, "whole"), args.iterations, whole_limit) for _ in range(args.repeats)
+    ]
+    if any(r[2] for r in whole):
+        raise SystemExit("the whole run went in tiles")
+    tiled = [command_run(source, os.path.join(folder, "tiled"), args.iterations, limit) for _ in range(args.repeats)]
+    figures = [(statistics.median(r[0] for r in runs), max(r[1] for r in runs)) for runs in (whole, tiled)]
+    row(table, "whole", n, *figures[0], None)
+    row(table, f"tiled, --memory-limit {limit}", n, *figures[1], tiled[0][2])
+    return figures
+
+
 def compare(args, folder, out):
     source = os.path.join(folder, "compare.ply")
     n, _ = write_torus(source, args.compare)
     table = header(out)
-    whole = [command_run(source, os.path.join(folder, "whole"), args.iterations) for _ in range(args.repeats)]
-    limit = args.compare_limit
-    tiled = [command_run(source, os.path.join(folder, "tiled"), args.iterations, limit) for _ in range(args.repeats)]
-    time_whole = statistics.median(r[0] for r in whole)
-    time_tiled = statistics.median(r[0] for r in tiled)
-    row(table, "whole", n, time_whole, max(r[1] for r in whole), None)
-    row(table, f"tiled, --memory-limit {limit}", n, time_tiled, max(r[1] for r in tiled), tiled[0][2])
+    (time_whole, _), (time_tiled, _) = whole_and_tiled(args, source, folder, n, table, None, args.compare_limit)
     a, b = os.path.join(folder, "whole", "compare.ply"), os.path.join(folder, "tiled", "compare.ply")
     one, two = positions(a), positions(b)
     diagonal = float(np.linalg.norm(one.max(axis=0) - one.min(axis=0)))
@@ -260,20 +270,14 @@ def obj(args, folder, out):
     table = header(out)
     # The whole run with a limit above its need: by the estimate (a vertex per 12 bytes of text) the default
     # limit would send a large OBJ into tiles.
-    whole = [command_run(source, os.path.join(folder, "whole"), args.iterations, WHOLE) for _ in range(args.repeats)]
-    if any(r[2] for r in whole):
-        raise SystemExit("the whole run went in tiles")
-    limit = args.obj_limit
-    tiled = [command_run(source, os.path.join(folder, "tiled"), args.iterations, limit) for _ in range(args.repeats)]
-    time_whole = statistics.median(r[0] for r in whole)
-    time_tiled = statistics.median(r[0] for r in tiled)
-    row(table, "whole", n, time_whole, max(r[1] for r in whole), None)
-    row(table, f"tiled, --memory-limit {limit}", n, time_tiled, max(r[1] for r in tiled), tiled[0][2])
+    (time_whole, peak_whole), (time_tiled, peak_tiled) = whole_and_tiled(
+        args, source, folder, n, table, WHOLE, args.obj_limit
+    )
     a, b = os.path.join(folder, "whole", "scan.obj"), os.path.join(folder, "tiled", "scan.obj")
     out()
     out(
         f"Tiled against whole at {n:,} vertices (OBJ): files "
         f"{'byte for byte the same' if same_bytes(a, b) else 'differ'}; "
         f"time per vertex {time_tiled / time_whole:.2f}x the whole run's, peak memory "
-        f"{max(r[1] for r in tiled) / max(r[1] for r in whole):.2f}x (medians of {args.repeats})."
+        f"{peak_tiled / peak_whole:.2f}x (medians of {args.repeats})."
     )

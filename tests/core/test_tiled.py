@@ -181,11 +181,9 @@ class Stop(Exception):
     pass
 
 
-@pytest.mark.parametrize("stop", [Stop, KeyboardInterrupt])
-def test_a_run_stopped_midway_leaves_no_output(tmp_path, monkeypatch, stop):
-    points, faces = torus(300, 120)
-    source, target = tmp_path / "scan.ply", tmp_path / "out" / "scan.ply"
-    source.write_bytes(binary_ply(points, faces))
+def stop_at_third_tile(monkeypatch, stop):
+    """cli/tiled.py's smooth_tile raising ``stop`` (an exception class) on the third tile; returns the list of
+    its calls (cleared: the count starts again)."""
     real, calls = tiled.smooth_tile, []
 
     def failing(*args):
@@ -195,6 +193,15 @@ def test_a_run_stopped_midway_leaves_no_output(tmp_path, monkeypatch, stop):
         return real(*args)
 
     monkeypatch.setattr(tiled, "smooth_tile", failing)
+    return calls
+
+
+@pytest.mark.parametrize("stop", [Stop, KeyboardInterrupt])
+def test_a_run_stopped_midway_leaves_no_output(tmp_path, monkeypatch, stop):
+    points, faces = torus(300, 120)
+    source, target = tmp_path / "scan.ply", tmp_path / "out" / "scan.ply"
+    source.write_bytes(binary_ply(points, faces))
+    calls = stop_at_third_tile(monkeypatch, stop)
     with pytest.raises(stop):
         tiled.smooth_file(str(source), str(target), EXPLICIT, 8 << 30, capacity=12_000)
     assert not (tmp_path / "out").exists()  # the folder made for it is gone too

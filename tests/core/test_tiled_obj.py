@@ -8,7 +8,7 @@ import os
 import numpy as np
 import pytest
 from test_cli_arguments import load
-from test_tiled import EXPLICIT, torus
+from test_tiled import EXPLICIT, stop_at_third_tile, torus
 
 core = load("core")
 tiled = load("cli.tiled")
@@ -127,15 +127,7 @@ def test_a_run_stopped_midway_leaves_nothing(tmp_path, monkeypatch, stop):
     points, faces = torus(300, 120)
     source, target = tmp_path / "scan.obj", tmp_path / "out" / "scan.obj"
     source.write_bytes(obj_text(points, faces, "v//vn", "vertex"))
-    real, calls = tiled.smooth_tile, []
-
-    def failing(*args):
-        calls.append(1)
-        if len(calls) == 3:
-            raise stop()
-        return real(*args)
-
-    monkeypatch.setattr(tiled, "smooth_tile", failing)
+    stop_at_third_tile(monkeypatch, stop)
     made, close = [], obj_blocks.ObjBlocks.close
     monkeypatch.setattr(obj_blocks.ObjBlocks, "close", lambda self: made.extend(self._made) or close(self))
     (tmp_path / "out").mkdir()
