@@ -135,11 +135,11 @@ def local_result(job):
 
 def deviation_map(job):
     """The job's core.DeviationMap, made once: the move along the input's vertex normals (those the report
-    measures along; world-space lengths, as the job's positions), in linear colours as Blender's float colour
-    attributes hold them."""
+    measures along on an open mesh, made here for a closed one; world-space lengths, as the job's positions),
+    in linear colours as Blender's float colour attributes hold them."""
     if job.deviation is None:
         normals = input_measure(job).result().normals
-        job.deviation = core.deviation_map(job.positions, job.result, normals=normals, linear=True)
+        job.deviation = core.deviation_map(job.positions, job.result, job.faces, normals=normals, linear=True)
     return job.deviation
 
 

@@ -1,5 +1,6 @@
-"""What a smoothing run changed: how far vertices moved (largest, RMS, and on average along the normals:
-the shrinkage the paper is about), the bounding box and, for closed meshes, the enclosed volume.
+"""What a smoothing run changed: how far vertices moved (largest, RMS), the bounding box, and the shrinkage
+the paper is about: for closed meshes the enclosed volume, for open ones the mean move along the input's
+vertex normals (a closed mesh's volume says what that mean would, without a pass of normals over the input).
 
 Examples
 --------
@@ -39,7 +40,6 @@ class Change:
     3 of 4 vertices moved
     largest move 5.77% (0.1)
     RMS 5.00% (0.0866)
-    along the normals +4.33% (+0.075)
     volume +33.10%
     >>> change.closed, round(change.volume_change, 4), round(change.bbox_change, 4)
     (True, 0.331, 0.1)
@@ -50,7 +50,7 @@ class Change:
     mean_displacement: float
     max_displacement: float
     rms_displacement: float
-    normal_displacement: float | None  # mean move along the input's vertex normals (< 0: inwards); None: no faces
+    normal_displacement: float | None  # mean move along the input's vertex normals (< 0: inwards); None: closed, no faces
     bbox_diagonal_before: float
     bbox_diagonal_after: float
     bbox_change: float  # relative change of the bounding-box diagonal
@@ -61,8 +61,8 @@ class Change:
 
     def summary(self):
         """The report's words, the same in the operators, the command line and the demo: how many vertices
-        moved, the largest and the RMS move and the mean move along the normals (in % of the size, the
-        input's bounding-box diagonal, and in the positions' units), and the volume change of a closed mesh."""
+        moved, the largest and the RMS move (in % of the size, the input's bounding-box diagonal, and in the
+        positions' units), and the volume change of a closed mesh or the mean move along an open one's normals."""
         parts = [f"{self.moved} of {_count(self.n_vertices, 'vertex', 'vertices')} moved"]
         if self.moved:
             parts.append(f"largest move {self._of_size(self.max_displacement)}")
@@ -266,7 +266,7 @@ class InputMeasure:
     frame: _Frame
     corners: tuple | None  # the triangles' corner columns of a closed surface, for the result's volume
     volume_units: float | None  # the input's volume in frame.unit³
-    normals: np.ndarray | None = None  # the input's unit vertex normals (faces given), for the move along them
+    normals: np.ndarray | None = None  # the input's unit vertex normals (faces given, not closed), for the move along them
 
 
 def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> InputMeasure:
@@ -285,7 +285,6 @@ def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> 
     3 of 4 vertices moved
     largest move 5.77% (0.1)
     RMS 5.00% (0.0866)
-    along the normals +4.33% (+0.075)
     volume +33.10%
     """
     before = check_positions(before, "before")
@@ -295,10 +294,11 @@ def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> 
         triangles = fan_triangles(faces)
         if triangles.size and (triangles.max() >= before.shape[0] or triangles.min() < 0):
             raise ValueError("faces refer to vertices that do not exist")
-        normals = vertex_normals(_in_frame(before, _Frame.of(before))[0], triangles, before.dtype)
         if closed is not False:  # an open surface has no volume to compare
             closed = closed_from_triangles(triangles) if closed is None else bool(closed)
             corners = _corner_columns(triangles) if closed else None
+        if not closed:  # a closed surface's volume says what the move along its normals would
+            normals = vertex_normals(_in_frame(before, _Frame.of(before))[0], triangles, before.dtype)
     frame = _Frame.of(before)
     return InputMeasure(
         n_vertices=before.shape[0],
@@ -348,7 +348,6 @@ def measure_change(
     3 of 4 vertices moved
     largest move 5.77% (0.1)
     RMS 5.00% (0.0866)
-    along the normals +4.33% (+0.075)
     volume +33.10%
     >>> core.measure_change(positions, positions * 1.1).summary()  # no faces: no volume
     '3 of 4 vertices moved, largest move 5.77% (0.1), RMS 5.00% (0.0866)'
