@@ -73,7 +73,7 @@ from numpy.typing import ArrayLike
 
 from ..adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
 from ..convergence import ConvergenceWarning, DivergenceError
-from ..geometry import median_edge_length
+from ..geometry import median_edge_length, smallest_group_axes
 from ..slices import as_fraction
 from ..smoothing import Smoothing
 from ..validation import check_fixed, check_positions, check_unit_interval
@@ -169,11 +169,7 @@ def _ring_normals(points, rows, operator):
     centre = np.stack([np.bincount(owner, ring[:, k], count) for k in range(3)], axis=1)
     centre /= operator.degree[rows][:, None]
     spread = ring - centre[owner]
-    covariance = np.empty((count, 3, 3))
-    for a in range(3):
-        for b in range(a, 3):
-            covariance[:, a, b] = covariance[:, b, a] = np.bincount(owner, spread[:, a] * spread[:, b], count)
-    return np.linalg.eigh(covariance)[1][:, :, 0]
+    return smallest_group_axes(owner, spread, count)
 
 
 class _Run:

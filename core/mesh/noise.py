@@ -44,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..geometry import smallest_group_axes
 from ..slices import to_end
 from .parts import parts as connected_parts
 
@@ -310,11 +311,7 @@ def _planes(point_at, ring, operator, plane_at):
     counts = np.bincount(owner_all, minlength=ring.size).astype(np.float64)
     centre = np.stack([np.bincount(owner_all, spots[:, k], ring.size) for k in range(3)], axis=1) / counts[:, None]
     spread = spots - centre[owner_all]
-    covariance = np.empty((ring.size, 3, 3))
-    for a in range(3):
-        for b in range(a, 3):
-            covariance[:, a, b] = covariance[:, b, a] = np.bincount(owner_all, spread[:, a] * spread[:, b], ring.size)
-    normals = np.linalg.eigh(covariance)[1][:, :, 0]
+    normals = smallest_group_axes(owner_all, spread, ring.size)
     degree = operator.degree[ring].astype(np.float64)
     around = point_at(neighbour)
     mean = np.stack([np.bincount(owner, around[:, k], ring.size) for k in range(3)], axis=1)

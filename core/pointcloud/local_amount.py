@@ -19,8 +19,8 @@ bench/bench_quality_points.py (bench/results/2026-11-25-point-cloud-quality.md).
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..geometry import smallest_eigenvectors
 from ..parallel import run_blocks
-from .geometry import smallest_eigenvectors
 
 Z0 = 0.3
 # The fit's ball grows with the noise: thinning q = THIN_GAIN r^2 within [1, THIN_MAX] (r = sigma / spacing).

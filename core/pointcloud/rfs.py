@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..adjacency import umbrella_operator
+from ..geometry import smallest_eigenvectors
 from ..parallel import run_blocks, run_chunks
 from ..slices import to_end
 from .geometry import (
@@ -25,7 +26,6 @@ from .geometry import (
     face_normals,
     faces_of_keys,
     normals_and_quality,
-    smallest_eigenvectors,
     triple_keys,
 )
 from .stepwise import Slices

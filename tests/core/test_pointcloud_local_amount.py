@@ -7,7 +7,7 @@ from pointcloud_sets import noisy_sphere, sphere_rms
 
 import core
 import core.pointcloud.smooth as pointcloud_smooth
-from core.pointcloud.geometry import smallest_eigenvectors
+from core.geometry import smallest_eigenvectors
 from core.pointcloud.local_amount import THIN_MAX, Z0, curvature, local_influence, sampled_curvature, thinning
 from core.pointcloud.spanning_tree import NeighbourIndex
 
