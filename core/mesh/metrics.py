@@ -50,7 +50,8 @@ class Change:
     mean_displacement: float
     max_displacement: float
     rms_displacement: float
-    normal_displacement: float | None  # mean move along the input's vertex normals (< 0: inwards); None: closed, no faces
+    # mean move along the input's vertex normals (< 0: inwards); None: closed (its volume says it) or no faces
+    normal_displacement: float | None
     bbox_diagonal_before: float
     bbox_diagonal_after: float
     bbox_change: float  # relative change of the bounding-box diagonal
@@ -266,7 +267,7 @@ class InputMeasure:
     frame: _Frame
     corners: tuple | None  # the triangles' corner columns of a closed surface, for the result's volume
     volume_units: float | None  # the input's volume in frame.unit³
-    normals: np.ndarray | None = None  # the input's unit vertex normals (faces given, not closed), for the move along them
+    normals: np.ndarray | None = None  # the input's unit vertex normals (faces, not closed), for the move along them
 
 
 def measure_input(before: ArrayLike, faces=None, closed: bool | None = None) -> InputMeasure:
