@@ -38,7 +38,8 @@ RATIO, MINOR = 2.5, 0.4  # as bench/meshes.torus
 VERTEX = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("red", "u1"), ("green", "u1"), ("blue", "u1")])
 FACE = np.dtype([("count", "u1"), ("corners", "<i4", (3,))])
 ROWS = 256  # torus rows (around the axis) per block written
-WHOLE = "1000G"  # the --memory-limit of an OBJ's whole run
+WHOLE = "1000G"
+AUTO = "auto"  # --iterations: leave the amount to the Automatic Amount  # the --memory-limit of an OBJ's whole run
 
 
 def torus_rows(vertices, noise, seed):
@@ -128,7 +129,8 @@ sys.exit(status)
 def command_run(source, folder, iterations, limit=None):
     """(seconds of the command, peak resident memory in bytes, its output) of one command-line run."""
     shutil.rmtree(folder, ignore_errors=True)
-    argv = [source, "-o", folder, "--iterations", str(iterations)] + (["--memory-limit", limit] if limit else [])
+    argv = [source, "-o", folder] + ([] if iterations == AUTO else ["--iterations", str(iterations)])
+    argv += ["--memory-limit", limit] if limit else []
     done = subprocess.run(
         ["/usr/bin/time", "-v", sys.executable, "-c", CHILD, str(ROOT), *argv], capture_output=True, text=True
     )
@@ -164,6 +166,10 @@ def same_bytes(a, b):
                 return True
 
 
+def _iterations(text):
+    return AUTO if str(text).strip().lower() == AUTO else int(text)
+
+
 PARAMETERS = (
     Parameter("compare", None, "vertices of the mesh run whole and tiled", count),
     Parameter("big", None, "vertices of the mesh run tiled only", count),
@@ -171,7 +177,9 @@ PARAMETERS = (
     Parameter("obj_limit", "1G", "the --obj tiled run's --memory-limit"),
     Parameter("memory_limit", "4G", "the --big run's --memory-limit"),
     Parameter("compare_limit", "2G", "the --compare tiled run's --memory-limit"),
-    Parameter("iterations", 10),
+    Parameter(
+        "iterations", 10, f"HC iterations, or {AUTO!r}: the Automatic Amount (report bench_tiled_auto)", _iterations
+    ),
     repeats(3, "runs of each kind in --compare (medians)"),
     Parameter("big_repeats", 1, "runs of --big (median)"),
     Parameter("folder", None, "where the files go (default: a temporary folder)"),
@@ -180,13 +188,16 @@ QUICK = {"compare": "200k", "compare_limit": "380M", "iterations": 2, "repeats":
 
 
 def report_name(args):
-    return "bench_tiled_obj" if args.obj else "bench_tiled"
+    return "bench_tiled_obj" if args.obj else "bench_tiled_auto" if args.iterations == AUTO else "bench_tiled"
 
 
 def run(args, out):
     folder = tempfile.mkdtemp(prefix="bench_tiled_", dir=args.folder)
     try:
-        out(f"Noisy torus (noise 0.2 edge lengths), {args.iterations} iterations.")
+        amount = f"{args.iterations} iterations"
+        if args.iterations == AUTO:
+            amount = "the Automatic Amount (closed parts given their volume back)"
+        out(f"Noisy torus (noise 0.2 edge lengths), {amount}.")
         out()
         if args.obj:
             obj(args, folder, out)
