@@ -62,6 +62,20 @@ def test_a_box_of_nine_cuts_in_quads_never_ends_farther_from_the_cube(kind):
         assert cube_error(result) <= cube_error(noisy.positions) * (1 + 1e-9), seed
 
 
+@pytest.mark.parametrize("kind", ["isotropic", "normal"])
+def test_keep_in_place_keeps_the_noise_off_a_coarse_box_creases(kind):
+    """Item 7: a box of 7 cuts in quads, noise of 0.5 % of its size. Keep in Place projected every move on the
+    vertex normal, which at a crease is the faces' bisector: the crease vertices (a quarter of them) kept half
+    their noise, and the box ended up to 3 % farther from the cube than the same run sliding (1.004 and 1.025
+    times the input's distance, seeds 0 and 1). A crease vertex now keeps its move across both faces."""
+    box = subdivided_cube(7, triangulate=False)
+    for seed in range(8):
+        noisy, _ = with_noise(box, 0.005 * 8, kind, seed=seed)
+        kept, _ = default_run(noisy)
+        sliding, _ = default_run(noisy, keep_in_place=False)
+        assert cube_error(kept) <= 1.01 * cube_error(sliding), seed
+
+
 @pytest.mark.parametrize("cuts", [5, 7, 9])
 def test_a_box_with_noise_too_light_to_find_never_ends_farther_from_the_cube(cuts):
     """Item 7: boxes of 5-9 cuts, triangulated, noise of 0.1 % of the size along the normals: no noise is

@@ -48,6 +48,32 @@ def test_each_move_is_along_the_result_normal():
     assert np.allclose(np.einsum("ij,ij->i", move, normals), np.einsum("ij,ij->i", result - start, normals))
 
 
+def test_a_crease_vertex_keeps_its_move_across_both_faces():
+    """Two faces meeting at 90 degrees along the y axis: a vertex on the crease keeps the part of its move that
+    its faces face (x and z), and gives up the part along the crease (y); a vertex inside a face keeps the
+    part along its normal only."""
+    ys = np.arange(5.0)
+    floor = [(x, y, 0.0) for y in ys for x in (-2.0, -1.0, 0.0)]  # the crease: x = 0, z = 0
+    wall = [(0.0, y, z) for y in ys for z in (1.0, 2.0)]
+    result = np.array(floor + wall)
+    index = {tuple(p): i for i, p in enumerate(floor + wall)}
+    triangles = []
+    for y in ys[:-1]:
+        for strip in ([(-2.0, 0.0), (-1.0, 0.0), (0.0, 0.0)], [(0.0, 0.0), (0.0, 1.0), (0.0, 2.0)]):
+            for (a, b), (c, d) in zip(strip, strip[1:]):
+                p, q = (a, y, b), (c, y, d)
+                r, s = (c, y + 1, d), (a, y + 1, b)
+                triangles += [(index[p], index[q], index[r]), (index[p], index[r], index[s])]
+    triangles = np.array(triangles)
+    move = np.zeros_like(result)
+    crease, inside = index[(0.0, 2.0, 0.0)], index[(-1.0, 2.0, 0.0)]
+    move[crease] = move[inside] = [0.01, 0.02, 0.03]
+    kept = keep_in_place(result - move, result, triangles)
+    np.testing.assert_allclose(kept[crease] - (result - move)[crease], [0.01, 0.0, 0.03], atol=1e-12)
+    normal = vertex_normals(result, triangles)[inside]
+    np.testing.assert_allclose(kept[inside] - (result - move)[inside], (move[inside] @ normal) * normal, atol=1e-12)
+
+
 def test_still_and_faceless_vertices_keep_their_result():
     part = ico_sphere(2)
     positions = np.vstack([part.positions, [[5.0, 5.0, 5.0]]])  # a loose vertex, in no triangle
