@@ -157,18 +157,18 @@ class TiledVolume:
         groups = part_of_vertex[at[label[copies]]]
         self.union.join(vertices[copies[counted[groups]]], groups[counted[groups]])
         owner = np.where(own, part_of_vertex, parts)  # only own triangles and vertices count: the rest is ``parts``
-        planar_before, planar_after = volume._planar(run.positions[near]), volume._planar(run.result[first[near]])
+        planar_before, planar_after = volume.as_planar(run.positions[near]), volume.as_planar(run.result[first[near]])
         target = to_end(volume.volume_steps(planar_before, triangles, owner, parts + 1, self.centre))
         normals, (c0, area) = to_end(
-            normals_and_measures(planar_after, triangles, owner, parts + 1, self.centre, volume._BLOCK)
+            normals_and_measures(planar_after, triangles, owner, parts + 1, self.centre, volume.BLOCK)
         )
         normals *= movable
         mine = triangles[own[triangles[:, 0]]]  # the cubic's terms of the other triangles go to part ``parts``
-        cubic = to_end(volume._cubic_steps(planar_after, normals, mine, owner, parts + 1, self.centre))
+        cubic = to_end(volume.cubic_steps(planar_after, normals, mine, owner, parts + 1, self.centre))
         rows = np.flatnonzero(owned)
         boxes = [
-            *volume._boxes(planar_before[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
-            *volume._boxes(planar_after[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
+            *volume.part_boxes(planar_before[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
+            *volume.part_boxes(planar_after[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
         ]
         lowest = np.full(parts, len(near), dtype=np.int64)
         np.minimum.at(lowest, part_of_vertex, np.arange(len(near)))
@@ -232,7 +232,7 @@ class TiledVolume:
         offsets = np.where(self.roots[at] == roots, self.offsets[at], 0.0)
         normals, _ = to_end(
             normals_and_measures(
-                volume._planar(smoothed), run.faces, None, 1, self.centre, volume._BLOCK, measure=False
+                volume.as_planar(smoothed), run.faces, None, 1, self.centre, volume.BLOCK, measure=False
             )
         )
         movable = _movable(run)
@@ -265,7 +265,9 @@ def tile_volumes(before, after, triangles, own, centre):
     if len(triangles) == 0:
         return 0.0, 0.0, False
     label = np.where(own, 0, 1).astype(np.int32)
-    volumes = [to_end(volume.volume_steps(volume._planar(p), triangles, label, 2, centre))[0] for p in (before, after)]
+    volumes = [
+        to_end(volume.volume_steps(volume.as_planar(p), triangles, label, 2, centre))[0] for p in (before, after)
+    ]
     unmatched = topology.surface(triangles, len(own)).unmatched
     return float(volumes[0]), float(volumes[1]), bool(np.any(unmatched & own))
 

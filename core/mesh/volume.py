@@ -43,7 +43,7 @@ NOISE_OFFSETS = 1.0
 # A part whose volume changed so little that the offset giving it back would stay under this share of
 # ``limit`` keeps its smoothed shape: the offset would not matter, and finding it takes a pass.
 NEGLIGIBLE = 1e-3
-_BLOCK = TRIANGLE_BLOCK  # triangles per block: bounds the temporaries (a few MB a block, one block per thread)
+BLOCK = TRIANGLE_BLOCK  # triangles per block: bounds the temporaries (a few MB a block, one block per thread)
 _VERTEX_BLOCK = VECTOR_BLOCK  # vertices per block
 
 
@@ -65,8 +65,8 @@ def measure_before(before, triangles, surface):
 
 def _before_steps(before, triangles, surface):
     """measure_before in slices (yields between blocks of triangles)."""
-    planar = _planar(before)
-    low, high = _boxes(planar, surface.part_of_vertex, surface.used, surface.parts)
+    planar = as_planar(before)
+    low, high = part_boxes(planar, surface.part_of_vertex, surface.used, surface.parts)
     centre = _centre(before)
     volumes = yield from volume_steps(planar, triangles, surface.part_of_vertex, surface.parts, centre)
     return Before(centre, volumes, low, high)
@@ -76,20 +76,20 @@ def volume_steps(planar, triangles, part_of_vertex, parts, centre):
     """Per part (parts,) the volume its triangles enclose about ``centre``, times 6, of (3, n) planar
     positions (a triangle counts to its first corner's part), in slices (yields between blocks)."""
     volumes = np.zeros(parts)
-    for start in range(0, len(triangles), _BLOCK):
-        block = np.ascontiguousarray(triangles[start : start + _BLOCK].T, dtype=index_dtype(planar.shape[1]))
+    for start in range(0, len(triangles), BLOCK):
+        block = np.ascontiguousarray(triangles[start : start + BLOCK].T, dtype=index_dtype(planar.shape[1]))
         a, b, c = corner_rows(planar, block, centre)
         volumes += part_sums([dot(a, cross(b, c))], part_of_vertex, block, parts)[0]
         yield
     return volumes
 
 
-def _planar(points):
+def as_planar(points):
     """A (3, n) C-contiguous copy of (n, 3) ``points``, in their dtype."""
     return np.ascontiguousarray(points.T)
 
 
-def _cubic_steps(after, normals, triangles, part_of_vertex, parts, centre):
+def cubic_steps(after, normals, triangles, part_of_vertex, parts, centre):
     """(c1, c2, c3) in slices, of (3, n) planar positions and normals: per part, (3, parts), the
     coefficients beyond c0 (the volume, from normals_and_measures) of its volume after an offset d along
     ``normals``: V(d) = c0 + c1 d + c2 d^2 + c3 d^3 (times 6). Each triangle's signed tetrahedron volume
@@ -107,7 +107,7 @@ def _cubic_steps(after, normals, triangles, part_of_vertex, parts, centre):
         return part_sums(terms, part_of_vertex, block, parts)
 
     total = np.zeros((3, parts))
-    for sums in in_rounds(block_sums, len(triangles), _BLOCK):
+    for sums in in_rounds(block_sums, len(triangles), BLOCK):
         for block in sums:
             total += block
         yield
@@ -166,11 +166,11 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
         measured = yield from _before_steps(before, triangles, surface)
     parts, part_of_vertex, used, closed = surface.parts, surface.part_of_vertex, surface.used, surface.closed
     sizes = np.bincount(part_of_vertex[used], minlength=parts)
-    planar_after = _planar(after)
-    low_after, high_after = _boxes(planar_after, part_of_vertex, used, parts)
+    planar_after = as_planar(after)
+    low_after, high_after = part_boxes(planar_after, part_of_vertex, used, parts)
     extent, centre, target = measured.high - measured.low, measured.centre, measured.volumes
     yield
-    measuring = normals_and_measures(planar_after, triangles, part_of_vertex, parts, centre, _BLOCK)
+    measuring = normals_and_measures(planar_after, triangles, part_of_vertex, parts, centre, BLOCK)
     normals, (c0, area) = yield from measuring
     normals *= movable
     outward, inward = offset_bounds(extent, high_after - low_after, limit)
@@ -178,7 +178,7 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
     eligible = eligible_parts(closed & has_movable, sizes, target, extent, c0, area, limit)
     if not eligible.any():
         return np.array(after, dtype=dtype), np.zeros(parts)
-    c1, c2, c3 = yield from _cubic_steps(planar_after, normals, triangles, part_of_vertex, parts, centre)
+    c1, c2, c3 = yield from cubic_steps(planar_after, normals, triangles, part_of_vertex, parts, centre)
     del planar_after
     offsets = solve_offsets(target, (c0, c1, c2, c3), eligible, inward, outward)
     result = np.empty((n, 3), dtype=dtype)
@@ -255,7 +255,7 @@ def _centre(points):
     return total / points.shape[0]
 
 
-def _boxes(planar, part_of_vertex, used, parts):
+def part_boxes(planar, part_of_vertex, used, parts):
     """(low, high) corners of each part's bounding box, float64 (parts, 3) each, of (3, n) points."""
     low = np.full((parts, 3), np.inf)
     high = np.full((parts, 3), -np.inf)

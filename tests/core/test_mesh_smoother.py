@@ -126,7 +126,7 @@ def test_every_stage_yields_and_a_cancel_anywhere_hands_nothing_back(noisy_spher
     slice, it hands nothing back and leaves the input as it was."""
     noisy, edges, faces = noisy_sphere
     before = noisy.copy()
-    monkeypatch.setattr(core.mesh.volume, "_BLOCK", 64)  # the restore in many rounds of triangles
+    monkeypatch.setattr(core.mesh.volume, "BLOCK", 64)  # the restore in many rounds of triangles
     if patches:
         monkeypatch.setattr(mesh_amount, "PATCH_FROM", 100)
         monkeypatch.setattr(mesh_amount, "PATCH_RINGS", 8)
