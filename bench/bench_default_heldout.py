@@ -511,15 +511,28 @@ def cell_name(cell):
     return f"{cell['mesh']} {cell['kind']} {100 * cell['sigma']:g} %"
 
 
+def ratio(ours, theirs):
+    """ours / theirs; a part held (nothing moved: a slide of 0 on both sides) reads 1, ours alone moving inf."""
+    if theirs:
+        return ours / theirs
+    return 1.0 if not ours else float("inf")
+
+
 def in_place_checks(cell):
     """{target: (ratio or value, met)} of issue 31 for one cell; targets that do not apply are left out."""
     m = cell["measures"]
     ours = m["default"]
     checks = {
-        "slide_meshlab": (ours["slide"] / m["meshlab_taubin"]["slide"], ours["slide"] <= m["meshlab_taubin"]["slide"]),
-        "slide_sliding": (ours["slide"] / m["sliding"]["slide"], ours["slide"] <= SLIDE_WITHIN * m["sliding"]["slide"]),
+        "slide_meshlab": (
+            ratio(ours["slide"], m["meshlab_taubin"]["slide"]),
+            ours["slide"] <= m["meshlab_taubin"]["slide"],
+        ),
+        "slide_sliding": (
+            ratio(ours["slide"], m["sliding"]["slide"]),
+            ours["slide"] <= SLIDE_WITHIN * m["sliding"]["slide"],
+        ),
         "surface_sliding": (
-            ours["surface"] / m["sliding"]["surface"],
+            ratio(ours["surface"], m["sliding"]["surface"]),
             ours["surface"] <= SURFACE_WITHIN * m["sliding"]["surface"],
         ),
     }
