@@ -79,16 +79,19 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray, 
     [1.0, 1.0, 0.0]
     """
     triangles = np.asarray(triangles)
+    corners_of = [np.ascontiguousarray(triangles[:, k]) for k in range(3)]
     normals = vertex_normals(result, triangles)
     move = result.astype(np.float64) - start
     along = np.einsum("ij,ij->i", move, normals)
     kept = start + along[:, None] * normals
-    _keep_across_creases(kept, start, move, normals, result, triangles)
+    facing, area = _unit_faces(_planar(result), corners_of)  # the crease rule's and the fold check's
+    _keep_across_creases(kept, start, move, normals, facing, area, corners_of)
     bare = ~normals.any(axis=1)  # in no triangle: no surface to keep to
     kept[bare] = result[bare]
     if outline is not None and outline.vertices.size:
         result = outline.across(start, result, normals)  # what an outline vertex takes back: no pull-in
-    unfold(kept, start, result, triangles)
+        facing = None  # its faces turned with it: the fold check reads them again
+    unfold(kept, start, result, corners_of, facing)
     out = kept.astype(result.dtype)
     still = ~move.any(axis=1)
     out[still] = result[still]
@@ -174,14 +177,11 @@ def _group_medians(values, labels):
     return values[order][np.cumsum(counts) - counts + counts // 2]
 
 
-def _keep_across_creases(kept, start, move, normals, result, triangles):
-    """Set ``kept`` at the crease and corner vertices of ``result`` (see CREASE): the start plus the move less
-    its part along the crease (the normal tensor's smallest axis); a corner's whole move."""
+def _keep_across_creases(kept, start, move, normals, faces, area, corners_of):
+    """Set ``kept`` at the crease and corner vertices of the result (see CREASE), whose unit face normals
+    ``faces`` (3, t) and twice-areas ``area`` are given: the start plus the move less its part along the
+    crease (the normal tensor's smallest axis); a corner's whole move."""
     n = len(kept)
-    corners_of = [np.ascontiguousarray(triangles[:, k]) for k in range(3)]
-    faces = _cross(_planar(result), corners_of)  # (3, t) single precision: a threshold's test
-    area = np.sqrt(_dot(faces, faces))
-    faces /= np.where(area > 0, area, 1.0)
     # The tensor's share off the vertex normal bounds its middle eigenvalue from above: only a vertex where
     # sum_f area_f ((1 - CREASE) - (n_f . n)^2) > 0 can reach CREASE.
     vertex = _planar(normals)
@@ -215,7 +215,7 @@ def _along(move, direction):
     return np.einsum("ij,ij->i", move, direction)[:, None] * direction
 
 
-def unfold(kept, start, result, triangles):
+def unfold(kept, start, result, corners_of, facing=None):
     """Where ``kept`` folds or flattens a triangle, its corners take back part of the slide to ``result``,
     in place. Shadows are read along the smoothed triangle's normal: a kept triangle is folded where its
     shadow is not positive, flattened where it is under FOLDED times the input's shadow or FLAT times the
@@ -226,14 +226,17 @@ def unfold(kept, start, result, triangles):
     more do, all of it at once; where more than _FOLDED_LAYOUT do (noise folded the layout nearly
     everywhere), every vertex does. Rounds go on until no triangle with a corner off the result is folded,
     _LAST at most (the corners of those still folded then take all of it), each reading only the triangles
-    at the corners just moved. Shadows in single precision, blocks of triangles on threads."""
-    t = len(triangles)
-    corners_of = [np.ascontiguousarray(triangles[:, k]) for k in range(3)]
-    facing, least = np.empty((3, t), dtype=np.float32), np.empty(t, dtype=np.float32)
-    planar, smoothed, before = _planar(kept), _planar(result), _planar(start)
+    at the corners just moved. Shadows in single precision, blocks of triangles on threads. ``corners_of``:
+    the triangles' three corner columns; ``facing``: the result's unit face normals (``_unit_faces``), if
+    the caller has them."""
+    t = len(corners_of[0])
+    if facing is None:
+        facing = _unit_faces(_planar(result), corners_of)[0]
+    least = np.empty(t, dtype=np.float32)
+    planar, before = _planar(kept), _planar(start)
     folded = np.concatenate(
         parallel.run_chunks(
-            lambda low, high: _first_check(planar, smoothed, before, corners_of, facing, least, low, high), t, _BLOCK
+            lambda low, high: _first_check(planar, before, corners_of, facing, least, low, high), t, _BLOCK
         )
     )
     share = away = checked = None
@@ -263,18 +266,32 @@ def unfold(kept, start, result, triangles):
         checked = np.flatnonzero(moved[corners_of[0]] | moved[corners_of[1]] | moved[corners_of[2]])
 
 
-def _first_check(planar, smoothed, before, corners_of, facing, least, low, high):
-    """Triangles low:high: their smoothed unit normals into ``facing``, their least shadows into ``least``,
-    and whether the kept ``planar`` one is folded (returned)."""
+def _first_check(planar, before, corners_of, facing, least, low, high):
+    """Triangles low:high: their least shadows into ``least``, and whether the kept ``planar`` one is folded
+    against the smoothed unit normals ``facing`` (returned)."""
     picked = [column[low:high] for column in corners_of]
-    normal = _cross(smoothed, picked)
-    length = np.sqrt(_dot(normal, normal))
-    normal /= np.where(length > 0, length, 1.0)
+    normal = facing[:, low:high]
     area = _cross(before, picked)
     bound = np.maximum(FOLDED * _dot(area, normal), FLAT * np.sqrt(_dot(area, area)))
-    bound[length == 0] = -np.inf  # a smoothed triangle without area has no side to fold to
-    facing[:, low:high], least[low:high] = normal, bound
+    bound[~normal.any(axis=0)] = -np.inf  # a smoothed triangle without area has no side to fold to
+    least[low:high] = bound
     return _folded(planar, picked, normal, bound)
+
+
+def _unit_faces(planar, corners_of):
+    """((3, t) unit normals, (t,) twice-areas) of the triangles over (3, n) ``planar`` coordinates, (0, 0, 0)
+    for one without area; blocks of triangles on threads."""
+    t = len(corners_of[0])
+    facing, area = np.empty((3, t), dtype=planar.dtype), np.empty(t, dtype=planar.dtype)
+
+    def block(low, high):
+        normal = _cross(planar, [column[low:high] for column in corners_of])
+        length = np.sqrt(_dot(normal, normal))
+        normal /= np.where(length > 0, length, 1.0)
+        facing[:, low:high], area[low:high] = normal, length
+
+    parallel.run_chunks(block, t, _BLOCK)
+    return facing, area
 
 
 def _folded(planar, picked, facing, least):
