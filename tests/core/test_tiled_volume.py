@@ -8,16 +8,11 @@ import pytest
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from test_cli_arguments import load
-from test_tiled import EXPLICIT, binary_ply, smooth_tiled, torus
+from test_tiled import EXPLICIT, binary_ply, core, formats, mesh_amount, ply, smooth_tiled, tiled, torus
 from test_tiled_obj import obj_text
 
-core = load("core")
-formats = load("cli.formats")
-ply = load("cli.formats.ply")
-tiled = load("cli.tiled")
 geometry = load("core.geometry")
 metrics = load("core.mesh.metrics")
-mesh_amount = load("core.mesh.amount")
 tile_volume = load("core.mesh.tile_volume")
 volume = load("core.mesh.volume")
 
