@@ -8,6 +8,10 @@ written as in a serial run, whole or not at all (a temporary file in the output 
 and are the serial run's bytes: the same code on the same arrays, whatever the worker or its thread count
 (core/parallel.py). A worker lost mid-file: the scheduler runs the file again on another worker (up to
 Dask's ``distributed.scheduler.allowed-failures`` times, then the file fails with that reason).
+
+A file too big for memory (cli/tiled.py) runs on a worker too, and hands its tiles to the cluster's workers
+(``TilesOnWorkers``): each tile is a task that reads its part of the file and writes its own vertices into the
+file's temporary result, so a tile run again (its worker lost) writes the same bytes.
 """
 
 import contextlib
@@ -51,8 +55,16 @@ def import_distributed():
 
 def task_of(plan):
     """What a worker needs of the plan, in plain Python values (the classes of this copy of the package may
-    not import on a worker: in Blender they live under bl_ext)."""
+    not import on a worker: in Blender they live under bl_ext). ``memory_limit`` is each worker's: without
+    --memory-limit, --jobs N's workers share this machine's default (cli/tiled.py) N ways, and a cluster's
+    workers take their own machine's."""
+    from .tiled import default_memory_limit
+
+    limit = plan.memory_limit
+    if limit is None and not plan.scheduler:
+        limit = default_memory_limit() // plan.jobs
     return {
+        "memory_limit": limit,
         "settings": dataclasses.asdict(plan.settings),
         "given": sorted(plan.given),
         "points": plan.points,
@@ -98,11 +110,49 @@ def smooth_task(task, source, target):
         given=frozenset(task["given"]),
         points=task["points"],
         point_options=task["point_options"],
+        memory_limit=task["memory_limit"],
     )
     settings = one_file.point_settings(plan) if plan.points else plan.settings
     outcome = one_file.Outcome(source=source, target=target)
     one_file.process(outcome, plan, settings, one_file.Console())
     return outcome
+
+
+class TilesOnWorkers:
+    """cli/tiled.py's ``runner`` on a Dask worker: the tiles of the file this worker smooths, each a task for
+    any worker of its cluster (the file's task steps out of its worker's thread meanwhile: Dask's
+    ``worker_client``); yields each tile's TileDone as it finishes. A tile whose worker is lost runs again
+    elsewhere: it writes the same rows with the same values."""
+
+    def __init__(self, distributed):
+        self.distributed = distributed
+
+    def __call__(self, jobs):
+        with self.distributed.worker_client() as client:
+            futures = [
+                client.submit(pickle.loads, standalone.sent(standalone.on_worker_tile, str(ROOT), pickle.dumps(job)))
+                for job in jobs
+            ]
+            try:
+                for future in self.distributed.as_completed(futures):
+                    yield future.result()
+            finally:
+                client.cancel(futures)
+
+
+def tile_runner():
+    """Where a tiled file's tiles run: ``TilesOnWorkers`` when this process is a Dask worker (which has imported
+    distributed), else None (here)."""
+    import sys
+
+    distributed = sys.modules.get("distributed")
+    if distributed is None:
+        return None
+    try:
+        distributed.get_worker()
+    except ValueError:  # not in a worker's task
+        return None
+    return TilesOnWorkers(distributed)
 
 
 def threads_per_worker(jobs):

@@ -15,7 +15,7 @@ import numpy as np
 from .. import core
 from ..jobs import mesh as mesh_jobs
 from ..jobs import points
-from . import files, tiled
+from . import batch, files, tiled
 from .files import FileError
 
 
@@ -91,7 +91,12 @@ def smooth_tiled_file(outcome, plan, settings, console, limit):
             )
         group_mask(name, {}, group, False, 0)  # a PLY file has no vertex groups: the whole route's message
     options = mesh_jobs.core_options(settings, plan.given)
-    run = tiled.smooth_file(outcome.source, outcome.target, options, limit, say=lambda text: console.say(f"  {text}"))
+    runner = batch.tile_runner()  # on a batch's worker: the tiles go to the cluster's workers
+    run = tiled.smooth_file(
+        outcome.source, outcome.target, options, limit, say=lambda text: console.say(f"  {text}"), runner=runner
+    )
+    if runner is not None:
+        run.notes.append(f"its {run.tiles} tiles ran on the Dask cluster's workers")
     outcome.objects, outcome.vertices, outcome.iterations = 1, run.vertices, run.iterations
     outcome.kept = run.kept_in_place
     outcome.changes.append(run.change)

@@ -57,6 +57,16 @@ def on_worker(root, *args):
     return importlib.import_module(f"{NAME}.cli.batch").smooth_task(*args)
 
 
+def on_worker_tile(root, job):
+    """On a worker: cli/tiled.py's ``run_tile`` of a tiled file's ``job`` (a TileJob pickled by the worker that
+    runs the file, whose classes import once the package in ``root`` is loaded)."""
+    import pickle
+
+    load(root)
+    importlib.import_module(f"{NAME}.cli.batch").heap_for_large_arrays()
+    return importlib.import_module(f"{NAME}.cli.tiled").run_tile(pickle.loads(job))
+
+
 def problem(root):
     """Why this process cannot run the package in ``root`` (on a worker: what it lacks), or None."""
     import os

@@ -237,10 +237,11 @@ def read_tile(mesh, reaches, owns, lookup):
     return Tile(vertices, np.concatenate(positions), np.concatenate(own), np.concatenate(corners).astype(np.int64))
 
 
-def tile_capacity(limit, n, parts=False):
+def tile_capacity(limit, n, parts=False, spread=False):
     """The vertices a tile may hold within ``limit`` bytes, beside the per-vertex lookup and the sample (and
-    with ``parts`` the volume restore's index of the parts, core.TiledVolume)."""
-    lookups = 2 if parts else 1
+    with ``parts`` the volume restore's index of the parts, core.TiledVolume; with ``spread``, tiles run by
+    workers, each tile's own lookup beside the file's, which a worker may hold too)."""
+    lookups = 1 + int(parts) + int(spread)
     spare = limit - BASE_BYTES - lookups * np.dtype(index_dtype(n)).itemsize * n - 24 * min(n, SAMPLE_POINTS)
     return int(spare // TILE_BYTES_PER_VERTEX)
 
@@ -271,12 +272,15 @@ def mesh_blocks(source, temporary):
         raise FormatError(f"a {ext or 'file without extension'} file cannot be smoothed in tiles (PLY or OBJ)")
 
 
-def smooth_file(source, target, options, limit, say=None, capacity=None):
+def smooth_file(source, target, options, limit, say=None, capacity=None, runner=None):
     """Smooth the binary PLY or OBJ ``source`` into ``target`` in tiles within about ``limit`` bytes; ``options``
     are core.MeshSmoother's (the operators' core_options): where they leave alpha and iterations to the
     Automatic Amount, it chooses them once (``choose_on_region``). ``say(text)`` hears each tile's progress;
-    ``capacity``: the vertices a tile may hold (default: what ``limit`` leaves room for). Returns a TiledRun;
-    raises FormatError or ValueError with a message for what cannot run tiled (nothing is written then)."""
+    ``capacity``: the vertices a tile may hold (default: what ``limit`` leaves room for). ``runner``: where the
+    smoothing pass's tiles run, ``runner(jobs)`` yielding each ``TileJob``'s ``TileDone`` as it finishes (in any
+    order: each tile writes only its own rows), e.g. on a Dask cluster's workers (cli/batch.py); None: here, one
+    after the other. Returns a TiledRun; raises FormatError or ValueError with a message for what cannot run
+    tiled (nothing is written then)."""
     say = say or (lambda text: None)
     problem = core.tiled_problem(options)
     if problem:
@@ -298,7 +302,7 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
                 f"for a tile within --memory-limit {size_words(limit)}: no closed part gets its volume back "
                 "(raise --memory-limit)"
             )
-        capacity = capacity or tile_capacity(limit, n, parts=restoring)
+        capacity = capacity or tile_capacity(limit, n, parts=restoring, spread=runner is not None)
         found = scan(mesh)
         lookup = np.full(n, -1, dtype=index_dtype(n))
         boxes = plan_tiles(mesh, found, options, lookup, capacity, limit, run, restoring)
@@ -307,21 +311,16 @@ def smooth_file(source, target, options, limit, say=None, capacity=None):
         output = mesh.output(temporary)
         with smoothed_copy(temporary, n, run.restoring) as smoothed:
             volume = tiled_volume(run, found, options) if run.restoring else None
-            for number, box in enumerate(boxes, 1):
-                tick = time.perf_counter()
-                tile = read_tile(mesh, lambda p, box=box: box.reaches(p, run.margin), box.owns, lookup)
-                run.largest_tile = max(run.largest_tile, len(tile.vertices))
-                result, smoother = smooth_tile(tile, options)
-                if volume is None:
-                    write_tile(tile, result, mesh, output, totals)
-                else:  # the whole smoothed mesh is kept aside: the restore's pass reads it around each tile
-                    smoothed.write(tile.vertices[tile.own], result[tile.own])
-                    volume.add_tile(smoother, tile.vertices, tile.own)
-                del smoother
-                say(
-                    f"tile {number} of {len(boxes)}: {len(tile.vertices)} vertices, {int(tile.own.sum())} its own, "
-                    f"{time.perf_counter() - tick:.1f} s"
-                )
+            centre = None if volume is None else volume.centre
+            jobs = [TileJob(mesh, output, smoothed, box, run.margin, options, centre) for box in boxes]
+            done = (run_tile(job, lookup) for job in jobs) if runner is None else runner(jobs)
+            for number, tile in enumerate(done, 1):
+                run.largest_tile = max(run.largest_tile, tile.vertices)
+                totals.merge(tile.totals)
+                if volume is not None:
+                    volume.add(tile.piece)
+                words = f"{tile.vertices} vertices, {tile.own} its own, {tile.seconds:.1f} s"
+                say(f"tile {number} of {len(boxes)}: {words}")
             if volume is not None:
                 restore_tiles(mesh, found, options, boxes, lookup, volume, smoothed, output, totals, run, say)
         output.finish()
@@ -463,6 +462,52 @@ def smooth_tile(tile, options):
     return run.run(), run
 
 
+@dataclass
+class TileJob:
+    """One tile of the smoothing pass, everything a worker needs to run it (``run_tile``): the file read in blocks
+    (``mesh``), where its own vertices go (``output``, and ``smoothed``, a SmoothedCopy, when closed parts get
+    their volume back: then ``centre`` too), its ``box`` and ``margin`` and the ``options`` every tile runs."""
+
+    mesh: object
+    output: object
+    smoothed: object
+    box: object
+    margin: float
+    options: dict
+    centre: np.ndarray | None = None
+
+
+@dataclass
+class TileDone:
+    """A tile smoothed and written: its ``vertices`` and ``own`` counts, its ``seconds``, its ``totals`` (the
+    report's sums over its own vertices) and, with the volume restore, its ``piece`` (core.TilePiece)."""
+
+    vertices: int
+    own: int
+    seconds: float
+    totals: object
+    piece: object = None
+
+
+def run_tile(job, lookup=None):
+    """Read, smooth and write one tile (a ``TileJob``); returns its ``TileDone``. ``lookup``: the (n,) index the
+    read numbers the tile's vertices with (-1 everywhere; made here when not given)."""
+    tick = time.perf_counter()
+    mesh = job.mesh
+    if lookup is None:
+        lookup = np.full(mesh.vertex_count, -1, dtype=index_dtype(mesh.vertex_count))
+    tile = read_tile(mesh, lambda p: job.box.reaches(p, job.margin), job.box.owns, lookup)
+    result, smoother = smooth_tile(tile, job.options)
+    totals, piece = Totals(), None
+    if job.smoothed is None:
+        write_tile(tile, result, mesh, job.output, totals)
+    else:  # the whole smoothed mesh is kept aside: the restore's pass reads it around each tile
+        job.smoothed.write(tile.vertices[tile.own], result[tile.own])
+        piece = core.tile_piece(smoother, tile.vertices, tile.own, job.centre)
+    del smoother
+    return TileDone(len(tile.vertices), int(tile.own.sum()), time.perf_counter() - tick, totals, piece)
+
+
 def write_tile(tile, result, mesh, output, totals):
     """Write a tile's own vertices' moved positions (and the normals they touch, where the file stores one per
     vertex) into ``output``, and count their moves into ``totals``."""
@@ -489,6 +534,17 @@ class Totals:
         self.sum = self.squares = self.largest = 0.0
         self.low, self.high = np.full(3, np.inf), np.full(3, -np.inf)
         self.volumes, self.open = None, False  # (before, after) times 6, where every tile adds them
+
+    def merge(self, other):
+        """Add another Totals' sums (a tile's, made where it ran)."""
+        self.count += other.count
+        self.moved += other.moved
+        self.sum += other.sum
+        self.squares += other.squares
+        self.largest = max(self.largest, other.largest)
+        self.low, self.high = np.minimum(self.low, other.low), np.maximum(self.high, other.high)
+        if other.volumes is not None:
+            self.add_volume(*other.volumes, other.open)
 
     def add_volume(self, before, after, open_):
         """A tile's volumes before and after (times 6) and whether it found the mesh open."""

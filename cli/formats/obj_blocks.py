@@ -71,6 +71,10 @@ class ObjBlocks:
     def __enter__(self):
         return self
 
+    def __getstate__(self):
+        """A copy for a worker (cli/tiled.py's TileJob): it reads the scratch files; this one removes them."""
+        return {**self.__dict__, "_scratch": None, "_made": []}
+
     def __exit__(self, *exc):
         self.close()
 

@@ -140,50 +140,16 @@ class TiledVolume:
         """Add a smoothed tile: ``run`` the core.MeshSmoother that smoothed it (its welding, faces and fixed
         vertices), ``vertices`` its vertices' indices in the mesh, ``own`` which are the tile's own. Only the
         triangles around its own vertices and around the corners of its own triangles are read."""
-        if self.too_many or run.faces is None or len(run.faces) == 0:
+        if not self.too_many:
+            self.add(tile_piece(run, vertices, own, self.centre))
+
+    def add(self, piece):
+        """Add a tile's ``TilePiece`` (``tile_piece``, made where the tile ran: on a worker too), in any order."""
+        if self.too_many or piece is None:
             return
-        welded = len(run.positions)
-        first = run.welding.first if run.welding is not None else np.arange(welded)
-        label = run.welding.label if run.welding is not None else np.arange(welded)
-        own = np.asarray(own, bool)[first]
-        near, triangles = _around_own(run.faces, own)
-        at = np.full(welded, -1, dtype=np.int64)
-        at[near] = np.arange(len(near))
-        own, movable, copies = own[near], _movable(run)[near], np.flatnonzero(at[label] >= 0)
-        surface = topology.surface(triangles, len(near))
-        parts, part_of_vertex = surface.parts, surface.part_of_vertex
-        owned = own & surface.used
-        counted = np.bincount(part_of_vertex[owned], minlength=parts) > 0  # the pieces this tile adds
-        groups = part_of_vertex[at[label[copies]]]
-        self.union.join(vertices[copies[counted[groups]]], groups[counted[groups]])
-        owner = np.where(own, part_of_vertex, parts)  # only own triangles and vertices count: the rest is ``parts``
-        planar_before, planar_after = volume.as_planar(run.positions[near]), volume.as_planar(run.result[first[near]])
-        target = to_end(volume.volume_steps(planar_before, triangles, owner, parts + 1, self.centre))
-        normals, (c0, area) = to_end(
-            normals_and_measures(planar_after, triangles, owner, parts + 1, self.centre, volume.BLOCK)
-        )
-        normals *= movable
-        mine = triangles[own[triangles[:, 0]]]  # the cubic's terms of the other triangles go to part ``parts``
-        cubic = to_end(volume.cubic_steps(planar_after, normals, mine, owner, parts + 1, self.centre))
-        rows = np.flatnonzero(owned)
-        boxes = [
-            *volume.part_boxes(planar_before[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
-            *volume.part_boxes(planar_after[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
-        ]
-        lowest = np.full(parts, len(near), dtype=np.int64)
-        np.minimum.at(lowest, part_of_vertex, np.arange(len(near)))
-        keep = np.flatnonzero(counted)
-        self.pieces.append(
-            _Pieces(
-                vertex=vertices[first[near[lowest[keep]]]],
-                unmatched=(np.bincount(owner[surface.unmatched & own], minlength=parts + 1) > 0)[keep],
-                movable=(np.bincount(owner[owned & movable], minlength=parts + 1) > 0)[keep],
-                sizes=np.bincount(owner[owned], minlength=parts + 1)[keep],
-                sums=np.stack([target, c0, area, *cubic], axis=1)[keep],
-                boxes=np.concatenate(boxes, axis=1)[keep],
-            )
-        )
-        self.piece_count += len(keep)
+        self.union.join(piece.joined, piece.groups)
+        self.pieces.append(piece.pieces)
+        self.piece_count += len(piece.pieces.vertex)
         if self.most_pieces is not None and self.piece_count > self.most_pieces:
             self.too_many, self.pieces = True, []
 
@@ -242,6 +208,60 @@ class TiledVolume:
         if np.any(self.deviation):
             project_rows_within(result, run.positions, self.deviation)
         return result if run.welding is None else run.welding.scatter(result)
+
+
+@dataclass
+class TilePiece:
+    """What a smoothed tile adds to a ``TiledVolume``: its vertices (mesh indices) ``joined`` with the others
+    of their ``groups`` (the union's links) and the ``pieces`` of the parts it holds."""
+
+    joined: np.ndarray
+    groups: np.ndarray
+    pieces: _Pieces
+
+
+def tile_piece(run, vertices, own, centre):
+    """The ``TilePiece`` of a smoothed tile (``TiledVolume.add_tile``'s arguments, ``centre`` its centre), or
+    None where the tile has no triangles."""
+    if run.faces is None or len(run.faces) == 0:
+        return None
+    welded = len(run.positions)
+    first = run.welding.first if run.welding is not None else np.arange(welded)
+    label = run.welding.label if run.welding is not None else np.arange(welded)
+    own = np.asarray(own, bool)[first]
+    near, triangles = _around_own(run.faces, own)
+    at = np.full(welded, -1, dtype=np.int64)
+    at[near] = np.arange(len(near))
+    own, movable, copies = own[near], _movable(run)[near], np.flatnonzero(at[label] >= 0)
+    surface = topology.surface(triangles, len(near))
+    parts, part_of_vertex = surface.parts, surface.part_of_vertex
+    owned = own & surface.used
+    counted = np.bincount(part_of_vertex[owned], minlength=parts) > 0  # the pieces this tile adds
+    groups = part_of_vertex[at[label[copies]]]
+    owner = np.where(own, part_of_vertex, parts)  # only own triangles and vertices count: the rest is ``parts``
+    planar_before, planar_after = volume.as_planar(run.positions[near]), volume.as_planar(run.result[first[near]])
+    target = to_end(volume.volume_steps(planar_before, triangles, owner, parts + 1, centre))
+    normals, (c0, area) = to_end(normals_and_measures(planar_after, triangles, owner, parts + 1, centre, volume.BLOCK))
+    normals *= movable
+    mine = triangles[own[triangles[:, 0]]]  # the cubic's terms of the other triangles go to part ``parts``
+    cubic = to_end(volume.cubic_steps(planar_after, normals, mine, owner, parts + 1, centre))
+    rows = np.flatnonzero(owned)
+    boxes = [
+        *volume.part_boxes(planar_before[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
+        *volume.part_boxes(planar_after[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
+    ]
+    lowest = np.full(parts, len(near), dtype=np.int64)
+    np.minimum.at(lowest, part_of_vertex, np.arange(len(near)))
+    keep = np.flatnonzero(counted)
+    pieces = _Pieces(
+        vertex=vertices[first[near[lowest[keep]]]],
+        unmatched=(np.bincount(owner[surface.unmatched & own], minlength=parts + 1) > 0)[keep],
+        movable=(np.bincount(owner[owned & movable], minlength=parts + 1) > 0)[keep],
+        sizes=np.bincount(owner[owned], minlength=parts + 1)[keep],
+        sums=np.stack([target, c0, area, *cubic], axis=1)[keep],
+        boxes=np.concatenate(boxes, axis=1)[keep],
+    )
+    return TilePiece(vertices[copies[counted[groups]]], groups[counted[groups]], pieces)
 
 
 def tile_volumes(before, after, triangles, own, centre):

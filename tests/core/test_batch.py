@@ -29,8 +29,8 @@ def big_scans(folder, count, subdivisions=6):
     return folder
 
 
-def serial(tmp_path, scans):
-    completed = run_without_blender([scans, "-o", tmp_path / "serial"], cwd=tmp_path)
+def serial(tmp_path, scans, options=()):
+    completed = run_without_blender([scans, "-o", tmp_path / "serial", *options], cwd=tmp_path)
     assert completed.returncode == 0, completed.stdout + completed.stderr
     return digests(tmp_path / "serial")
 
@@ -67,6 +67,58 @@ def test_scheduler_gives_the_serial_bytes(tmp_path, cluster):
     assert "hc_smooth: 1 of 5 files failed" in completed.stderr
     (scans / "broken.ply").unlink()
     assert digests(tmp_path / "cluster") == serial(tmp_path, scans)
+
+
+def tiled_scan(folder):
+    """A binary PLY of 256 coarse noisy tori (123k vertices) and the --memory-limit that smooths it in tiles
+    (24 with the Automatic Amount)."""
+    from test_tiled import binary_ply
+    from test_tiled_volume import tori
+
+    folder.mkdir(parents=True)
+    points, faces = tori(16)
+    (folder / "tori.ply").write_bytes(binary_ply(points, faces, normals=True))
+    return folder, ["--memory-limit", "360M"]
+
+
+def test_a_file_in_tiles_has_its_tiles_run_by_the_workers(tmp_path):
+    scans, limit = tiled_scan(tmp_path / "scans")
+    expected = serial(tmp_path, scans, limit)
+    completed = run_without_blender([scans, "-o", tmp_path / "jobs", "--jobs", "2", *limit], cwd=tmp_path)
+    assert completed.returncode == 0, completed.stdout + completed.stderr
+    assert "  its 24 tiles ran on the Dask cluster's workers" in completed.stdout.splitlines()
+    assert "255 closed parts got their volume back" in completed.stdout
+    assert digests(tmp_path / "jobs") == expected
+
+
+@pytest.mark.slow
+def test_a_worker_killed_mid_tile_has_the_tile_run_again(tmp_path, cluster):
+    local, client = cluster
+    scans, limit = tiled_scan(tmp_path / "scans")
+    expected = serial(tmp_path, scans, limit)
+    pids = client.run(os.getpid)
+    batch = subprocess.Popen(
+        without_blender([scans, "-o", tmp_path / "cluster", "--scheduler", local.scheduler_address, *limit]),
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    killed = None
+    deadline = time.monotonic() + 300
+    while killed is None and time.monotonic() < deadline and batch.poll() is None:
+        busy = [worker for worker, keys in client.processing().items() if keys]
+        if sum(len(keys) for keys in client.processing().values()) >= 2:  # tiles (the file's task steps out)
+            killed = busy[-1]
+            os.kill(pids[killed], signal.SIGKILL)
+        time.sleep(0.05)
+    out, err = batch.communicate(timeout=600)
+    assert killed is not None, "the batch ended before a worker could be killed mid-tile"
+    assert batch.returncode == 0, out + err
+    assert "1 of 1 files smoothed" in out and "tiles ran on the Dask cluster's workers" in out
+    results = {name: digest for name, digest in digests(tmp_path / "cluster").items() if not name.startswith(".")}
+    assert results == expected  # the lost tile (or the lost file) run again: the serial run's bytes
+    client.wait_for_workers(2, timeout=120)
 
 
 @pytest.mark.slow

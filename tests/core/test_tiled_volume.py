@@ -2,6 +2,7 @@
 offsets solved from the tiles' sums are the whole mesh's, and every closed part ends with the volume it had."""
 
 import os
+import re
 
 import numpy as np
 import pytest
@@ -148,3 +149,37 @@ def test_parts_beyond_the_memory_limit_are_said_and_skipped(tmp_path, monkeypatc
     assert run.restoring and "no closed part got its volume back (raise --memory-limit)" in run.notes[-1]
     _, _, smoothed, _ = in_core(binary_ply(points, faces), run.options, run.amount.sigma)
     assert np.array_equal(ply.PlyFile(got).positions, smoothed)
+
+
+def pickled_backwards(jobs):
+    """A ``runner`` as workers are to cli/tiled.py: each job pickled (as it travels to a worker), the tiles run
+    last first, with a lookup of their own."""
+    import pickle
+
+    for job in reversed([pickle.loads(pickle.dumps(job)) for job in jobs]):
+        yield pickle.loads(pickle.dumps(tiled.run_tile(job)))
+
+
+def untimed(notes):
+    return [re.sub(r"[0-9.]+ s$", "", note) for note in notes]
+
+
+@pytest.mark.parametrize("name", ["scan.ply", "scan.obj"])
+def test_tiles_run_anywhere_in_any_order_give_the_same_bytes(tmp_path, monkeypatch, name):
+    """Tiles handed to workers (cli/batch.py's TilesOnWorkers) write only their own rows and return their sums:
+    run elsewhere and in another order, the file's bytes are those of the tiles run here, one after the other."""
+    points, faces = tori(8)
+    monkeypatch.setattr(mesh_amount, "WORK_BUDGET", 4 * len(points))
+    data = binary_ply(points, faces, normals=True) if name == "scan.ply" else obj_text(points, faces)
+    for options in (AUTOMATIC, EXPLICIT):
+        source, runs = tmp_path / name, []
+        source.write_bytes(data)
+        for folder, runner in (("here", None), ("away", pickled_backwards)):
+            target = tmp_path / folder / name
+            run = tiled.smooth_file(str(source), str(target), options, 8 << 30, capacity=10_000, runner=runner)
+            runs.append((run, target.read_bytes()))
+        (here, expected), (away, got) = runs
+        assert here.tiles >= 4 and got == expected and untimed(away.notes) == untimed(here.notes)
+        assert here.change.max_displacement == away.change.max_displacement
+        assert here.change.rms_displacement == pytest.approx(away.change.rms_displacement, rel=1e-12)
+        assert ("63 closed parts got their volume back" in here.notes[-1]) == (options is AUTOMATIC)
