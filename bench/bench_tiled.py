@@ -9,6 +9,8 @@ under /usr/bin/time -v: its peak memory is that process's maximum resident set, 
 * ``--compare 5M``: the whole run and the tiled run on the same file; the largest difference of their
   positions over the bounding-box diagonal, whether the files are byte for byte the same, and the time
   per vertex of each (medians of ``--repeats``).
+* ``--jobs 2`` (with ``--compare``): the tiled run again with its tiles on a LocalCluster of that many
+  workers (cli/batch.py): whether its file is the serial tiled run's, and its time against that run's.
 * ``--big 30M``: the tiled run alone within ``--memory-limit`` (the whole run would not fit beside the
   other work on this machine); its peak memory and time per vertex.
 * ``--obj 2M``: the same torus as an OBJ file (`v` lines of six decimals, a `vn` per vertex, faces
@@ -18,6 +20,7 @@ under /usr/bin/time -v: its peak memory is that process's maximum resident set, 
 The generated files are deleted afterwards (they take about 30 bytes per vertex, twice: input and output).
 
     .envs/bench/bin/python bench/run.py tiled --compare 5M --compare-limit 2G --repeats 3
+    .envs/bench/bin/python bench/run.py tiled --compare 5M --compare-limit 1G --jobs 2 --repeats 1
     .envs/bench/bin/python bench/run.py tiled --big 30M --memory-limit 4G --big-repeats 1
     .envs/bpy45/bin/python bench/run.py tiled --obj 2M --obj-limit 1G --repeats 3
 """
@@ -126,11 +129,13 @@ sys.exit(status)
 """
 
 
-def command_run(source, folder, iterations, limit=None):
-    """(seconds of the command, peak resident memory in bytes, its output) of one command-line run."""
+def command_run(source, folder, iterations, limit=None, jobs=1):
+    """(seconds of the command, peak resident memory in bytes, its output) of one command-line run; with
+    ``jobs`` > 1 its tiles run on a LocalCluster of that many workers (peak: the largest process's)."""
     shutil.rmtree(folder, ignore_errors=True)
     argv = [source, "-o", folder] + ([] if iterations == AUTO else ["--iterations", str(iterations)])
     argv += ["--memory-limit", limit] if limit else []
+    argv += ["--jobs", str(jobs)] if jobs > 1 else []
     done = subprocess.run(
         ["/usr/bin/time", "-v", sys.executable, "-c", CHILD, str(ROOT), *argv], capture_output=True, text=True
     )
@@ -138,8 +143,8 @@ def command_run(source, folder, iterations, limit=None):
         raise SystemExit(f"the run failed:\n{done.stdout}\n{done.stderr}")
     seconds = float(re.search(r"command seconds: ([0-9.]+)", done.stdout).group(1))
     peak = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", done.stderr).group(1)) * 1024
-    tiles = re.search(r"smoothed in (\d+) tiles of at most (\d+) vertices", done.stdout)
-    return seconds, peak, tiles.groups() if tiles else None
+    tiles = re.search(r"smoothed in (\d+) tiles of at most (\d+) vertices .*, ([0-9.]+) s$", done.stdout, re.M)
+    return seconds, peak, tiles.groups() if tiles else None  # (tiles, largest, the tiled run's own seconds)
 
 
 def positions(path):
@@ -183,6 +188,7 @@ PARAMETERS = (
     repeats(3, "runs of each kind in --compare (medians)"),
     Parameter("big_repeats", 1, "runs of --big (median)"),
     Parameter("folder", None, "where the files go (default: a temporary folder)"),
+    Parameter("jobs", 1, "--compare: also run the tiled file with --jobs N (its tiles on N local workers)", int),
 )
 QUICK = {"compare": "200k", "compare_limit": "380M", "iterations": 2, "repeats": 1}
 
@@ -220,9 +226,9 @@ def row(table, label, n, seconds, peak, tiles):
 
 
 def whole_and_tiled(args, source, folder, n, table, whole_limit, limit):
-    """((median seconds, peak bytes) of the whole runs, the same of the tiled runs) of ``source``, --repeats of
-    each, into subfolders whole/ and tiled/ of ``folder``, each a row of ``table``; the whole runs with
-    ``whole_limit`` (None: the default) must not go in tiles."""
+    """((median seconds, peak bytes) of the whole runs, the same of the tiled runs, the tiled runs) of
+    ``source``, --repeats of each, into subfolders whole/ and tiled/ of ``folder``, each a row of ``table``;
+    the whole runs with ``whole_limit`` (None: the default) must not go in tiles."""
     whole = [
         command_run(source, os.path.join(folder, "whole"), args.iterations, whole_limit) for _ in range(args.repeats)
     ]
@@ -232,15 +238,18 @@ def whole_and_tiled(args, source, folder, n, table, whole_limit, limit):
     figures = [(statistics.median(r[0] for r in runs), max(r[1] for r in runs)) for runs in (whole, tiled)]
     row(table, "whole", n, *figures[0], None)
     row(table, f"tiled, --memory-limit {limit}", n, *figures[1], tiled[0][2])
-    return figures
+    return (*figures, tiled)
 
 
 def compare(args, folder, out):
     source = os.path.join(folder, "compare.ply")
     n, _ = write_torus(source, args.compare)
     table = header(out)
-    (time_whole, _), (time_tiled, _) = whole_and_tiled(args, source, folder, n, table, None, args.compare_limit)
+    (time_whole, _), (time_tiled, _), tiled_runs = whole_and_tiled(
+        args, source, folder, n, table, None, args.compare_limit
+    )
     a, b = os.path.join(folder, "whole", "compare.ply"), os.path.join(folder, "tiled", "compare.ply")
+    words = spread(args, source, folder, n, table, b, tiled_runs) if args.jobs > 1 else None
     one, two = positions(a), positions(b)
     diagonal = float(np.linalg.norm(one.max(axis=0) - one.min(axis=0)))
     difference = float(np.abs(one - two).max()) / diagonal
@@ -251,9 +260,33 @@ def compare(args, folder, out):
         f"{time_tiled / time_whole:.2f}x the whole run's (medians of {args.repeats})."
     )
     out()
+    if words:
+        out(words)
+        out()
     for path in (source, a, b):
         os.remove(path)
     return time_whole / n
+
+
+def spread(args, source, folder, n, table, tiled, serial):
+    """The tiled run again with --jobs (its tiles on a LocalCluster's workers, the cluster's start included),
+    a row of ``table``, against the serial tiled run's file ``tiled`` and its runs ``serial`` (command_run's);
+    returns the sentence that says how it compares."""
+    time_tiled = statistics.median(r[0] for r in serial)
+    there = os.path.join(folder, "jobs")
+    runs = [command_run(source, there, args.iterations, args.compare_limit, args.jobs) for _ in range(args.repeats)]
+    seconds, peak = statistics.median(r[0] for r in runs), max(r[1] for r in runs)
+    row(table, f"tiled, --memory-limit {args.compare_limit}, --jobs {args.jobs}", n, seconds, peak, runs[0][2])
+    result = os.path.join(there, os.path.basename(source))
+    same = same_bytes(result, tiled)
+    os.remove(result)
+    phase = statistics.median(float(r[2][2]) for r in runs) / statistics.median(float(r[2][2]) for r in serial)
+    return (
+        f"Tiles on {args.jobs} workers (--jobs {args.jobs}): files {'byte for byte the same' if same else 'differ'} "
+        f"as the serial tiled run's; time {seconds / time_tiled:.2f}x its with the cluster's start, the tiled run "
+        f"itself (its reading, tiles and writing) {phase:.2f}x (medians of {args.repeats}); peak memory: the "
+        "largest process's."
+    )
 
 
 def big(args, folder, out, whole):
@@ -281,7 +314,7 @@ def obj(args, folder, out):
     table = header(out)
     # The whole run with a limit above its need: by the estimate (a vertex per 12 bytes of text) the default
     # limit would send a large OBJ into tiles.
-    (time_whole, peak_whole), (time_tiled, peak_tiled) = whole_and_tiled(
+    (time_whole, peak_whole), (time_tiled, peak_tiled), _ = whole_and_tiled(
         args, source, folder, n, table, WHOLE, args.obj_limit
     )
     a, b = os.path.join(folder, "whole", "scan.obj"), os.path.join(folder, "tiled", "scan.obj")

@@ -235,8 +235,9 @@ def make_parser(prog=PROG):
         "--memory-limit",
         type=_size,
         metavar="SIZE",
-        help="the most memory a file's run may take, e.g. 4G or 500M (default: 3/4 of the machine's); a binary "
-        "PLY or OBJ file whose whole run would take more is smoothed in tiles (docs/large_scans.md)",
+        help="the most memory a file's run may take, e.g. 4G or 500M (default: 3/4 of the machine's; with --jobs "
+        "or --scheduler, each worker's); a binary PLY or OBJ file whose whole run would take more is smoothed in "
+        "tiles, on the workers with --jobs or --scheduler (docs/large_scans.md)",
     )
     batch = parser.add_argument_group('many files at once (Dask: python -m pip install "dask[distributed]")')
     batch.add_argument(
