@@ -91,14 +91,14 @@ def test_a_file_in_tiles_has_its_tiles_run_by_the_workers(tmp_path):
     assert digests(tmp_path / "jobs") == expected
 
 
-@pytest.mark.slow
-def test_a_worker_killed_mid_tile_has_the_tile_run_again(tmp_path, cluster):
+def killing_a_worker(tmp_path, cluster, scans, options, pick):
+    """Run the batch of ``scans`` (with ``options``) on ``cluster``'s workers and SIGKILL, once, the worker
+    ``pick(client)`` names (None: not yet). Returns (the killed worker's pid, stdout, the results' digests);
+    the cluster has its two workers back afterwards."""
     local, client = cluster
-    scans, limit = tiled_scan(tmp_path / "scans")
-    expected = serial(tmp_path, scans, limit)
     pids = client.run(os.getpid)
     batch = subprocess.Popen(
-        without_blender([scans, "-o", tmp_path / "cluster", "--scheduler", local.scheduler_address, *limit]),
+        without_blender([scans, "-o", tmp_path / "cluster", "--scheduler", local.scheduler_address, *options]),
         cwd=tmp_path,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -107,51 +107,48 @@ def test_a_worker_killed_mid_tile_has_the_tile_run_again(tmp_path, cluster):
     killed = None
     deadline = time.monotonic() + 300
     while killed is None and time.monotonic() < deadline and batch.poll() is None:
-        busy = [worker for worker, keys in client.processing().items() if keys]
-        if sum(len(keys) for keys in client.processing().values()) >= 2:  # tiles (the file's task steps out)
-            killed = busy[-1]
+        killed = pick(client)
+        if killed is not None:
             os.kill(pids[killed], signal.SIGKILL)
         time.sleep(0.05)
     out, err = batch.communicate(timeout=600)
-    assert killed is not None, "the batch ended before a worker could be killed mid-tile"
+    assert killed is not None, "the batch ended before a worker could be killed"
     assert batch.returncode == 0, out + err
-    assert "1 of 1 files smoothed" in out and "tiles ran on the Dask cluster's workers" in out
     results = {name: digest for name, digest in digests(tmp_path / "cluster").items() if not name.startswith(".")}
+    client.wait_for_workers(2, timeout=120)  # the nanny brings a new worker up for the next test
+    return pids[killed], out, results
+
+
+@pytest.mark.slow
+def test_a_worker_killed_mid_tile_has_the_tile_run_again(tmp_path, cluster):
+    scans, limit = tiled_scan(tmp_path / "scans")
+    expected = serial(tmp_path, scans, limit)
+
+    def tiles_running(client):  # two tasks in hand: tiles (the file's own task steps out while they run)
+        processing = client.processing()
+        busy = [worker for worker, keys in processing.items() if keys]
+        return busy[-1] if sum(len(keys) for keys in processing.values()) >= 2 else None
+
+    _, out, results = killing_a_worker(tmp_path, cluster, scans, limit, tiles_running)
+    assert "1 of 1 files smoothed" in out and "tiles ran on the Dask cluster's workers" in out
     assert results == expected  # the lost tile (or the lost file) run again: the serial run's bytes
-    client.wait_for_workers(2, timeout=120)
 
 
 @pytest.mark.slow
 def test_a_worker_killed_mid_file_has_the_file_run_again(tmp_path, cluster):
-    local, client = cluster
     scans = big_scans(tmp_path / "scans", 6)
     expected = serial(tmp_path, scans)
-    pids = client.run(os.getpid)
-    batch = subprocess.Popen(
-        without_blender([scans, "-o", tmp_path / "cluster", "--scheduler", local.scheduler_address]),
-        cwd=tmp_path,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    killed = None
-    deadline = time.monotonic() + 300
-    while killed is None and time.monotonic() < deadline and batch.poll() is None:
+
+    def holding_a_file(client):  # a worker with a file in hand, after the first result is written
         busy = [worker for worker, keys in client.processing().items() if keys]
         written = (tmp_path / "cluster").exists() and os.listdir(tmp_path / "cluster")
-        if busy and written:
-            killed = busy[0]  # a worker with a file in hand, after the first result is written
-            os.kill(pids[killed], signal.SIGKILL)
-        time.sleep(0.05)
-    out, err = batch.communicate(timeout=600)
-    assert killed is not None, "the batch ended before a worker could be killed mid-file"
-    assert batch.returncode == 0, out + err
+        return busy[0] if busy and written else None
+
+    pid, out, results = killing_a_worker(tmp_path, cluster, scans, (), holding_a_file)
     assert "6 of 6 files smoothed" in out
-    results = {name: digest for name, digest in digests(tmp_path / "cluster").items() if not name.startswith(".")}
     assert results == expected  # every file whole, the lost one run again, the serial run's bytes
     leftovers = [name for name in os.listdir(tmp_path / "cluster") if name.startswith(".")]
-    assert all(name.startswith(f".hc_smooth-{pids[killed]}-") for name in leftovers)  # only the lost worker's
-    client.wait_for_workers(2, timeout=120)  # the nanny brings a new worker up for the next test
+    assert all(name.startswith(f".hc_smooth-{pid}-") for name in leftovers)  # only the lost worker's
 
 
 @pytest.mark.slow
