@@ -17,6 +17,8 @@ The route, for a file whose whole run would not fit in the memory limit (``needs
    vertices, one over the faces), smoothed with its vertices in the file's order, and its own vertices'
    positions (and the normals the file stores per vertex) written into the copy in place; the copy replaces
    the target only once every tile is written (cli/files.py), so an interrupt or a failure leaves no output.
+   Each tile is a ``TileJob`` that writes only its own rows: on a Dask worker the tiles go to the cluster's
+   workers (``runner``, cli/batch.py), in any order, with the same bytes.
    An OBJ's tiles write into a scratch copy of its positions instead; a last pass writes the output text
    (obj_blocks.ObjOutput), its `vn` normals recomputed from the whole result.
 5. With the Automatic Amount, closed parts get their volume back (core.TiledVolume): the tiles of step 4
