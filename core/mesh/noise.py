@@ -51,17 +51,16 @@ from ..geometry import smallest_group_axes
 from ..slices import to_end
 from .parts import parts as connected_parts
 
-GAIN = 1.6  # r's standard deviation over the noise's, on the tuning set's dense meshes (valence 4 to 6)
+GAIN = 1.6  # r's standard deviation over the noise's on the tuning set, each r scaled to LAYOUT_REFERENCE
 # On a curve, r = L_i - (L_{i-1} + L_{i+1}) / 2 = (4 e_{i-1} + 4 e_{i+1} - 6 e_i - e_{i-2} - e_{i+2}) / 4 of
 # the noise e: each coordinate has standard deviation sqrt(70) / 4 times the noise's, and the length of
 # three such is chi-distributed (median 1.5382 times that).
 CURVE_GAIN = math.sqrt(70.0) / 4.0 * 1.5382
 # Noise found where the estimate exceeds this many median edge lengths: 1.12 times the largest estimate on
-# the clean meshes it was tuned on (0.089 on Blender's Monkey as it comes; bench/bench_noise_found.py).
+# the clean meshes it was tuned on (0.073 on Blender's Monkey as it comes; bench/bench_noise_found.py).
 # Below it a part is quiet: smoothed, but within QUIET_SHARE of its size, so a clean shape read as
-# light noise keeps its form, while light noise on the tuning set's scans is still smoothed
-# (bench/bench_default_heldout.py --sets tuning: 0.10 against 0.12 wins 3 more cells at 0.1-0.25 %).
-NOISE_THRESHOLD = 0.10
+# light noise keeps its form, while light noise on the tuning set's scans is still smoothed.
+NOISE_THRESHOLD = 0.082
 # Light noise (see above): a part below NOISE_THRESHOLD whose estimate exceeds LIGHT_FLOOR edge lengths and
 # drops below WHITE times itself after a half step, read on at least WHITE_SAMPLES sample vertices. WHITE
 # lies between the tuning set's noisy meshes (at most 0.41) and its clean ones (at least 0.57); the floor

@@ -89,13 +89,14 @@ def test_a_box_with_noise_too_light_to_find_never_ends_farther_from_the_cube(cut
 
 
 def test_the_clipped_floor_reads_the_noise_where_a_fifth_of_the_vertices_are_creases():
-    """The box of 9 cuts in quads with noise along the normals: the median's estimate reads 1.3-1.7 times the
-    noise, the floor (its clipped estimate) at most 1.35 times; on a noisy UV Sphere the floor is within 2 %
-    of the median's."""
+    """The box of 9 cuts in quads with noise along the normals: the median's estimate reads 1.1-1.4 times the
+    noise (a fifth of the vertices on creases), the floor (its clipped estimate) 0.8-1.1 times; on a noisy UV
+    Sphere the floor is within 2 % of the median's."""
     for seed in SEEDS:
         noisy, sigma = with_noise(subdivided_cube(9, triangulate=False), 0.005 / 0.2, "normal", seed=seed)
         noise = find_noise(noisy.positions, core.umbrella_operator(noisy.edges, len(noisy.positions)))
-        assert noise.sigma[0] > 1.3 * sigma and 0.8 * sigma < noise.floor[0] < 1.35 * sigma, seed
+        assert noise.sigma[0] > 1.08 * sigma and 0.75 * sigma < noise.floor[0] < 1.15 * sigma, seed
+        assert noise.floor[0] < 0.85 * noise.sigma[0], seed
         sphere, _ = with_noise(PRIMITIVES["uv_sphere"](), 0.07, "normal", seed=seed)  # light: the floor is clipped
         noise = find_noise(sphere.positions, core.umbrella_operator(sphere.edges, len(sphere.positions)))
         assert noise.light[0], seed
@@ -200,3 +201,16 @@ def test_two_spheres_of_very_different_size_each_get_smoothed(sharp, small_first
                 assert after <= before * (1 + 1e-9), (kind, seed, name, after / before)
                 if not sharp or kind == "isotropic":
                     assert after < 0.8 * before, (kind, seed, name, after / before)
+
+
+@pytest.mark.parametrize(
+    ("cuts", "kind", "seed"), [(7, "isotropic", 1), (9, "normal", 0), (9, "normal", 2), (13, "normal", 1)]
+)
+def test_a_quad_box_with_light_noise_never_ends_farther_from_the_cube(cuts, kind, seed):
+    """Item 7: boxes in quads, noise of 0.1 % of the size. With one gain for every layout the noise estimate read
+    quad meshes 20 % above triangle meshes, and these boxes ended 1.015-1.116 times farther from the cube than
+    their input; each residual scaled by its layout's own gain (core.mesh.noise.layout_gains) reads their
+    noise as a triangle mesh's, and the trace's bound gives them their input back."""
+    noisy, _ = with_noise(subdivided_cube(cuts, triangulate=False), 0.001 * (cuts + 1), kind, seed=seed)
+    result, _ = default_run(noisy)
+    assert cube_error(result) <= cube_error(noisy.positions) * (1 + 1e-9)

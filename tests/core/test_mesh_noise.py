@@ -29,13 +29,14 @@ def test_clean_meshes_have_no_noise(name):
 @pytest.mark.parametrize("ratio", [0.3, 0.5])
 def test_noise_is_found_and_estimated(name, ratio, kind):
     """Noise of 0.3 and 0.5 edge lengths (scan noise of ~0.1 % of the diagonal on a 100k-vertex scan is
-    about 0.3) is found, and estimated within 25 % at 0.3 (the tube, coarse with sharp rims: 50 %).
-    Heavier noise along the normals tilts the planes fitted to the rings: 0.5 is under-estimated by up
-    to 30 %."""
+    about 0.3) is found, and estimated within 25 % at 0.3 (the tube, coarse with sharp rims: 50 %; the
+    Grid, 121 vertices: 35 %, as the median of its 117 residuals varies by about 11 % from seed to seed, and
+    reads 0.83-0.84 times the noise over 40 seeds). Heavier noise along the normals tilts the planes fitted
+    to the rings: 0.5 is under-estimated by up to 30 %."""
     part, sigma = with_noise({**PRIMITIVES, **CAD}[name](), ratio, kind)
     noise = noise_of(part)
     assert noise.found and not noise.quiet.any()
-    low = 0.5 if name == "tube" else 0.75 if ratio < 0.5 else 0.65
+    low = 0.5 if name == "tube" else 0.75 if ratio < 0.5 and name != "grid" else 0.65
     assert low * sigma < noise.level() < 1.25 * sigma
 
 
@@ -110,3 +111,32 @@ def test_small_parts_are_judged_by_magnitude_alone():
     noise = noise_of(part)
     assert len(part.positions) < WHITE_SAMPLES
     assert not noise.found and LIGHT_FLOOR * median_edge(part) < noise.level() < NOISE_THRESHOLD * median_edge(part)
+
+
+def flat_layouts(side=100, seed=0):
+    """Flat grids of ``side`` x ``side`` vertices: quads (valence 4), regular triangles (6) and a Delaunay
+    triangulation of random points (valence 3 to 10), as (name, positions, edges)."""
+    from scipy.spatial import Delaunay
+
+    x, y = np.meshgrid(np.arange(side, dtype=float), np.arange(side, dtype=float))
+    grid = np.c_[x.ravel(), y.ravel(), np.zeros(side * side)]
+    at = np.arange(side * side).reshape(side, side)
+    quads = np.r_[np.c_[at[:, :-1].ravel(), at[:, 1:].ravel()], np.c_[at[:-1].ravel(), at[1:].ravel()]]
+    triangles = np.r_[quads, np.c_[at[:-1, :-1].ravel(), at[1:, 1:].ravel()]]
+    points = np.random.default_rng(seed).random((side * side, 2)) * side
+    fans = Delaunay(points).simplices
+    delaunay = np.unique(np.sort(np.r_[fans[:, [0, 1]], fans[:, [1, 2]], fans[:, [2, 0]]], axis=1), axis=0)
+    return [("quads", grid, quads), ("triangles", grid, triangles), ("delaunay", np.c_[points, grid[:, 2]], delaunay)]
+
+
+def test_every_layout_reads_the_same_noise():
+    """Noise along the normals of flat grids: the estimate does not depend on the layout (quads read 20 %
+    above regular triangles with one gain for all; each residual scaled by its layout's own gain,
+    core.mesh.noise.layout_gains, they read within 5 % of each other, open borders included)."""
+    sigma, reads = 0.05, {}
+    for name, positions, edges in flat_layouts():
+        noisy = (
+            positions + np.c_[np.zeros((len(positions), 2)), np.random.default_rng(1).normal(0, sigma, len(positions))]
+        )
+        reads[name] = find_noise(noisy, core.umbrella_operator(edges, len(noisy))).sigma[0] / sigma
+    assert max(reads.values()) < 1.05 * min(reads.values()), reads
