@@ -23,7 +23,7 @@ GCV (core.mesh.amount) cannot tell a clean mesh's curvature from noise: on a Ble
   (``CURVE_GAIN``).
 
 A part has noise when that estimate exceeds NOISE_THRESHOLD median edge lengths. Below it, light noise
-and a coarse clean shape's own detail can read alike (Blender's Monkey as it comes reads 0.09 with no
+and a coarse clean shape's own detail can read alike (Blender's Monkey as it comes reads 0.07 with no
 noise), so a second test asks how the residual behaves: noise is uncorrelated from vertex to vertex,
 and half a step towards the neighbours' mean (x + (mean(adj) - x) / 2) takes most of it away, while a
 shape's detail spans several vertices and keeps more. On the tuning set the estimate after that half
