@@ -482,7 +482,7 @@ class TileJob:
 @dataclass
 class TileDone:
     """A tile smoothed and written: its ``vertices`` and ``own`` counts, its ``seconds``, its ``totals`` (the
-    report's sums over its own vertices) and, with the volume restore, its ``piece`` (core.TilePiece)."""
+    report's sums over its own vertices) and, with the volume restore, its ``piece`` (core.TiledVolume.piece)."""
 
     vertices: int
     own: int
@@ -505,7 +505,7 @@ def run_tile(job, lookup=None):
         write_tile(tile, result, mesh, job.output, totals)
     else:  # the whole smoothed mesh is kept aside: the restore's pass reads it around each tile
         job.smoothed.write(tile.vertices[tile.own], result[tile.own])
-        piece = core.tile_piece(smoother, tile.vertices, tile.own, job.centre)
+        piece = core.TiledVolume.piece(smoother, tile.vertices, tile.own, job.centre)
     del smoother
     return TileDone(len(tile.vertices), int(tile.own.sum()), time.perf_counter() - tick, totals, piece)
 

@@ -21,7 +21,7 @@ Meshes (core/mesh)
     faces close a surface; every_edge_shared: whether they leave no seam to weld. world_frame,
     to_frame, from_frame: an object's stretch (its world-space shape). tile_rings, tile_margin,
     tile_boxes, tiled_problem, tiles_choose, region_amount, TiledVolume: a mesh larger than memory smoothed in
-    tiles (TiledVolume: its closed parts' volume given back, from each tile's tile_piece; tile_volumes: its volume
+    tiles (TiledVolume: its closed parts' volume given back, from each tile's piece; tile_volumes: its volume
     measured).
 Point clouds (core/pointcloud, section 7)
     smooth_point_cloud, PointCloudSmoother: the RFS-mesh pipeline. collinear: points no surface can
@@ -47,7 +47,7 @@ from .mesh.amount import MAX_ITERATIONS, AmountChooser, MeshAmount, choose_amoun
 from .mesh.deviation import DeviationMap, deviation_colors, deviation_extent, deviation_map, normal_deviation
 from .mesh.metrics import Change, InputMeasure, enclosed_volume, measure_change, measure_input
 from .mesh.smooth import AUTO, DEFAULT_ALPHA, DEFAULT_BETA, DEFAULT_ITERATIONS, MeshReport, MeshSmoother, smooth_mesh
-from .mesh.tile_volume import TiledVolume, TilePiece, tile_piece, tile_volumes
+from .mesh.tile_volume import TiledVolume, tile_volumes
 from .mesh.tiles import region_amount, tile_boxes, tile_margin, tile_rings, tiled_problem, tiles_choose
 from .mesh.topology import closed_from_corners, every_edge_shared
 from .mesh.world import frame as world_frame
@@ -123,8 +123,6 @@ __all__ = [
     "tiled_problem",
     "tiles_choose",
     "TiledVolume",
-    "TilePiece",
-    "tile_piece",
     "tile_volumes",
     "to_frame",
     "world_frame",

@@ -141,10 +141,16 @@ class TiledVolume:
         vertices), ``vertices`` its vertices' indices in the mesh, ``own`` which are the tile's own. Only the
         triangles around its own vertices and around the corners of its own triangles are read."""
         if not self.too_many:
-            self.add(tile_piece(run, vertices, own, self.centre))
+            self.add(self.piece(run, vertices, own, self.centre))
+
+    @staticmethod
+    def piece(run, vertices, own, centre):
+        """What ``add_tile`` adds, made where the tile ran (a worker too): a ``TilePiece``, or None (no
+        triangles). ``centre``: the TiledVolume's."""
+        return _tile_piece(run, vertices, own, centre)
 
     def add(self, piece):
-        """Add a tile's ``TilePiece`` (``tile_piece``, made where the tile ran: on a worker too), in any order."""
+        """Add a tile's ``TilePiece`` (``piece``), in any order."""
         if self.too_many or piece is None:
             return
         self.union.join(piece.joined, piece.groups)
@@ -220,7 +226,7 @@ class TilePiece:
     pieces: _Pieces
 
 
-def tile_piece(run, vertices, own, centre):
+def _tile_piece(run, vertices, own, centre):
     """The ``TilePiece`` of a smoothed tile (``TiledVolume.add_tile``'s arguments, ``centre`` its centre), or
     None where the tile has no triangles."""
     if run.faces is None or len(run.faces) == 0:
