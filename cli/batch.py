@@ -129,10 +129,8 @@ class TilesOnWorkers:
 
     def __call__(self, jobs):
         with self.distributed.worker_client() as client:
-            futures = [
-                client.submit(pickle.loads, standalone.sent(standalone.on_worker_tile, str(ROOT), pickle.dumps(job)))
-                for job in jobs
-            ]
+            sent = (standalone.sent(standalone.on_worker_tile, str(ROOT), pickle.dumps(job)) for job in jobs)
+            futures = [client.submit(pickle.loads, task, pure=False) for task in sent]  # no result shared
             try:
                 for future in self.distributed.as_completed(futures):
                     yield future.result()
