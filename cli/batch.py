@@ -20,6 +20,7 @@ import logging
 import os
 import pathlib
 import pickle
+import sys
 
 from . import files, standalone
 
@@ -141,8 +142,6 @@ class TilesOnWorkers:
 def tile_runner():
     """Where a tiled file's tiles run: ``TilesOnWorkers`` when this process is a Dask worker (which has imported
     distributed), else None (here)."""
-    import sys
-
     distributed = sys.modules.get("distributed")
     if distributed is None:
         return None

@@ -286,26 +286,21 @@ def _residuals(positions, rows, operator, halves=0):
 def layout_gains(rows, operator):
     """How much each row's residual scales the noise on its layout: the length of row i of (I - U)^2, U the
     umbrella average (r_i ~ s_i - mean of s_j over adj(i), s = (U - I) e, with the median in place of the
-    mean). On flat grids with unit noise along the normal, median |r| / (0.6745 times this) reads 1.01-1.04
+    mean). On flat grids with unit noise along the normal, median |r| / (0.6745 times this) reads 0.99-1.04
     on every valence (quads, regular and Delaunay triangles, valence 3 to 10), where a fixed gain reads quads
     20 % above regular triangles (``LAYOUT_REFERENCE``)."""
     owner, first = neighbours(rows, operator)
-    k = operator.degree[rows].astype(np.float64)
     second_owner, second = neighbours(first, operator)
-    weight_first = 1.0 / k[owner]
+    weight_first = 1.0 / operator.degree[rows][owner]
     weight_second = weight_first[second_owner] / operator.degree[first][second_owner]
-    coo = sp.coo_matrix(
+    weights = sp.csr_matrix(  # (I - 2U + U^2) on the rows: duplicates (paths of two steps) summed
         (
             np.concatenate([np.ones(rows.size), -2.0 * weight_first, weight_second]),
-            (
-                np.concatenate([np.arange(rows.size), owner, owner[second_owner]]),
-                np.concatenate([rows, first, second]),
-            ),
+            (np.concatenate([np.arange(rows.size), owner, owner[second_owner]]), np.concatenate([rows, first, second])),
         ),
         shape=(rows.size, operator.n_vertices),
-    ).tocsr()
-    coo.sum_duplicates()
-    return np.sqrt(np.bincount(np.repeat(np.arange(rows.size), np.diff(coo.indptr)), coo.data**2, rows.size))
+    )
+    return np.sqrt(np.asarray(weights.multiply(weights).sum(axis=1)).ravel())
 
 
 def _union(n, *vertex_sets):

@@ -93,6 +93,16 @@ class _Pieces:
     boxes: np.ndarray  # (k, 12)
 
 
+@dataclass
+class TilePiece:
+    """What a smoothed tile adds to a ``TiledVolume``: its vertices (mesh indices) ``joined`` with the others
+    of their ``groups`` (the union's links) and the ``pieces`` of the parts it holds."""
+
+    joined: np.ndarray
+    groups: np.ndarray
+    pieces: _Pieces
+
+
 class TiledVolume:
     """The volume restore of a mesh of ``n`` vertices smoothed in tiles (see the module docstring):
     ``add_tile`` after each tile's smoothing, ``solve`` once, ``restored`` for each tile of the second pass.
@@ -145,9 +155,49 @@ class TiledVolume:
 
     @staticmethod
     def piece(run, vertices, own, centre):
-        """What ``add_tile`` adds, made where the tile ran (a worker too): a ``TilePiece``, or None (no
-        triangles). ``centre``: the TiledVolume's."""
-        return _tile_piece(run, vertices, own, centre)
+        """What ``add_tile`` adds (its arguments, ``centre`` the TiledVolume's), made where the tile ran (a
+        worker too): a ``TilePiece``, or None where the tile has no triangles."""
+        if run.faces is None or len(run.faces) == 0:
+            return None
+        welded = len(run.positions)
+        first = run.welding.first if run.welding is not None else np.arange(welded)
+        label = run.welding.label if run.welding is not None else np.arange(welded)
+        own = np.asarray(own, bool)[first]
+        near, triangles = _around_own(run.faces, own)
+        at = np.full(welded, -1, dtype=np.int64)
+        at[near] = np.arange(len(near))
+        own, movable, copies = own[near], _movable(run)[near], np.flatnonzero(at[label] >= 0)
+        surface = topology.surface(triangles, len(near))
+        parts, part_of_vertex = surface.parts, surface.part_of_vertex
+        owned = own & surface.used
+        counted = np.bincount(part_of_vertex[owned], minlength=parts) > 0  # the pieces this tile adds
+        groups = part_of_vertex[at[label[copies]]]
+        owner = np.where(own, part_of_vertex, parts)  # only own triangles and vertices count: the rest is ``parts``
+        planar_before, planar_after = volume.as_planar(run.positions[near]), volume.as_planar(run.result[first[near]])
+        target = to_end(volume.volume_steps(planar_before, triangles, owner, parts + 1, centre))
+        normals, (c0, area) = to_end(
+            normals_and_measures(planar_after, triangles, owner, parts + 1, centre, volume.BLOCK)
+        )
+        normals *= movable
+        mine = triangles[own[triangles[:, 0]]]  # the cubic's terms of the other triangles go to part ``parts``
+        cubic = to_end(volume.cubic_steps(planar_after, normals, mine, owner, parts + 1, centre))
+        rows = np.flatnonzero(owned)
+        boxes = [
+            *volume.part_boxes(planar_before[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
+            *volume.part_boxes(planar_after[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
+        ]
+        lowest = np.full(parts, len(near), dtype=np.int64)
+        np.minimum.at(lowest, part_of_vertex, np.arange(len(near)))
+        keep = np.flatnonzero(counted)
+        pieces = _Pieces(
+            vertex=vertices[first[near[lowest[keep]]]],
+            unmatched=(np.bincount(owner[surface.unmatched & own], minlength=parts + 1) > 0)[keep],
+            movable=(np.bincount(owner[owned & movable], minlength=parts + 1) > 0)[keep],
+            sizes=np.bincount(owner[owned], minlength=parts + 1)[keep],
+            sums=np.stack([target, c0, area, *cubic], axis=1)[keep],
+            boxes=np.concatenate(boxes, axis=1)[keep],
+        )
+        return TilePiece(vertices[copies[counted[groups]]], groups[counted[groups]], pieces)
 
     def add(self, piece):
         """Add a tile's ``TilePiece`` (``piece``), in any order."""
@@ -214,60 +264,6 @@ class TiledVolume:
         if np.any(self.deviation):
             project_rows_within(result, run.positions, self.deviation)
         return result if run.welding is None else run.welding.scatter(result)
-
-
-@dataclass
-class TilePiece:
-    """What a smoothed tile adds to a ``TiledVolume``: its vertices (mesh indices) ``joined`` with the others
-    of their ``groups`` (the union's links) and the ``pieces`` of the parts it holds."""
-
-    joined: np.ndarray
-    groups: np.ndarray
-    pieces: _Pieces
-
-
-def _tile_piece(run, vertices, own, centre):
-    """The ``TilePiece`` of a smoothed tile (``TiledVolume.add_tile``'s arguments, ``centre`` its centre), or
-    None where the tile has no triangles."""
-    if run.faces is None or len(run.faces) == 0:
-        return None
-    welded = len(run.positions)
-    first = run.welding.first if run.welding is not None else np.arange(welded)
-    label = run.welding.label if run.welding is not None else np.arange(welded)
-    own = np.asarray(own, bool)[first]
-    near, triangles = _around_own(run.faces, own)
-    at = np.full(welded, -1, dtype=np.int64)
-    at[near] = np.arange(len(near))
-    own, movable, copies = own[near], _movable(run)[near], np.flatnonzero(at[label] >= 0)
-    surface = topology.surface(triangles, len(near))
-    parts, part_of_vertex = surface.parts, surface.part_of_vertex
-    owned = own & surface.used
-    counted = np.bincount(part_of_vertex[owned], minlength=parts) > 0  # the pieces this tile adds
-    groups = part_of_vertex[at[label[copies]]]
-    owner = np.where(own, part_of_vertex, parts)  # only own triangles and vertices count: the rest is ``parts``
-    planar_before, planar_after = volume.as_planar(run.positions[near]), volume.as_planar(run.result[first[near]])
-    target = to_end(volume.volume_steps(planar_before, triangles, owner, parts + 1, centre))
-    normals, (c0, area) = to_end(normals_and_measures(planar_after, triangles, owner, parts + 1, centre, volume.BLOCK))
-    normals *= movable
-    mine = triangles[own[triangles[:, 0]]]  # the cubic's terms of the other triangles go to part ``parts``
-    cubic = to_end(volume.cubic_steps(planar_after, normals, mine, owner, parts + 1, centre))
-    rows = np.flatnonzero(owned)
-    boxes = [
-        *volume.part_boxes(planar_before[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
-        *volume.part_boxes(planar_after[:, rows], owner[rows], np.ones(len(rows), bool), parts + 1),
-    ]
-    lowest = np.full(parts, len(near), dtype=np.int64)
-    np.minimum.at(lowest, part_of_vertex, np.arange(len(near)))
-    keep = np.flatnonzero(counted)
-    pieces = _Pieces(
-        vertex=vertices[first[near[lowest[keep]]]],
-        unmatched=(np.bincount(owner[surface.unmatched & own], minlength=parts + 1) > 0)[keep],
-        movable=(np.bincount(owner[owned & movable], minlength=parts + 1) > 0)[keep],
-        sizes=np.bincount(owner[owned], minlength=parts + 1)[keep],
-        sums=np.stack([target, c0, area, *cubic], axis=1)[keep],
-        boxes=np.concatenate(boxes, axis=1)[keep],
-    )
-    return TilePiece(vertices[copies[counted[groups]]], groups[counted[groups]], pieces)
 
 
 def tile_volumes(before, after, triangles, own, centre):
