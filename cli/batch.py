@@ -170,16 +170,21 @@ def connected(plan, distributed):
         with client:
             yield client
         return
-    cluster = distributed.LocalCluster(
-        n_workers=plan.jobs,
-        threads_per_worker=1,
-        processes=True,
-        dashboard_address=":0",  # its HTTP server (health checks) on a free port: 8787 may be taken
-        silence_logs=logging.ERROR,
-        env={"HC_SMOOTH_THREADS": str(threads_per_worker(plan.jobs))},
-    )
-    with cluster, distributed.Client(cluster) as client:
-        yield client
+    import dask  # with distributed
+
+    # A worker killed mid-file (the memory limit, the OOM killer) is restarted by its nanny; the cluster would
+    # drop it if the new one took over `lost-worker-timeout` (15 s) to start, as it can on a loaded machine.
+    with dask.config.set({"distributed.deploy.lost-worker-timeout": "600s"}):
+        cluster = distributed.LocalCluster(
+            n_workers=plan.jobs,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=":0",  # its HTTP server (health checks) on a free port: 8787 may be taken
+            silence_logs=logging.ERROR,
+            env={"HC_SMOOTH_THREADS": str(threads_per_worker(plan.jobs))},
+        )
+        with cluster, distributed.Client(cluster) as client:
+            yield client
 
 
 def check_workers(client):

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 
+import dask
 import distributed  # in the test environments (scripts/setup_envs.sh)
 import pytest
 import scan_files
@@ -37,8 +38,11 @@ def serial(tmp_path, scans, options=()):
 
 @pytest.fixture(scope="module")
 def cluster():
-    """A LocalCluster of 2 worker processes, as `dask scheduler` and two `dask worker` would be."""
+    """A LocalCluster of 2 worker processes, as `dask scheduler` and two `dask worker` would be. A killed
+    worker's nanny starts a new one; the cluster closes that nanny if no worker of its name is back within
+    `lost-worker-timeout` (15 s), which a loaded machine can miss: the tests wait for the new worker."""
     with (
+        dask.config.set({"distributed.deploy.lost-worker-timeout": "600s"}),
         distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster,
         distributed.Client(cluster) as client,
     ):
