@@ -109,7 +109,7 @@ PASS_SLICES_FROM = 200_000  # triangles from which steps() also yields between t
 FIT_SLICE = 5  # fitting passes between two of those yields
 FIT_SLICES = -(-FIT_ITERATIONS // FIT_SLICE)
 REFIT_SLICES = -(-REFIT_ITERATIONS // FIT_SLICE)
-GUIDED_SLICES = 3  # after the guidance and after each choice of the nearest planes
+GUIDED_SLICES = 5  # within and after the guidance (guidance_steps) and after each choice of the nearest planes
 STEP_SLICES = GUIDED_SLICES + NORMAL_ITERATIONS + FIT_SLICES + REFIT_SLICES + FOLD_ROUNDS  # a step's, at most
 # The guidance's vertex rings (about 6 faces) count their consistency this many times against the face
 # rings' (about 13): on the tuning parts at 0.5 % noise 1.5-3 leave the same dihedral error, 1 more.
@@ -288,20 +288,23 @@ def _ring_pattern(corners, incidence):
 def _edge_neighbours(triangles, n_vertices):
     """(across, border) of FaceRings: each triangle's neighbour across each edge, the open border's vertices.
 
-    Each triangle's edges (its corners k, k + 1) as sorted vertex pairs, sorted by pair: a pair met twice
-    is an edge between two triangles, a pair met once an open border (its umbrella leans inwards)."""
+    Each triangle's edges (edge 3 f + k from its corner k to corner k + 1) keyed by their vertex pair, low
+    end first, sorted by key: a pair met twice is an edge between two triangles, a pair met once an open
+    border (its umbrella leans inwards)."""
     t = triangles.shape[0]
-    pairs = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1).astype(np.int64)
-    keys = pairs[:, 0] * n_vertices + pairs[:, 1]
+    start = triangles.astype(np.int64, copy=False).ravel()
+    end = triangles[:, [1, 2, 0]].astype(np.int64, copy=False).ravel()
+    keys = np.minimum(start, end) * n_vertices + np.maximum(start, end)  # min, max: a sort of rows of two costs 4x
     order = np.argsort(keys, kind="stable")
     ordered = keys[order]
     same = ordered[1:] == ordered[:-1]
     first, second = order[:-1][same], order[1:][same]
     across = np.repeat(np.arange(t), 3)  # on a border: itself
     across[first], across[second] = second // 3, first // 3
-    alone = ~(np.r_[same, False] | np.r_[False, same])
+    alone = order[~(np.r_[same, False] | np.r_[False, same])]
     border = np.zeros(n_vertices, dtype=bool)
-    border[pairs[order[alone]].ravel()] = True
+    border[start[alone]] = True
+    border[end[alone]] = True
     index = np.int32 if t < 2**31 else np.int64
     return np.ascontiguousarray(across.reshape(t, 3).T, dtype=index), border
 
@@ -327,6 +330,11 @@ def _unit_planar(vectors):
 
 
 def guidance_normals(normals, rings):
+    """``guidance_steps`` run to its end: the (t, 3) guidance normals."""
+    return to_end(guidance_steps(normals, rings))
+
+
+def guidance_steps(normals, rings):
     """Zhang, Deng, Zhang, Bouaziz and Liu 2015's guidance ("Guided Mesh Normal Filtering"): each face takes
     the mean normal of the most consistent patch it lies in. The patches are the face rings (the faces
     sharing a vertex with face j, P_j) and, smaller, the vertex rings (the faces around vertex v, P_v):
@@ -342,7 +350,9 @@ def guidance_normals(normals, rings):
     as much as a crease turns, but the mean of a patch on one side is steady: the filter's weights
     compare these. At a corner every patch is mixed, and the guidance is a blend of the sides.
 
-    A chunk of the ring pattern's rows at a time (FaceRings.each_chunk)."""
+    A chunk of the ring pattern's rows at a time (FaceRings.each_chunk). A generator: yields after the
+    patches' spread and after the face rings' choice (each about a third of the work), returns the (t, 3)
+    guidance normals."""
     t = normals.shape[0]
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
     means = _unit_planar(rings.ring_sums(planar))
@@ -370,6 +380,7 @@ def guidance_normals(normals, rings):
         steepest[first:end] = steep.take(columns).max(axis=0)
 
     rings.each_chunk(patches)
+    yield
     consistency = spread * steepest / (1e-9 + rings.ring_sums(summed))
     chosen, best = np.empty(t, dtype=np.intp), np.empty(t)
 
@@ -380,6 +391,7 @@ def guidance_normals(normals, rings):
 
     rings.each_chunk(most_consistent)
     guidance = np.stack([row.take(chosen) for row in means])
+    yield
     vertex_means, vertex_consistency = _vertex_ring_consistency(normals, planar, rings, steep, summed)
     at_corners = [VERTEX_RING_WEIGHT * vertex_consistency.take(corner) for corner in rings.corners]
     lowest = np.minimum(np.minimum(at_corners[0], at_corners[1]), at_corners[2])
@@ -778,9 +790,9 @@ class SharpSmoothing:
     def steps(self, chunk: int | None = None) -> Iterator[float]:
         """Run the steps left, ``chunk`` at a time, yielding the fraction done after each slice; on meshes of
         ``PASS_SLICES_FROM`` triangles or more also between the stages of building the face rings (yielding
-        0.0) and within a step (at most ``STEP_SLICES`` slices: after the guidance, each filtering pass, each
-        choice of the nearest planes, each fitting's set-up, every ``FIT_SLICE`` fitting passes and each
-        unfolding round but the last; a step takes seconds there)."""
+        0.0) and within a step (at most ``STEP_SLICES`` slices: within and after the guidance, each filtering
+        pass, each choice of the nearest planes, each fitting's set-up, every ``FIT_SLICE`` fitting passes and
+        each unfolding round but the last; a step takes seconds there)."""
         chunk = self.iterations if chunk is None else max(1, int(chunk))
         passes = self.triangles.shape[0] >= PASS_SLICES_FROM
         if self.rings is None and self.iterations > 0:
@@ -810,7 +822,7 @@ class SharpSmoothing:
         normals = before = face_normals(start, self.triangles)
         guidance = None
         if self.guided:
-            guidance = guidance_normals(normals, self.rings)
+            guidance = yield from _counted(guidance_steps(normals, self.rings), slices)
             yield next(slices)
         filtering = filter_steps(normals, self.rings, self.cos_threshold, NORMAL_ITERATIONS, guidance)
         del guidance  # the filter keeps its weights instead

@@ -352,8 +352,8 @@ def test_big_meshes_yield_between_filtering_passes(monkeypatch):
 
 def test_big_meshes_yield_while_the_rings_and_the_guidance_are_made(monkeypatch):
     """On big meshes the face rings are built in slices (steps() yields 0.0 after each stage) and a guided
-    step yields after the guidance and after each choice of the nearest planes too: a cancel never waits
-    for the whole set-up. Sliced or not, the rings and the result are the same."""
+    step yields within the guidance (GUIDED_SLICES), after it and after each choice of the nearest planes
+    too: a cancel never waits for the whole set-up. Sliced or not, the rings and the result are the same."""
     _, noisy, faces = noisy_box(0.005, "iso", cells=6)
     whole = SharpSmoothing(noisy, faces, iterations=2, guided=True)
     at_once = list(whole.steps())
@@ -569,8 +569,8 @@ def test_the_filter_is_guided_where_noise_is_found(monkeypatch):
     """The guidance runs on a noisy part, with the Automatic Amount and with a set number of steps alike
     (the result then is SharpSmoothing's guided run of those steps); not on a clean part, steps set or not."""
     calls = []
-    guidance = sharp_edges.guidance_normals
-    monkeypatch.setattr(sharp_edges, "guidance_normals", lambda *a: calls.append(1) or guidance(*a))
+    guidance = sharp_edges.guidance_steps
+    monkeypatch.setattr(sharp_edges, "guidance_steps", lambda *a: calls.append(1) or guidance(*a))
     _, noisy, faces = noisy_box(0.005, "iso", cells=8)
     core.smooth_mesh(noisy, edges_of(faces), faces=faces, keep_sharp_edges=True)
     assert calls
