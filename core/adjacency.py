@@ -25,6 +25,21 @@ except ImportError:  # SciPy without them
     _coo_tocsr = _csr_tocsc = None
 
 
+def pair_keys(u: ArrayLike, v: ArrayLike, n: int) -> np.ndarray:
+    """int64 keys low * n + high of the unordered vertex pairs (u, v) of a mesh of ``n`` vertices: the same
+    key for (a, b) and (b, a), sorted keys sort the pairs. (Elementwise minimum and maximum: a sort of rows
+    of two costs four times as much.)
+
+    Examples
+    --------
+    >>> from core.adjacency import pair_keys
+    >>> pair_keys([0, 3, 2], [3, 0, 2], 10).tolist()
+    [3, 3, 22]
+    """
+    u, v = np.asarray(u, dtype=np.int64), np.asarray(v, dtype=np.int64)
+    return np.minimum(u, v) * n + np.maximum(u, v)
+
+
 def _exclusive_cumsum(counts, dtype):
     out = np.zeros(counts.size + 1, dtype=dtype)
     np.cumsum(counts, out=out[1:])

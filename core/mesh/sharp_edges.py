@@ -76,7 +76,7 @@ except (ImportError, TypeError, ValueError):  # SciPy without this kernel, or wi
 from numpy.typing import ArrayLike
 
 from .. import parallel
-from ..adjacency import Umbrella, umbrella_operator
+from ..adjacency import Umbrella, pair_keys, umbrella_operator
 from ..geometry import face_normals, fan_triangles, project_rows_within
 from ..parallel import BLOCK
 from ..slices import to_end
@@ -292,9 +292,8 @@ def _edge_neighbours(triangles, n_vertices):
     end first, sorted by key: a pair met twice is an edge between two triangles, a pair met once an open
     border (its umbrella leans inwards)."""
     t = triangles.shape[0]
-    start = triangles.astype(np.int64, copy=False).ravel()
-    end = triangles[:, [1, 2, 0]].astype(np.int64, copy=False).ravel()
-    keys = np.minimum(start, end) * n_vertices + np.maximum(start, end)  # min, max: a sort of rows of two costs 4x
+    start, end = triangles.ravel(), triangles[:, [1, 2, 0]].ravel()
+    keys = pair_keys(start, end, n_vertices)
     order = np.argsort(keys, kind="stable")
     ordered = keys[order]
     same = ordered[1:] == ordered[:-1]

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from ..adjacency import grouped_pairs
+from ..adjacency import grouped_pairs, pair_keys
 from ..parallel import BLOCK
 from ..slices import to_end
 from .parts import parts as connected_parts
@@ -210,6 +210,5 @@ def _border(rows, indptr, tails, into, heads, n):
         keys.append(np.repeat(rows, counts).astype(np.int64) * n + other)
     key, count = np.unique(np.concatenate(keys), return_counts=True)
     once = key[count == 1]
-    low, high = np.minimum(once // n, once % n), np.maximum(once // n, once % n)
-    pair = np.unique(low * n + high)
+    pair = np.unique(pair_keys(once // n, once % n, n))
     return np.stack([pair // n, pair % n], axis=1)

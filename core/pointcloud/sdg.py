@@ -37,6 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..adjacency import pair_keys
+
 # sin(30 degrees): how far off the nearest-neighbour line a neighbour must lie to make p's
 # neighbourhood two-dimensional.
 _OFF_LINE_SIN = 0.5
@@ -168,6 +170,4 @@ def surface_description_graph(index, emst_edges, *, spacing_factor=3.0, gap_fact
 
 def _edge_keys(u, v, n):
     """Keys low * n + high of the pairs (u, v) without self-loops."""
-    low, high = np.minimum(u, v).astype(np.int64), np.maximum(u, v).astype(np.int64)
-    keys = low * n + high
-    return keys[low != high]
+    return pair_keys(u, v, n)[np.asarray(u) != np.asarray(v)]
