@@ -80,18 +80,19 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray, 
     """
     triangles = np.asarray(triangles)
     corners_of = [np.ascontiguousarray(triangles[:, k]) for k in range(3)]
+    origin = _origin(start)
     normals = vertex_normals(result, triangles)
     move = result.astype(np.float64) - start
     along = np.einsum("ij,ij->i", move, normals)
     kept = start + along[:, None] * normals
-    facing, area = _unit_faces(_planar(result), corners_of)  # the crease rule's and the fold check's
+    facing, area = _unit_faces(_planar(result, origin), corners_of)  # the crease rule's and the fold check's
     _keep_across_creases(kept, start, move, normals, facing, area, corners_of)
     bare = ~normals.any(axis=1)  # in no triangle: no surface to keep to
     kept[bare] = result[bare]
     if outline is not None and outline.vertices.size:
         result = outline.across(start, result, normals)  # what an outline vertex takes back: no pull-in
         facing = None  # its faces turned with it: the fold check reads them again
-    unfold(kept, start, result, corners_of, facing)
+    unfold(kept, start, result, corners_of, facing, origin)
     out = kept.astype(result.dtype)
     still = ~move.any(axis=1)
     out[still] = result[still]
@@ -215,7 +216,7 @@ def _along(move, direction):
     return np.einsum("ij,ij->i", move, direction)[:, None] * direction
 
 
-def unfold(kept, start, result, corners_of, facing=None):
+def unfold(kept, start, result, corners_of, facing=None, origin=None):
     """Where ``kept`` folds or flattens a triangle, its corners take back part of the slide to ``result``,
     in place. Shadows are read along the smoothed triangle's normal: a kept triangle is folded where its
     shadow is not positive, flattened where it is under FOLDED times the input's shadow or FLAT times the
@@ -228,12 +229,14 @@ def unfold(kept, start, result, corners_of, facing=None):
     _LAST at most (the corners of those still folded then take all of it), each reading only the triangles
     at the corners just moved. Shadows in single precision, blocks of triangles on threads. ``corners_of``:
     the triangles' three corner columns; ``facing``: the result's unit face normals (``_unit_faces``), if
-    the caller has them."""
+    the caller has them; ``origin``: the point the single-precision coordinates are taken from (``_origin``
+    of ``start`` if None)."""
     t = len(corners_of[0])
+    origin = _origin(start) if origin is None else origin
     if facing is None:
-        facing = _unit_faces(_planar(result), corners_of)[0]
+        facing = _unit_faces(_planar(result, origin), corners_of)[0]
     least = np.empty(t, dtype=np.float32)
-    planar, before = _planar(kept), _planar(start)
+    planar, before = _planar(kept, origin), _planar(start, origin)
     folded = np.concatenate(
         parallel.run_chunks(
             lambda low, high: _first_check(planar, before, corners_of, facing, least, low, high), t, _BLOCK
@@ -262,7 +265,7 @@ def unfold(kept, start, result, corners_of, facing=None):
             share, away = np.ones(len(kept), dtype=np.float32), kept - result
         share[corners] = 0.5 * share[corners] if halving and round_ <= _ROUNDS and round_ < _LAST else 0.0
         kept[corners] = result[corners] + share[corners, None] * away[corners]
-        planar[:, corners] = kept[corners].T
+        planar[:, corners] = (kept[corners] - origin).T
         checked = np.flatnonzero(moved[corners_of[0]] | moved[corners_of[1]] | moved[corners_of[2]])
 
 
@@ -300,9 +303,21 @@ def _folded(planar, picked, facing, least):
     return (shadow <= 0.0) & (least > -np.inf) | (shadow < least)
 
 
-def _planar(points):
-    """(3, n) single-precision coordinate rows of (n, 3) ``points``."""
-    return np.ascontiguousarray(points.T, dtype=np.float32)
+def _origin(points):
+    """The centre of ``points``' bounding box (zeros for none): single-precision coordinates taken from it
+    keep the mesh's size in digits wherever it lies (a georeferenced scan sits millions of units out)."""
+    if len(points) == 0:
+        return np.zeros(3)
+    return (np.min(points, axis=0) + np.max(points, axis=0)) / 2.0
+
+
+def _planar(points, origin=None):
+    """(3, n) single-precision coordinate rows of (n, 3) ``points``, less ``origin`` if given."""
+    if origin is None:
+        return np.ascontiguousarray(points.T, dtype=np.float32)
+    out = np.empty((3, len(points)), dtype=np.float32)
+    np.subtract(np.asarray(points).T, np.asarray(origin, dtype=np.float64)[:, None], out=out, casting="same_kind")
+    return out
 
 
 def _cross(planar, corners_of):

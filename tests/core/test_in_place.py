@@ -124,6 +124,20 @@ def test_texture_stays_where_it_was(sphere):
     assert texture_shift(kept) < 0.25 * sigma  # radians on a unit sphere: distance along it
 
 
+def test_a_georeferenced_mesh_is_kept_in_place_as_at_the_origin(sphere):
+    """A scan millions of units from the origin (georeferenced, in double precision) keeps its vertices
+    in place as the same scan at the origin does: the fold check reads each triangle's shape, not where
+    it lies."""
+    part, noisy, triangles = sphere
+    offset = np.array([500_000.0, 5_000_000.0, 0.0])
+    here, report = core.smooth_mesh(noisy, part.edges, faces=triangles, return_report=True)
+    far = core.smooth_mesh(noisy + offset, part.edges, faces=triangles) - offset
+    assert report.kept_in_place
+    assert np.abs(far - here).max() < 1e-6 * 0.01  # a millionth of the noise: double rounding at 5e6
+    result = keep_in_place(noisy + offset, here + offset, triangles) - offset
+    assert np.abs(result - keep_in_place(noisy, here, triangles)).max() < 1e-8
+
+
 def test_open_outline_is_not_pulled_in():
     """Blender's Grid (40 quads a side) with noise along z: the default keeps the outline's length and the
     enclosed area within 1 % of the clean ones; without Keep in Place the border is pulled in."""
