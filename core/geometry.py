@@ -213,9 +213,11 @@ def smallest_group_axes(owner, spread, groups):
     return smallest_eigenvectors(*(np.bincount(owner, spread[:, a] * spread[:, b], groups) for a, b in pairs))
 
 
-def vertex_normals(positions, triangles, dtype=np.float64):
+def vertex_normals(positions, triangles, dtype=np.float64, agreement=False):
     """Area-weighted unit vertex normals of a triangle mesh (zero where no face touches a vertex), summed in
-    float64 and handed back as ``dtype``.
+    float64 and handed back as ``dtype``. ``agreement``: also (n,) float64 |sum_f a_f n_f| / sum_f a_f over
+    each vertex's faces f (a_f their areas, n_f their unit normals): 1 where they all face one way, less
+    where they turn (0 where no face touches it).
 
     Examples
     --------
@@ -225,19 +227,26 @@ def vertex_normals(positions, triangles, dtype=np.float64):
     >>> triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     >>> geometry.vertex_normals(positions, triangles).round(3).tolist()
     [[-0.577, -0.577, -0.577], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    >>> geometry.vertex_normals(positions, triangles, agreement=True)[1].round(3).tolist()  # a corner everywhere
+    [0.577, 0.268, 0.268, 0.268]
     """
     planar = np.ascontiguousarray(np.asarray(positions).T)
-    normals, _ = to_end(normals_and_measures(planar, np.asarray(triangles), None, 1, None, measure=False))
-    return np.ascontiguousarray(normals.T, dtype=dtype)
+    steps = normals_and_measures(planar, np.asarray(triangles), None, 1, None, measure=False, agreement=agreement)
+    normals, _ = to_end(steps)
+    unit = np.ascontiguousarray(normals[:3].T, dtype=dtype)
+    return (unit, normals[3]) if agreement else unit
 
 
-def normals_and_measures(after, triangles, part_of_vertex, parts, centre, block=TRIANGLE_BLOCK, measure=True):
+def normals_and_measures(
+    after, triangles, part_of_vertex, parts, centre, block=TRIANGLE_BLOCK, measure=True, agreement=False
+):
     """(normals, measures) in slices, of (3, n) planar positions: the unit vertex normals (area-weighted,
     float64 (3, n)) and per part, (2, parts), its volume less the ``centre`` (None: the origin) (times 6)
-    and its area (times 2); ``measure`` False: the normals alone (measures zero). Each ``block`` of
+    and its area (times 2); ``measure`` False: the normals alone (measures zero); ``agreement``: the
+    normals get a fourth row, how far each vertex's faces agree (``vertex_normals``). Each ``block`` of
     triangles is measured on the threads, then its normals added at their corners block by block: the
     same numbers whatever the thread count."""
-    normals = np.zeros((3, after.shape[1]))
+    normals = np.zeros((4 if agreement else 3, after.shape[1]))
 
     def measured(start, stop):
         block = np.ascontiguousarray(triangles[start:stop].T, dtype=index_dtype(after.shape[1]))
@@ -245,7 +254,12 @@ def normals_and_measures(after, triangles, part_of_vertex, parts, centre, block=
         volume = dot(a, cross(b, c)) if measure else None
         b -= a
         c -= a
-        faces = cross(b, c)
+        if agreement:  # the twice-areas summed beside the twice-area normals
+            faces = np.empty((4, b.shape[1]))
+            faces[:3] = cross(b, c)
+            np.sqrt(dot(faces, faces), out=faces[3])
+        else:
+            faces = cross(b, c)
         sums = part_sums([volume, np.sqrt(dot(faces, faces))], part_of_vertex, block, parts) if measure else 0.0
         return block, faces, sums
 
@@ -256,8 +270,11 @@ def normals_and_measures(after, triangles, part_of_vertex, parts, centre, block=
             measures += sums
         yield
     for start in range(0, normals.shape[1], VECTOR_BLOCK):
-        rows = normals[:, start : start + VECTOR_BLOCK]
+        rows = normals[:3, start : start + VECTOR_BLOCK]
         length = np.sqrt(dot(rows, rows))
+        if agreement:
+            area = normals[3, start : start + VECTOR_BLOCK]
+            area[:] = np.divide(length, area, out=np.zeros_like(length), where=area > 0.0)
         rows /= np.where(length > 0.0, length, 1.0)
     return normals, measures
 
@@ -282,10 +299,10 @@ def _add_at_corners(sums, corners, values):
     for at in corners:
         if high - low <= 4 * corners.shape[1]:
             at = at - low
-            for j in range(3):
+            for j in range(len(values)):
                 sums[j, low:high] += np.bincount(at, weights=values[j], minlength=high - low)
         else:
-            for j in range(3):
+            for j in range(len(values)):
                 np.add.at(sums[j], at, values[j])
 
 

@@ -33,7 +33,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from .. import parallel
-from ..geometry import vertex_normals
+from ..geometry import index_dtype, vertex_normals
+from ..memory import small_pages
 from ..parallel import BLOCK
 from .noise import neighbours
 
@@ -78,15 +79,21 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray, 
     >>> keep_in_place(start, result, np.array([[0, 1, 3], [0, 3, 2]])).round(3).tolist()[3]
     [1.0, 1.0, 0.0]
     """
+    with small_pages():  # its arrays are made once and read in order (core.memory)
+        return _keep_in_place(start, result, triangles, outline)
+
+
+def _keep_in_place(start, result, triangles, outline):
+    """``keep_in_place``'s work."""
     triangles = np.asarray(triangles)
-    corners_of = [np.ascontiguousarray(triangles[:, k]) for k in range(3)]
+    corners_of = [np.ascontiguousarray(triangles[:, k], dtype=index_dtype(len(start))) for k in range(3)]
     origin = _origin(start)
-    normals = vertex_normals(result, triangles)
-    move = result.astype(np.float64) - start
-    along = np.einsum("ij,ij->i", move, normals)
-    kept = start + along[:, None] * normals
+    normals, agreement = vertex_normals(result, triangles, agreement=True)
+    move = np.subtract(result, start, dtype=np.float64)
+    kept = normals * np.einsum("ij,ij->i", move, normals)[:, None]  # the move along the normal
+    kept += start
     facing, area = _unit_faces(_planar(result, origin), corners_of)  # the crease rule's and the fold check's
-    _keep_across_creases(kept, start, move, normals, facing, area, corners_of)
+    _keep_across_creases(kept, start, move, agreement, facing, area, corners_of)
     bare = ~normals.any(axis=1)  # in no triangle: no surface to keep to
     kept[bare] = result[bare]
     if outline is not None and outline.vertices.size:
@@ -178,19 +185,16 @@ def _group_medians(values, labels):
     return values[order][np.cumsum(counts) - counts + counts // 2]
 
 
-def _keep_across_creases(kept, start, move, normals, faces, area, corners_of):
+def _keep_across_creases(kept, start, move, agreement, faces, area, corners_of):
     """Set ``kept`` at the crease and corner vertices of the result (see CREASE), whose unit face normals
     ``faces`` (3, t) and twice-areas ``area`` are given: the start plus the move less its part along the
-    crease (the normal tensor's smallest axis); a corner's whole move."""
+    crease (the normal tensor's smallest axis); a corner's whole move. ``agreement``: core.geometry's
+    vertex_normals' (how far each vertex's faces face one way)."""
     n = len(kept)
-    # The tensor's share off the vertex normal bounds its middle eigenvalue from above: only a vertex where
-    # sum_f area_f ((1 - CREASE) - (n_f . n)^2) > 0 can reach CREASE.
-    vertex = _planar(normals)
-    off = np.zeros(n)
-    for column in corners_of:
-        facing = _dot(faces, [row.take(column) for row in vertex])
-        off += np.bincount(column, area * ((1.0 - CREASE) - facing * facing), n)
-    candidates = np.flatnonzero(off > 0.0)
+    # The middle eigenvalue is at most 1 less the tensor's share along the vertex normal n, which is at least
+    # (sum_f area_f n_f . n)^2 / (sum_f area_f)^2 = agreement^2 (Cauchy-Schwarz): only a vertex whose
+    # agreement^2 is at most 1 - CREASE can reach CREASE (a little slack: the faces' own rounding).
+    candidates = np.flatnonzero(agreement * agreement <= (1.0 - CREASE) + 1e-6)
     if candidates.size == 0:
         return
     place = np.full(n, -1, dtype=np.int64)
@@ -202,7 +206,7 @@ def _keep_across_creases(kept, start, move, normals, faces, area, corners_of):
         unit, weight = faces[:, mine].T.astype(np.float64), area[mine].astype(np.float64)
         np.add.at(tensor, owner[mine], (unit * weight[:, None])[:, :, None] * unit[:, None, :])
         total += np.bincount(owner[mine], weight, candidates.size)
-    tensor /= total[:, None, None]
+    tensor /= np.where(total > 0.0, total, 1.0)[:, None, None]  # no face with area: no crease
     values, axes = np.linalg.eigh(tensor)  # ascending
     crease = values[:, 1] >= CREASE
     moves = move[candidates]
@@ -304,11 +308,9 @@ def _folded(planar, picked, facing, least):
 
 
 def _origin(points):
-    """The centre of ``points``' bounding box (zeros for none): single-precision coordinates taken from it
+    """A point of the mesh, its first vertex (zeros for none): single-precision coordinates taken from it
     keep the mesh's size in digits wherever it lies (a georeferenced scan sits millions of units out)."""
-    if len(points) == 0:
-        return np.zeros(3)
-    return (np.min(points, axis=0) + np.max(points, axis=0)) / 2.0
+    return np.array(points[0], dtype=np.float64) if len(points) else np.zeros(3)
 
 
 def _planar(points, origin=None):
