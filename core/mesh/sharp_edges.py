@@ -78,7 +78,6 @@ from numpy.typing import ArrayLike
 from .. import parallel
 from ..adjacency import Umbrella, pair_keys, umbrella_operator
 from ..geometry import face_normals, fan_triangles, project_rows_within
-from ..memory import small_pages
 from ..parallel import BLOCK
 from ..slices import to_end
 from ..validation import (
@@ -793,11 +792,6 @@ class SharpSmoothing:
         0.0) and within a step (at most ``STEP_SLICES`` slices: within and after the guidance, each filtering
         pass, each choice of the nearest planes, each fitting's set-up, every ``FIT_SLICE`` fitting passes and
         each unfolding round but the last; a step takes seconds there)."""
-        with small_pages():  # the rings' and each step's arrays are made afresh and read in order (core.memory)
-            yield from self._steps(chunk)
-
-    def _steps(self, chunk):
-        """``steps``' work."""
         chunk = self.iterations if chunk is None else max(1, int(chunk))
         passes = self.triangles.shape[0] >= PASS_SLICES_FROM
         if self.rings is None and self.iterations > 0:
