@@ -313,10 +313,8 @@ def _origin(points):
     return np.array(points[0], dtype=np.float64) if len(points) else np.zeros(3)
 
 
-def _planar(points, origin=None):
-    """(3, n) single-precision coordinate rows of (n, 3) ``points``, less ``origin`` if given."""
-    if origin is None:
-        return np.ascontiguousarray(points.T, dtype=np.float32)
+def _planar(points, origin):
+    """(3, n) single-precision coordinate rows of (n, 3) ``points`` less ``origin``."""
     out = np.empty((3, len(points)), dtype=np.float32)
     np.subtract(np.asarray(points).T, np.asarray(origin, dtype=np.float64)[:, None], out=out, casting="same_kind")
     return out
