@@ -33,7 +33,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from .. import parallel
-from ..geometry import index_dtype, vertex_normals
+from ..geometry import cross, dot, index_dtype, vertex_normals
 from ..memory import small_pages
 from ..parallel import BLOCK
 from .noise import neighbours
@@ -87,19 +87,18 @@ def _keep_in_place(start, result, triangles, outline):
     """``keep_in_place``'s work."""
     triangles = np.asarray(triangles)
     corners_of = [np.ascontiguousarray(triangles[:, k], dtype=index_dtype(len(start))) for k in range(3)]
-    origin = _origin(start)
     normals, agreement = vertex_normals(result, triangles, agreement=True)
     move = np.subtract(result, start, dtype=np.float64)
     kept = normals * np.einsum("ij,ij->i", move, normals)[:, None]  # the move along the normal
     kept += start
-    facing, area = _unit_faces(_planar(result, origin), corners_of)  # the crease rule's and the fold check's
+    facing, area = _unit_faces(_planar(result, _origin(start)), corners_of)  # the crease rule's, the fold check's
     _keep_across_creases(kept, start, move, agreement, facing, area, corners_of)
     bare = ~normals.any(axis=1)  # in no triangle: no surface to keep to
     kept[bare] = result[bare]
     if outline is not None and outline.vertices.size:
         result = outline.across(start, result, normals)  # what an outline vertex takes back: no pull-in
         facing = None  # its faces turned with it: the fold check reads them again
-    unfold(kept, start, result, corners_of, facing, origin)
+    unfold(kept, start, result, corners_of, facing)
     out = kept.astype(result.dtype)
     still = ~move.any(axis=1)
     out[still] = result[still]
@@ -220,7 +219,7 @@ def _along(move, direction):
     return np.einsum("ij,ij->i", move, direction)[:, None] * direction
 
 
-def unfold(kept, start, result, corners_of, facing=None, origin=None):
+def unfold(kept, start, result, corners_of, facing=None):
     """Where ``kept`` folds or flattens a triangle, its corners take back part of the slide to ``result``,
     in place. Shadows are read along the smoothed triangle's normal: a kept triangle is folded where its
     shadow is not positive, flattened where it is under FOLDED times the input's shadow or FLAT times the
@@ -233,10 +232,9 @@ def unfold(kept, start, result, corners_of, facing=None, origin=None):
     _LAST at most (the corners of those still folded then take all of it), each reading only the triangles
     at the corners just moved. Shadows in single precision, blocks of triangles on threads. ``corners_of``:
     the triangles' three corner columns; ``facing``: the result's unit face normals (``_unit_faces``), if
-    the caller has them; ``origin``: the point the single-precision coordinates are taken from (``_origin``
-    of ``start`` if None)."""
+    the caller has them. Single-precision coordinates are taken about a vertex of ``start`` (``_origin``)."""
     t = len(corners_of[0])
-    origin = _origin(start) if origin is None else origin
+    origin = _origin(start)
     if facing is None:
         facing = _unit_faces(_planar(result, origin), corners_of)[0]
     least = np.empty(t, dtype=np.float32)
@@ -279,7 +277,7 @@ def _first_check(planar, before, corners_of, facing, least, low, high):
     picked = [column[low:high] for column in corners_of]
     normal = facing[:, low:high]
     area = _cross(before, picked)
-    bound = np.maximum(FOLDED * _dot(area, normal), FLAT * np.sqrt(_dot(area, area)))
+    bound = np.maximum(FOLDED * dot(area, normal), FLAT * np.sqrt(dot(area, area)))
     bound[~normal.any(axis=0)] = -np.inf  # a smoothed triangle without area has no side to fold to
     least[low:high] = bound
     return _folded(planar, picked, normal, bound)
@@ -293,7 +291,7 @@ def _unit_faces(planar, corners_of):
 
     def block(low, high):
         normal = _cross(planar, [column[low:high] for column in corners_of])
-        length = np.sqrt(_dot(normal, normal))
+        length = np.sqrt(dot(normal, normal))
         normal /= np.where(length > 0, length, 1.0)
         facing[:, low:high], area[low:high] = normal, length
 
@@ -303,7 +301,7 @@ def _unit_faces(planar, corners_of):
 
 def _folded(planar, picked, facing, least):
     """Whether the triangles of corner arrays ``picked`` over ``planar`` fold against ``facing``/``least``."""
-    shadow = _dot(_cross(planar, picked), facing)
+    shadow = dot(_cross(planar, picked), facing)
     return (shadow <= 0.0) & (least > -np.inf) | (shadow < least)
 
 
@@ -324,11 +322,4 @@ def _cross(planar, corners_of):
     """(3, t) twice-area normals of the triangles whose corners are the index arrays ``corners_of``
     (a, b, c), over (3, n) ``planar`` coordinates, coordinate by coordinate."""
     a, b, c = corners_of
-    u = [row.take(b) - row.take(a) for row in planar]
-    v = [row.take(c) - row.take(a) for row in planar]
-    return np.stack((u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]))
-
-
-def _dot(a, b):
-    """Column-wise dot product of (3, t) arrays."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    return cross([row.take(b) - row.take(a) for row in planar], [row.take(c) - row.take(a) for row in planar])
