@@ -327,6 +327,10 @@ def test_work_budget_and_patches_are_parameters():
     assert uncut == core.choose_amount(noisy, edges) and uncut.iterations > 3 and not uncut.capped
     cut = core.choose_amount(noisy, edges, work_budget=3 * len(noisy))
     assert cut.iterations == 3 and cut.capped
+    # Once GCV wants more than the budget allows the choice stops: the checkpoint after 14 is 16.
+    cut = core.choose_amount(noisy, edges, work_budget=14 * len(noisy))
+    assert (cut.iterations, cut.explored, cut.capped) == (14, 16, True)
+    assert cut.sigma == pytest.approx(uncut.sigma, rel=0.05)
     whole = core.AmountChooser(noisy, edges)
     patched = core.AmountChooser(noisy, edges, patch_from=1)
     for chooser in (whole, patched):
