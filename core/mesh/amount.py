@@ -91,7 +91,6 @@ PATCH_FROM = 250_000
 PATCH_SEEDS = 8
 PATCH_RINGS = 48
 PATCH_MARGIN = 16
-PATCH_PROBE_ENTRIES = 180_000  # more probe entries on the patches' fewer vertices: less noise in t, still cheap
 _SEED = 20_161_999  # the probes' seed: fixed, so the choice is reproducible
 FINE_MAX = 3  # choices of at most this many iterations are made again on gentler steps (see above) ...
 FINE_BETA = 0.75  # ... of this beta
@@ -485,8 +484,9 @@ class _Ground:
         ]
         ground.y = np.asarray(ground.positions[ground.rows], dtype=np.float64)
         ground.trace_count = ground.movable if inner is None else int(np.count_nonzero(~ground.fixed_there[inner]))
-        entries = PROBE_ENTRIES if inner is None else PATCH_PROBE_ENTRIES
-        ground.probe_count = probe_count = int(min(24, max(3, 3 * math.ceil(entries / (3 * ground.trace_count)))))
+        # As many entries on the patches as on a whole mesh: three times as many chose the same iterations on
+        # 1M tori and a 1.8M bunny, smooth and bumpy, at 0.01-0.3 % noise (sigma within 0.1 %).
+        ground.probe_count = probe_count = int(min(24, max(3, 3 * math.ceil(PROBE_ENTRIES / (3 * ground.trace_count)))))
         probes = np.random.default_rng(_SEED).choice(
             np.array([-1.0, 1.0], start.dtype), size=(ground.operator.n_vertices, probe_count)
         )

@@ -294,8 +294,8 @@ def test_patches_estimate_the_trace_and_the_amount_of_the_whole_mesh(monkeypatch
     assert patched.runs[0].smoothing.shape[0] < 0.5 * len(noisy)  # the probes ran on patches
     assert patched.trace_count < patched.runs[0].smoothing.shape[0]  # ... read on their inner vertices
     assert patched.traces.keys() == whole.traces.keys()
-    for k, t in whole.traces.items():
-        assert patched.traces[k] == pytest.approx(t, rel=0.01)
+    for k, t in whole.traces.items():  # within 0.002: GCV's 1 / (1 - t)^2 moves by under TOLERANCE
+        assert patched.traces[k] == pytest.approx(t, abs=0.002)
     checkpoints = list(noise._checkpoints(noise.MAX_ITERATIONS))
     assert abs(checkpoints.index(patched.amount.iterations) - checkpoints.index(whole.amount.iterations)) <= 1
     assert patched.amount.sigma == pytest.approx(whole.amount.sigma, rel=0.05)
