@@ -33,9 +33,9 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from .. import parallel
-from ..geometry import cross, dot, index_dtype, vertex_normals
+from ..geometry import cross, dot, index_dtype, vertex_normal_rows
 from ..memory import small_pages
-from ..parallel import BLOCK
+from ..parallel import BLOCK, VECTOR_BLOCK
 from .noise import neighbours
 
 # A kept triangle is flattened where its shadow on the smoothed surface is under FOLDED times its input's
@@ -84,23 +84,30 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray, 
 
 
 def _keep_in_place(start, result, triangles, outline):
-    """``keep_in_place``'s work."""
+    """``keep_in_place``'s work: the projection a block of vertices at a time (no (n, 3) temporaries)."""
     triangles = np.asarray(triangles)
     corners_of = [np.ascontiguousarray(triangles[:, k], dtype=index_dtype(len(start))) for k in range(3)]
-    normals, agreement = vertex_normals(result, triangles, agreement=True)
-    move = np.subtract(result, start, dtype=np.float64)
-    kept = normals * np.einsum("ij,ij->i", move, normals)[:, None]  # the move along the normal
-    kept += start
+    rows = vertex_normal_rows(result, triangles, agreement=True)  # (4, n): the unit normals, their agreement
+    kept = np.empty(np.shape(result))
+    still, bare = np.empty(len(kept), dtype=bool), np.empty(len(kept), dtype=bool)
+    for low in range(0, len(kept), VECTOR_BLOCK):
+        block = slice(low, low + VECTOR_BLOCK)
+        begin = np.asarray(start[block], dtype=np.float64)
+        move = result[block] - begin
+        normal = rows[:3, block].T
+        np.add(begin, normal * np.einsum("ij,ij->i", move, normal)[:, None], out=kept[block])  # along the normal
+        still[block] = ~move.any(axis=1)
+        bare[block] = ~normal.any(axis=1)  # in no triangle: no surface to keep to
     facing, area = _unit_faces(_planar(result, _origin(start)), corners_of)  # the crease rule's, the fold check's
-    _keep_across_creases(kept, start, move, agreement, facing, area, corners_of)
-    bare = ~normals.any(axis=1)  # in no triangle: no surface to keep to
+    _keep_across_creases(kept, start, result, rows[3], facing, area, corners_of)
     kept[bare] = result[bare]
     if outline is not None and outline.vertices.size:
+        normals = rows[:3, outline.vertices].T
         result = outline.across(start, result, normals)  # what an outline vertex takes back: no pull-in
         facing = None  # its faces turned with it: the fold check reads them again
+    del rows
     unfold(kept, start, result, corners_of, facing)
     out = kept.astype(result.dtype)
-    still = ~move.any(axis=1)
     out[still] = result[still]
     return out
 
@@ -126,13 +133,12 @@ class Outline:
 
     def across(self, start, result, normals):
         """``result`` (as float64) with each outline vertex at its start plus its move in ``result`` along
-        its normal plus its curve move across the curve within the surface (along n x t, t the curve's
-        direction there), less that move's median over its curve: the slide an outline vertex takes back
-        where keeping folds the layout. Smoothing a curve shrinks it (a hole most); noise moves it across
-        by nothing in the middle, so a curve keeps its place and its size (the median: the few corners
-        a smoothing rounds off do not move the rest)."""
-        v = self.vertices
-        n = normals[v]
+        its normal (``normals``: (k, 3), one per outline vertex) plus its curve move across the curve within
+        the surface (along n x t, t the curve's direction there), less that move's median over its curve:
+        the slide an outline vertex takes back where keeping folds the layout. Smoothing a curve shrinks it
+        (a hole most); noise moves it across by nothing in the middle, so a curve keeps its place and its
+        size (the median: the few corners a smoothing rounds off do not move the rest)."""
+        v, n = self.vertices, normals
         side = np.cross(n, self.curve_at(self.after) - self.curve_at(self.before))
         side *= np.where(np.einsum("ij,ij->i", side, self.inward) < 0, -1.0, 1.0)[:, None]  # into the surface
         length = np.sqrt(np.einsum("ij,ij->i", side, side))
@@ -184,7 +190,7 @@ def _group_medians(values, labels):
     return values[order][np.cumsum(counts) - counts + counts // 2]
 
 
-def _keep_across_creases(kept, start, move, agreement, faces, area, corners_of):
+def _keep_across_creases(kept, start, result, agreement, faces, area, corners_of):
     """Set ``kept`` at the crease and corner vertices of the result (see CREASE), whose unit face normals
     ``faces`` (3, t) and twice-areas ``area`` are given: the start plus the move less its part along the
     crease (the normal tensor's smallest axis); a corner's whole move. ``agreement``: core.geometry's
@@ -208,7 +214,7 @@ def _keep_across_creases(kept, start, move, agreement, faces, area, corners_of):
     tensor /= np.where(total > 0.0, total, 1.0)[:, None, None]  # no face with area: no crease
     values, axes = np.linalg.eigh(tensor)  # ascending
     crease = values[:, 1] >= CREASE
-    moves = move[candidates]
+    moves = np.subtract(result[candidates], start[candidates], dtype=np.float64)
     moves -= np.where((values[:, 0] < CORNER)[:, None], _along(moves, axes[:, :, 0]), 0.0)
     rows = candidates[crease]
     kept[rows] = start[rows] + moves[crease]
