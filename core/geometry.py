@@ -169,20 +169,16 @@ def unit_rows(vectors):
     return np.divide(vectors, length, out=np.zeros_like(vectors), where=length > 0)
 
 
+# The six entries of a symmetric 3 x 3 matrix, (row, column), in the order this module's eigen solvers take them.
+SYMMETRIC_ENTRIES = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+
+
 def smallest_eigenvectors(xx, yy, zz, xy, xz, yz):
     """Unit eigenvectors of the smallest eigenvalue of the symmetric 3 x 3 matrices given by their six
     entries (each (s,)): the eigenvalue in closed form (trigonometric), the vector as the longest cross
     product of two rows of the matrix minus it. Vectorized, where a batched eigh spends most of its time
     on per-matrix overhead; rows with no clear smallest direction (collinear points) fall back to eigh."""
-    mean = (xx + yy + zz) / 3.0
-    off = xy * xy + xz * xz + yz * yz
-    spread = np.sqrt(((xx - mean) ** 2 + (yy - mean) ** 2 + (zz - mean) ** 2 + 2.0 * off) / 6.0)
-    safe = np.where(spread > 0, spread, 1.0)
-    # det((M - mean I) / spread) / 2 = cos(3 angle) of the trigonometric solution.
-    bx, by, bz = (xx - mean) / safe, (yy - mean) / safe, (zz - mean) / safe
-    bxy, bxz, byz = xy / safe, xz / safe, yz / safe
-    half_det = (bx * (by * bz - byz * byz) - bxy * (bxy * bz - byz * bxz) + bxz * (bxy * byz - by * bxz)) / 2.0
-    angle = np.arccos(np.clip(half_det, -1.0, 1.0)) / 3.0
+    mean, spread, angle = _trigonometric(xx, yy, zz, xy, xz, yz)
     smallest = mean + 2.0 * spread * np.cos(angle + 2.0 * np.pi / 3.0)
     rows = np.stack(
         [
@@ -206,11 +202,42 @@ def smallest_eigenvectors(xx, yy, zz, xy, xz, yz):
     return normal
 
 
+def symmetric_eigenvalues(xx, yy, zz, xy, xz, yz):
+    """(3, s) the eigenvalues of the symmetric 3 x 3 matrices given by their six entries (each (s,)),
+    ascending, in closed form (as ``smallest_eigenvectors`` finds the smallest).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core import geometry
+    >>> geometry.symmetric_eigenvalues(*np.array([[2.0], [3.0], [1.0], [0.0], [0.0], [0.0]])).round(9).ravel().tolist()
+    [1.0, 2.0, 3.0]
+    """
+    mean, spread, angle = _trigonometric(xx, yy, zz, xy, xz, yz)
+    low = mean + 2.0 * spread * np.cos(angle + 2.0 * np.pi / 3.0)
+    high = mean + 2.0 * spread * np.cos(angle)
+    return np.stack([low, 3.0 * mean - low - high, high])
+
+
+def _trigonometric(xx, yy, zz, xy, xz, yz):
+    """(mean, spread, angle): the eigenvalues of each symmetric matrix are mean + 2 spread cos(angle + 2 pi k / 3)."""
+    mean = (xx + yy + zz) / 3.0
+    off = xy * xy + xz * xz + yz * yz
+    spread = np.sqrt(((xx - mean) ** 2 + (yy - mean) ** 2 + (zz - mean) ** 2 + 2.0 * off) / 6.0)
+    safe = np.where(spread > 0, spread, 1.0)
+    # det((M - mean I) / spread) / 2 = cos(3 angle) of the trigonometric solution.
+    bx, by, bz = (xx - mean) / safe, (yy - mean) / safe, (zz - mean) / safe
+    bxy, bxz, byz = xy / safe, xz / safe, yz / safe
+    half_det = (bx * (by * bz - byz * byz) - bxy * (bxy * bz - byz * bxz) + bxz * (bxy * byz - by * bxz)) / 2.0
+    return mean, spread, np.arccos(np.clip(half_det, -1.0, 1.0)) / 3.0
+
+
 def smallest_group_axes(owner, spread, groups):
     """(groups, 3): per group, the unit eigenvector of the smallest eigenvalue of the sum of spread spread^T
     over its rows (``owner`` (k,) in [0, groups), ``spread`` (k, 3)): the normal of a PCA plane fit."""
-    pairs = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
-    return smallest_eigenvectors(*(np.bincount(owner, spread[:, a] * spread[:, b], groups) for a, b in pairs))
+    return smallest_eigenvectors(
+        *(np.bincount(owner, spread[:, a] * spread[:, b], groups) for a, b in SYMMETRIC_ENTRIES)
+    )
 
 
 def vertex_normals(positions, triangles, dtype=np.float64, agreement=False):

@@ -33,7 +33,15 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from .. import parallel
-from ..geometry import cross, dot, index_dtype, vertex_normal_rows
+from ..geometry import (
+    SYMMETRIC_ENTRIES,
+    cross,
+    dot,
+    index_dtype,
+    smallest_eigenvectors,
+    symmetric_eigenvalues,
+    vertex_normal_rows,
+)
 from ..memory import small_pages
 from ..parallel import BLOCK, VECTOR_BLOCK
 from .noise import neighbours
@@ -202,22 +210,25 @@ def _keep_across_creases(kept, start, result, agreement, faces, area, corners_of
     candidates = np.flatnonzero(agreement * agreement <= (1.0 - CREASE) + 1e-6)
     if candidates.size == 0:
         return
-    place = np.full(n, -1, dtype=np.int64)
+    chosen = np.zeros(n, dtype=bool)
+    chosen[candidates] = True
+    place = np.empty(n, dtype=index_dtype(n))  # read at the candidates only
     place[candidates] = np.arange(candidates.size)
-    tensor, total = np.zeros((candidates.size, 3, 3)), np.zeros(candidates.size)
+    entries = np.zeros((7, candidates.size))  # the tensor's xx, yy, zz, xy, xz, yz, then the faces' area
     for column in corners_of:
-        owner = place[column]
-        mine = np.flatnonzero(owner >= 0)
-        unit, weight = faces[:, mine].T.astype(np.float64), area[mine].astype(np.float64)
-        np.add.at(tensor, owner[mine], (unit * weight[:, None])[:, :, None] * unit[:, None, :])
-        total += np.bincount(owner[mine], weight, candidates.size)
-    tensor /= np.where(total > 0.0, total, 1.0)[:, None, None]  # no face with area: no crease
-    values, axes = np.linalg.eigh(tensor)  # ascending
-    crease = values[:, 1] >= CREASE
-    moves = np.subtract(result[candidates], start[candidates], dtype=np.float64)
-    moves -= np.where((values[:, 0] < CORNER)[:, None], _along(moves, axes[:, :, 0]), 0.0)
+        mine = np.flatnonzero(chosen[column])
+        owner, unit, weight = place[column[mine]], faces[:, mine].astype(np.float64), area[mine].astype(np.float64)
+        for k, (a, b) in enumerate(SYMMETRIC_ENTRIES):
+            entries[k] += np.bincount(owner, weight * unit[a] * unit[b], candidates.size)
+        entries[6] += np.bincount(owner, weight, candidates.size)
+    entries[:6] /= np.where(entries[6] > 0.0, entries[6], 1.0)  # no face with area: no crease
+    low, middle, _ = symmetric_eigenvalues(*entries[:6])
+    crease = middle >= CREASE
     rows = candidates[crease]
-    kept[rows] = start[rows] + moves[crease]
+    moves = np.subtract(result[rows], start[rows], dtype=np.float64)
+    line = low[crease] < CORNER  # a corner keeps its whole move; a crease gives up its part along the crease
+    moves[line] -= _along(moves[line], smallest_eigenvectors(*entries[:6, crease][:, line]))
+    kept[rows] = start[rows] + moves
 
 
 def _along(move, direction):

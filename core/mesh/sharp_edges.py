@@ -77,7 +77,7 @@ from numpy.typing import ArrayLike
 
 from .. import parallel
 from ..adjacency import Umbrella, pair_keys, umbrella_operator
-from ..geometry import face_normals, fan_triangles, project_rows_within
+from ..geometry import SYMMETRIC_ENTRIES, face_normals, fan_triangles, project_rows_within
 from ..parallel import BLOCK
 from ..slices import to_end
 from ..validation import (
@@ -470,7 +470,6 @@ def nearest_plane_normals(points, normals, rings):
 
 
 _FACE_CHUNK = 1 << 15  # triangles per chunk of the per-triangle work: its temporaries stay in cache
-_MOMENT_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the entries of a symmetric 3 x 3
 
 
 def _first_smallest(values):
@@ -641,7 +640,7 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     n, t = points.shape[0], normals.shape[0]
     scale = np.divide(step_share, rings.faces_at, out=np.zeros(n), where=rings.faces_at > 0)
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
-    tensor = np.empty((len(_MOMENT_PAIRS), n))  # M_i's entries _MOMENT_PAIRS
+    tensor = np.empty((len(SYMMETRIC_ENTRIES), n))  # M_i's entries, in that order
 
     def moments(k, a, b):
         def combine(rows, sums):
@@ -650,7 +649,7 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
         products = planar[a] * planar[b]
         rings.vertex_blocks.run(lambda block: block.neighbour_sums(products, combine))
 
-    for k, (a, b) in enumerate(_MOMENT_PAIRS):
+    for k, (a, b) in enumerate(SYMMETRIC_ENTRIES):
         moments(k, a, b)
     x = np.array(points.T, dtype=np.float64, order="C")  # coordinate rows: 1-D gathers
     moved, pulled = np.empty_like(x), np.empty((3, t))
@@ -664,7 +663,7 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     def update(rows, sums):  # moved = x + share / |F| (sums - M x) on a chunk of vertices
         here, m = x[:, rows], tensor[:, rows]
         product, term = np.empty((2, sums.shape[1]))
-        for k, entries in enumerate(((0, 3, 4), (3, 1, 5), (4, 5, 2))):  # row k of M, as _MOMENT_PAIRS
+        for k, entries in enumerate(((0, 3, 4), (3, 1, 5), (4, 5, 2))):  # row k of M, as SYMMETRIC_ENTRIES
             np.multiply(m[entries[0]], here[0], out=product)
             for c in (1, 2):
                 product += np.multiply(m[entries[c]], here[c], out=term)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..adjacency import umbrella_operator
-from ..geometry import smallest_eigenvectors
+from ..geometry import SYMMETRIC_ENTRIES, smallest_eigenvectors
 from ..parallel import run_blocks, run_chunks
 from ..slices import to_end
 from .geometry import (
@@ -64,7 +64,7 @@ def _normals_from_offsets(offset, row, degree):
     # Centre on the mean of the vertex and its neighbours (the vertex is the origin here).
     entries = [
         np.bincount(row, offset[i] * offset[j], minlength=n) - total[i] * total[j] / (degree + 1.0)
-        for i, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+        for i, j in SYMMETRIC_ENTRIES
     ]
     return smallest_eigenvectors(*entries)
 
