@@ -257,26 +257,28 @@ def vertex_normals(positions, triangles, dtype=np.float64, agreement=False):
     >>> geometry.vertex_normals(positions, triangles, agreement=True)[1].round(3).tolist()  # a corner everywhere
     [0.577, 0.268, 0.268, 0.268]
     """
-    normals = vertex_normal_rows(positions, triangles, agreement)
+    normals = to_end(vertex_normal_steps(positions, triangles, agreement))
     unit = np.ascontiguousarray(normals[:3].T, dtype=dtype)
     return (unit, normals[3]) if agreement else unit
 
 
-def vertex_normal_rows(positions, triangles, agreement=False):
-    """``vertex_normals`` as float64 coordinate rows, (3, n), with ``agreement`` as a fourth row: no
-    transposed copy, for callers that read them a block of vertices at a time.
+def vertex_normal_steps(positions, triangles, agreement=False):
+    """``vertex_normals`` in slices, as float64 coordinate rows: a generator that yields (None) after each
+    round of blocks of triangles and returns the (3, n) unit normals, with ``agreement`` as a fourth row
+    (no transposed copy: for callers that read them a block of vertices at a time).
 
     Examples
     --------
     >>> import numpy as np
     >>> from core import geometry
+    >>> from core.slices import to_end
     >>> positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=float)
-    >>> geometry.vertex_normal_rows(positions, np.array([[0, 1, 2]]), agreement=True).tolist()
+    >>> to_end(geometry.vertex_normal_steps(positions, np.array([[0, 1, 2]]), agreement=True)).tolist()
     [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0]]
     """
     planar = np.ascontiguousarray(np.asarray(positions).T)
     steps = normals_and_measures(planar, np.asarray(triangles), None, 1, None, measure=False, agreement=agreement)
-    return to_end(steps)[0]
+    return (yield from steps)[0]
 
 
 def normals_and_measures(

@@ -40,10 +40,11 @@ from ..geometry import (
     index_dtype,
     smallest_eigenvectors,
     symmetric_eigenvalues,
-    vertex_normal_rows,
+    vertex_normal_steps,
 )
 from ..memory import small_pages
 from ..parallel import BLOCK, VECTOR_BLOCK
+from ..slices import to_end
 from .noise import neighbours
 
 # A kept triangle is flattened where its shadow on the smoothed surface is under FOLDED times its input's
@@ -74,7 +75,7 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray, 
     """``result`` with each vertex's move from ``start`` reduced to its part along ``result``'s vertex
     normal (area-weighted, core.geometry.vertex_normals). Vertices in no triangle (no normal) keep their
     result, and the corners of a triangle that keeping would fold or flatten take back part of the slide
-    (see ``unfold``); a vertex that did not move stays bit for bit. ``outline``: an ``Outline`` (the border
+    (see ``unfold_steps``); a vertex that did not move stays bit for bit. ``outline``: an ``Outline`` (the border
     curves smoothed as curves, see ``outline_curves``) whose vertices also take the move across their
     curve. Returns a new array in ``result``'s dtype.
 
@@ -87,15 +88,22 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray, 
     >>> keep_in_place(start, result, np.array([[0, 1, 3], [0, 3, 2]])).round(3).tolist()[3]
     [1.0, 1.0, 0.0]
     """
+    return to_end(keep_in_place_steps(start, result, triangles, outline))
+
+
+def keep_in_place_steps(start, result, triangles, outline=None):
+    """``keep_in_place`` in slices, for callers that show progress and let the user cancel: a generator
+    that yields (None) between its passes (a round of blocks of triangles of the vertex normals, the
+    projection, the crease rule, the fold check and each of its rounds) and returns the kept positions."""
     with small_pages():  # its arrays are made once and read in order (core.memory)
-        return _keep_in_place(start, result, triangles, outline)
+        return (yield from _keep_in_place(start, result, triangles, outline))
 
 
 def _keep_in_place(start, result, triangles, outline):
-    """``keep_in_place``'s work: the projection a block of vertices at a time (no (n, 3) temporaries)."""
+    """``keep_in_place_steps``' work: the projection a block of vertices at a time (no (n, 3) temporaries)."""
     triangles = np.asarray(triangles)
     corners_of = [np.ascontiguousarray(triangles[:, k], dtype=index_dtype(len(start))) for k in range(3)]
-    rows = vertex_normal_rows(result, triangles, agreement=True)  # (4, n): the unit normals, their agreement
+    rows = yield from vertex_normal_steps(result, triangles, agreement=True)  # the unit normals, their agreement
     kept = np.empty(np.shape(result))
     still, bare = np.empty(len(kept), dtype=bool), np.empty(len(kept), dtype=bool)
     for low in range(0, len(kept), VECTOR_BLOCK):
@@ -106,15 +114,17 @@ def _keep_in_place(start, result, triangles, outline):
         np.add(begin, normal * np.einsum("ij,ij->i", move, normal)[:, None], out=kept[block])  # along the normal
         still[block] = ~move.any(axis=1)
         bare[block] = ~normal.any(axis=1)  # in no triangle: no surface to keep to
+    yield
     facing, area = _unit_faces(_planar(result, _origin(start)), corners_of)  # the crease rule's, the fold check's
     _keep_across_creases(kept, start, result, rows[3], facing, area, corners_of)
+    yield
     kept[bare] = result[bare]
     if outline is not None and outline.vertices.size:
         normals = rows[:3, outline.vertices].T
         result = outline.across(start, result, normals)  # what an outline vertex takes back: no pull-in
         facing = None  # its faces turned with it: the fold check reads them again
-    del rows
-    unfold(kept, start, result, corners_of, facing)
+    del rows, area
+    yield from unfold_steps(kept, start, result, corners_of, facing)
     out = kept.astype(result.dtype)
     out[still] = result[still]
     return out
@@ -236,7 +246,7 @@ def _along(move, direction):
     return np.einsum("ij,ij->i", move, direction)[:, None] * direction
 
 
-def unfold(kept, start, result, corners_of, facing=None):
+def unfold_steps(kept, start, result, corners_of, facing=None):
     """Where ``kept`` folds or flattens a triangle, its corners take back part of the slide to ``result``,
     in place. Shadows are read along the smoothed triangle's normal: a kept triangle is folded where its
     shadow is not positive, flattened where it is under FOLDED times the input's shadow or FLAT times the
@@ -249,7 +259,8 @@ def unfold(kept, start, result, corners_of, facing=None):
     _LAST at most (the corners of those still folded then take all of it), each reading only the triangles
     at the corners just moved. Shadows in single precision, blocks of triangles on threads. ``corners_of``:
     the triangles' three corner columns; ``facing``: the result's unit face normals (``_unit_faces``), if
-    the caller has them. Single-precision coordinates are taken about a vertex of ``start`` (``_origin``)."""
+    the caller has them. Single-precision coordinates are taken about a vertex of ``start`` (``_origin``).
+    A generator: yields (None) after the first check and after each round."""
     t = len(corners_of[0])
     origin = _origin(start)
     if facing is None:
@@ -261,6 +272,7 @@ def unfold(kept, start, result, corners_of, facing=None):
             lambda low, high: _first_check(planar, before, corners_of, facing, least, low, high), t, _BLOCK
         )
     )
+    yield
     share = away = checked = None
     for round_ in range(1, _LAST + 1):
         if share is not None:  # a triangle all of whose corners are back at the result stays as it is
@@ -286,6 +298,7 @@ def unfold(kept, start, result, corners_of, facing=None):
         kept[corners] = result[corners] + share[corners, None] * away[corners]
         planar[:, corners] = (kept[corners] - origin).T
         checked = np.flatnonzero(moved[corners_of[0]] | moved[corners_of[1]] | moved[corners_of[2]])
+        yield
 
 
 def _first_check(planar, before, corners_of, facing, least, low, high):

@@ -49,8 +49,7 @@ from ..validation import (
 from . import collapse, sharp_amount, sharp_edges, topology, volume, welding
 from .amount import PATCH_FROM, AmountChooser, MeshAmount
 from .borders import BORDERS, apply_border, border_edges
-from .in_place import Outline, curve_labels, inward_directions, outline_curves
-from .in_place import keep_in_place as project_in_place
+from .in_place import Outline, curve_labels, inward_directions, keep_in_place_steps, outline_curves
 from .noise import noise_steps
 from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
 
@@ -392,7 +391,7 @@ class MeshSmoother:
             if noise is not None and self.hold_parts:
                 parts = yield from self._held_parts(result, noise, residual, progress)
             outline = self._outline(result, run, fixed, limit) if self.border == "free" else None
-            result = project_in_place(self.positions, result, self.faces, outline)
+            result = yield from as_fraction(keep_in_place_steps(self.positions, result, self.faces, outline), progress)
             if outline is not None and np.any(limit):  # across the surface and the curve at once: both limited
                 project_rows_within(result, self.positions, limit)
         if measuring is not None and ran > 0:

@@ -10,7 +10,8 @@ import core
 from bench.primitives import grid, ico_sphere
 from core.geometry import vertex_normals
 from core.mesh.borders import border_edges
-from core.mesh.in_place import keep_in_place, outline_curves
+from core import parallel
+from core.mesh.in_place import keep_in_place, keep_in_place_steps, outline_curves
 
 
 def _noisy_along_normals(part, sigma, seed=0):
@@ -136,6 +137,32 @@ def test_a_georeferenced_mesh_is_kept_in_place_as_at_the_origin(sphere):
     assert np.abs(far - here).max() < 1e-6 * 0.01  # a millionth of the noise: double rounding at 5e6
     result = keep_in_place(noisy + offset, here + offset, triangles) - offset
     assert np.abs(result - keep_in_place(noisy, here, triangles)).max() < 1e-8
+
+
+def test_keep_in_place_yields_between_its_passes():
+    """Keep in Place runs in slices (a cancel or a progress line waits for one slice, not the whole
+    projection: seconds on a 5M-vertex scan): it yields at least once per round of blocks of triangles of
+    the vertex normals and after the projection, the crease rule and the fold check, and ends with
+    keep_in_place's result; the default's steps yield as many more where it runs."""
+    part = ico_sphere(7)  # 327,680 triangles: more than one round of blocks
+    noisy, triangles = _noisy_along_normals(part, 0.002)
+    result = core.smooth_mesh(noisy, part.edges, faces=triangles, alpha=0.0, beta=0.6, iterations=10)
+    steps, yields = keep_in_place_steps(noisy, result, triangles), 0
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            kept = done.value
+            break
+        yields += 1
+    rounds = -(-len(triangles) // (parallel.TRIANGLE_BLOCK * parallel.thread_count()))
+    assert rounds >= 2 and yields >= rounds + 3
+    assert np.array_equal(kept, keep_in_place(noisy, result, triangles))
+
+    def slices(**options):
+        return sum(1 for _ in core.MeshSmoother(noisy, part.edges, faces=triangles, **options).steps(1))
+
+    assert slices() >= slices(keep_in_place=False) + rounds + 3
 
 
 def test_open_outline_is_not_pulled_in():
