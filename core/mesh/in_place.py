@@ -94,7 +94,8 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray, 
 def keep_in_place_steps(start, result, triangles, outline=None):
     """``keep_in_place`` in slices, for callers that show progress and let the user cancel: a generator
     that yields (None) between its passes (a round of blocks of triangles of the vertex normals, the
-    projection, the crease rule, the fold check and each of its rounds) and returns the kept positions."""
+    projection, the crease rule, the fold check and each of its rounds) and returns the kept positions.
+    NumPy's huge-page request stays off (core.memory) until it ends or is closed, suspended or not."""
     with small_pages():  # its arrays are made once and read in order (core.memory)
         return (yield from _keep_in_place(start, result, triangles, outline))
 

@@ -8,9 +8,9 @@ import pytest
 
 import core
 from bench.primitives import grid, ico_sphere
+from core import parallel
 from core.geometry import vertex_normals
 from core.mesh.borders import border_edges
-from core import parallel
 from core.mesh.in_place import keep_in_place, keep_in_place_steps, outline_curves
 
 
