@@ -60,12 +60,24 @@ def _executor(workers):
         return _pool
 
 
+_on_pool = threading.local()  # ``inside`` is set on the pool's threads while they run a task
+
+
+def _pool_task(task):
+    _on_pool.inside = True
+    try:
+        return task()
+    finally:
+        _on_pool.inside = False
+
+
 def run_all(tasks):
     """Run the callables, the first on this thread and the rest on the pool; return their results in
-    order and re-raise any error."""
-    if len(tasks) == 1:
-        return [tasks[0]()]
-    futures = [_executor(len(tasks) - 1).submit(task) for task in tasks[1:]]
+    order and re-raise any error. Called from a task the pool runs, it runs them one after another
+    (the pool's threads are busy: waiting there for more of them could wait for ever)."""
+    if len(tasks) == 1 or getattr(_on_pool, "inside", False):
+        return [task() for task in tasks]
+    futures = [_executor(len(tasks) - 1).submit(_pool_task, task) for task in tasks[1:]]
     try:
         first = tasks[0]()
     finally:
@@ -129,6 +141,15 @@ def _row_blocks(indptr, count):
     bounds = np.searchsorted(indptr, targets, side="left")
     bounds[0], bounds[-1] = 0, indptr.size - 1
     return np.unique(bounds)
+
+
+def run_beside(tasks, nonzeros):
+    """Run independent tasks whose work is sparse products over a pattern of ``nonzeros`` entries: side by
+    side where RowBlocks gives each one thread (the patches the Automatic Amount runs on), else one after
+    another, each on the threads. Their results, in order."""
+    if thread_count() > 1 and (nonzeros < MIN_WORK or _csr_matvec is None):
+        return run_all(tasks)
+    return [task() for task in tasks]
 
 
 class RowBlocks:

@@ -75,6 +75,7 @@ from numpy.typing import ArrayLike
 from ..adjacency import Umbrella, umbrella_from_pairs, umbrella_operator
 from ..convergence import ConvergenceWarning, DivergenceError
 from ..geometry import median_edge_length, smallest_group_axes
+from ..parallel import run_beside
 from ..slices import as_fraction
 from ..smoothing import Smoothing
 from ..validation import check_fixed, check_positions, check_unit_interval
@@ -161,13 +162,12 @@ def _checkpoints(limit):
         k = k + 1 if k < 12 else int(round(k * 1.15))
 
 
-def _ring_normals(points, rows, operator):
-    """Unit normals at ``rows``: the smallest PCA axis of each row's neighbours in ``points``."""
-    owner, neighbour = neighbours(rows, operator)
-    ring = points[neighbour]
-    count = rows.size
+def _ring_normals(ring, owner, degree):
+    """Unit normals at the rows: the smallest PCA axis of each row's neighbours' points ``ring`` (``owner``:
+    the row each belongs to, ``degree`` each row's count of them)."""
+    count = degree.size
     centre = np.stack([np.bincount(owner, ring[:, k], count) for k in range(3)], axis=1)
-    centre /= operator.degree[rows][:, None]
+    centre /= degree[:, None]
     spread = ring - centre[owner]
     return smallest_group_axes(owner, spread, count)
 
@@ -362,16 +362,14 @@ class AmountChooser:
         rows, runs, operator = ground.rows, self.runs, ground.operator
         most = most_iterations(self.operator.n_vertices, self.work_budget)
         use_normals, probe_count = ground.use_normals, ground.probe_count
-        ring = _ring_of(rows, operator) if use_normals else None
-        points = np.zeros((operator.n_vertices, 3)) if use_normals else None  # the state at ``ring``, for the normals
+        owner, neighbour = neighbours(rows, operator) if use_normals else (None, None)  # the normals' 1-rings
         done = 0
         steps, traces, residuals = [], [], []
         best_whole, normals = math.inf, None
         for k in _checkpoints(MAX_ITERATIONS):
-            try:
-                data.advance(k - done)
-                for run in runs:
-                    run.advance(k - done)
+            advances = [lambda run=run, count=k - done: run.advance(count) for run in (data, *runs)]
+            try:  # side by side where each runs on one thread (the patches)
+                run_beside(advances, operator.indices.size)
             except DivergenceError:
                 break
             done = k
@@ -385,8 +383,7 @@ class AmountChooser:
             whole = float(np.einsum("ij,ij->", residual, residual)) / (rows.size * (1.0 - t) ** 2)
             if use_normals and whole < best_whole:
                 best_whole = whole
-                points[ring] = data.at(ring)
-                normals = _ring_normals(points, rows, operator)
+                normals = _ring_normals(data.at(neighbour), owner, operator.degree[rows])
             score = _scores(residuals, traces, normals)
             chosen = _chosen(steps, score)
             if chosen == k and ground.whole:
@@ -534,16 +531,11 @@ def _rings(operator, seeds, count):
     reached[ring] = True
     levels = [ring]
     for _ in range(count):
-        ring = np.unique(neighbours(ring, operator)[1])
-        ring = ring[~reached[ring]]
+        ring = neighbours(ring, operator)[1]
+        ring = np.unique(ring[~reached[ring]])
         reached[ring] = True
         levels.append(ring)
     return levels
-
-
-def _ring_of(rows, operator):
-    """The neighbours of ``rows``, each once."""
-    return np.unique(neighbours(rows, operator)[1])
 
 
 def _scores(residuals, traces, normals):

@@ -172,8 +172,9 @@ def neighbours(rows, operator):
     """(owner, neighbour): every neighbour of every row, owner the row's place in ``rows``."""
     starts, counts = operator.indptr[rows], operator.degree[rows]
     owner = np.repeat(np.arange(rows.size), counts)
-    offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-    return owner, operator.indices[np.repeat(starts, counts) + offsets]
+    # Entry k of the result is entry k - (the owner's first k) of the owner's row.
+    shift = np.repeat(starts - (np.cumsum(counts) - counts), counts)
+    return owner, operator.indices[shift + np.arange(shift.size)]
 
 
 def find_noise(positions, operator):
@@ -240,27 +241,33 @@ def _residuals(positions, rows, operator, halves=0):
     ring = _union(operator.n_vertices, rows, neighbour)
     # around[k]: the vertices within k + 1 rings of the rows. The positions are read (as float64) on the
     # outermost; each average reaches one ring less, and the planes' points lie within two rings.
-    around = [ring]
+    # adjacent[k]: ``neighbours`` of around[k], kept for the averages and the planes.
+    around, adjacent = [ring], []
     for _ in range(PLANE_STEPS + 1 + halves):
-        around.append(_union(operator.n_vertices, around[-1], neighbours(around[-1], operator)[1]))
-    points, point_vertices = np.asarray(positions[around[-1]], dtype=np.float64), around[-1]
+        adjacent.append(neighbours(around[-1], operator))
+        around.append(_union(operator.n_vertices, around[-1], adjacent[-1][1]))
+    # place[k][v]: v's row in around[k] (valid for v in it), in one gather where a search would take many.
+    place = [_places(operator.n_vertices, vertices) for vertices in around]
+    points, at_points = np.asarray(positions[around[-1]], dtype=np.float64), place[-1]
     for step in range(halves):
-        targets = around[PLANE_STEPS + halves - step]
-        kept = points[np.searchsorted(point_vertices, targets)]
-        points, point_vertices = 0.5 * (kept + _averaged(points, point_vertices, targets, operator)), targets
-    plane, plane_vertices = points, point_vertices
+        targets = PLANE_STEPS + halves - step
+        kept = points[at_points[around[targets]]]
+        averaged = _averaged(points, at_points, around[targets], adjacent[targets][1], operator)
+        points, at_points = 0.5 * (kept + averaged), place[targets]
+    plane, at_plane = points, at_points
     for step in range(PLANE_STEPS):
-        targets = around[PLANE_STEPS - step]
-        plane, plane_vertices = _averaged(plane, plane_vertices, targets, operator), targets
+        targets = PLANE_STEPS - step
+        plane = _averaged(plane, at_plane, around[targets], adjacent[targets][1], operator)
+        at_plane = place[targets]
 
     def point_at(vertices):
-        return points[np.searchsorted(point_vertices, vertices)]
+        return points[at_points[vertices]]
 
     def plane_at(vertices):
-        return plane[np.searchsorted(plane_vertices, vertices)]
+        return plane[at_plane[vertices]]
 
-    normals, umbrella = _planes(point_at, ring, operator, plane_at)
-    row_at, neighbour_at = np.searchsorted(ring, rows), np.searchsorted(ring, neighbour)
+    normals, umbrella = _planes(point_at, ring, adjacent[0], operator, plane_at)
+    row_at, neighbour_at = place[0][rows], place[0][neighbour]
     surface = operator.degree[rows] >= 3
 
     # Surfaces: the normal part of the umbrella against its neighbours' median.
@@ -312,26 +319,34 @@ def _union(n, *vertex_sets):
     return np.flatnonzero(mask)
 
 
-def _averaged(values, sources, targets, operator):
+def _places(n, vertices):
+    """(n,) int: each of ``vertices``' place in it (other entries undefined), to look places up by vertex."""
+    places = np.empty(n, dtype=np.int64)
+    places[vertices] = np.arange(vertices.size)
+    return places
+
+
+def _averaged(values, places, targets, neighbour, operator):
     """One umbrella average (each vertex to the mean of its neighbours; one without neighbours stays) at
-    the sorted vertices ``targets``, from ``values`` at the sorted ``sources`` (which hold every
-    target's neighbours): row for row the product of the whole mesh's averaging matrix, bit for bit."""
-    owner, neighbour = neighbours(targets, operator)
+    the sorted vertices ``targets`` (``neighbour``: their ``neighbours``), from ``values`` at the vertices
+    ``places`` gives the rows of (which hold every target's neighbours): row for row the product of the
+    whole mesh's averaging matrix, bit for bit."""
     degree = operator.degree[targets]
     weights = np.repeat(1.0 / np.maximum(degree, 1), degree)
     indptr = np.zeros(targets.size + 1, dtype=np.int64)
     np.cumsum(degree, out=indptr[1:])
-    average = sp.csr_matrix((weights, np.searchsorted(sources, neighbour), indptr), shape=(targets.size, sources.size))
+    average = sp.csr_matrix((weights, places[neighbour], indptr), shape=(targets.size, values.shape[0]))
     moved = average @ values
     lonely = degree == 0
-    moved[lonely] = values[np.searchsorted(sources, targets[lonely])]
+    moved[lonely] = values[places[targets[lonely]]]
     return moved
 
 
-def _planes(point_at, ring, operator, plane_at):
-    """(normal, umbrella vector) at each vertex of ``ring``: the smallest PCA axis of its neighbours'
-    ``plane_at`` points (with itself where it has fewer than three), and mean(adj) - x of ``point_at``."""
-    owner, neighbour = neighbours(ring, operator)
+def _planes(point_at, ring, adjacent, operator, plane_at):
+    """(normal, umbrella vector) at each vertex of ``ring`` (``adjacent``: its ``neighbours``): the smallest
+    PCA axis of its neighbours' ``plane_at`` points (with itself where it has fewer than three), and
+    mean(adj) - x of ``point_at``."""
+    owner, neighbour = adjacent
     few = np.flatnonzero(operator.degree[ring] < 3)
     owner_all = np.concatenate([owner, few])
     spots = plane_at(np.concatenate([neighbour, ring[few]]))

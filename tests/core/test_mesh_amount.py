@@ -1,6 +1,7 @@
 """core.choose_amount: the Automatic Amount for meshes (core/mesh/amount.py)."""
 
 import math
+import threading
 import warnings
 
 import numpy as np
@@ -8,6 +9,7 @@ import pytest
 
 import core
 from bench.meshes import icosphere  # pure NumPy, no bench requirements
+from core import parallel
 from core.mesh import amount as noise
 
 
@@ -348,3 +350,29 @@ def test_held_parts_are_a_parameter():
     assert report.held_parts == 1 and np.array_equal(held, vertices)
     smoothed, report = core.smooth_mesh(vertices, edges, faces=faces, return_report=True, hold_parts=False)
     assert report.held_parts == 0 and report.iterations > 0 and not np.array_equal(smoothed, vertices)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_runs_beside_each_other_give_what_they_give_alone(monkeypatch, threads):
+    """The Automatic Amount's runs on patches go side by side, each on one thread (``run_beside``), with
+    threads off one after another: the choice is the same bit for bit, and with threads on the runs
+    did run on two threads."""
+    noisy, edges = noisy_torus_grid()
+    ran_on = set()
+    advance = noise._Run.advance
+
+    def recorded(run, count):
+        ran_on.add(threading.get_ident())
+        advance(run, count)
+
+    monkeypatch.setattr(noise._Run, "advance", recorded)
+    monkeypatch.setattr(parallel, "thread_count", lambda: threads)
+    chooser = core.AmountChooser(noisy, edges, patch_from=1)
+    for _ in chooser.steps():
+        pass
+    monkeypatch.setattr(parallel, "thread_count", lambda: 1)
+    alone = core.AmountChooser(noisy, edges, patch_from=1)
+    for _ in alone.steps():
+        pass
+    assert chooser.amount == alone.amount and chooser.traces == alone.traces
+    assert (len(ran_on) > 1) == (threads > 1)  # threads on: more than this one ran the runs

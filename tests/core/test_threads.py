@@ -214,3 +214,15 @@ def test_in_background_hands_back_the_result_or_the_error(monkeypatch, threads):
     assert parallel.in_background(lambda: 6 * 7).result() == 42
     with pytest.raises(ZeroDivisionError):
         parallel.in_background(lambda: 1 / 0).result()
+
+
+def test_run_all_inside_a_pool_task_runs_there():
+    """A task the pool runs that runs tasks itself runs them on its own thread: waiting there for the
+    pool's other threads could wait for ever (the pool may have no other)."""
+    import threading
+
+    def nested():
+        return threading.get_ident(), parallel.run_all([threading.get_ident, threading.get_ident])
+
+    here, (pool_thread, inner) = parallel.run_all([threading.get_ident, nested])
+    assert pool_thread != here and inner == [pool_thread, pool_thread]
