@@ -262,10 +262,12 @@ def vertex_normals(positions, triangles, dtype=np.float64, agreement=False):
     return (unit, normals[3]) if agreement else unit
 
 
-def vertex_normal_steps(positions, triangles, agreement=False):
+def vertex_normal_steps(positions, triangles, agreement=False, faces=None):
     """``vertex_normals`` in slices, as float64 coordinate rows: a generator that yields (None) after each
     round of blocks of triangles and returns the (3, n) unit normals, with ``agreement`` as a fourth row
-    (no transposed copy: for callers that read them a block of vertices at a time).
+    (no transposed copy: for callers that read them a block of vertices at a time). ``faces``: a (3, t) and
+    a (t,) array the triangles' unit normals ((0, 0, 0) without area) and twice-areas are written to, from
+    the same products.
 
     Examples
     --------
@@ -277,19 +279,21 @@ def vertex_normal_steps(positions, triangles, agreement=False):
     [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0]]
     """
     planar = np.ascontiguousarray(np.asarray(positions).T)
-    steps = normals_and_measures(planar, np.asarray(triangles), None, 1, None, measure=False, agreement=agreement)
+    steps = normals_and_measures(
+        planar, np.asarray(triangles), None, 1, None, measure=False, agreement=agreement, faces=faces
+    )
     return (yield from steps)[0]
 
 
 def normals_and_measures(
-    after, triangles, part_of_vertex, parts, centre, block=TRIANGLE_BLOCK, measure=True, agreement=False
+    after, triangles, part_of_vertex, parts, centre, block=TRIANGLE_BLOCK, measure=True, agreement=False, faces=None
 ):
     """(normals, measures) in slices, of (3, n) planar positions: the unit vertex normals (area-weighted,
     float64 (3, n)) and per part, (2, parts), its volume less the ``centre`` (None: the origin) (times 6)
     and its area (times 2); ``measure`` False: the normals alone (measures zero); ``agreement``: the
-    normals get a fourth row, how far each vertex's faces agree (``vertex_normals``). Each ``block`` of
-    triangles is measured on the threads, then its normals added at their corners block by block: the
-    same numbers whatever the thread count."""
+    normals get a fourth row, how far each vertex's faces agree (``vertex_normals``); ``faces``: as
+    ``vertex_normal_steps``'. Each ``block`` of triangles is measured on the threads, then its normals
+    added at their corners block by block: the same numbers whatever the thread count."""
     normals = np.zeros((4 if agreement else 3, after.shape[1]))
 
     def measured(start, stop):
@@ -299,18 +303,22 @@ def normals_and_measures(
         b -= a
         c -= a
         if agreement:  # the twice-areas summed beside the twice-area normals
-            faces = np.empty((4, b.shape[1]))
-            faces[:3] = cross(b, c)
-            np.sqrt(dot(faces, faces), out=faces[3])
+            twice = np.empty((4, b.shape[1]))
+            twice[:3] = cross(b, c)
+            np.sqrt(dot(twice, twice), out=twice[3])
         else:
-            faces = cross(b, c)
-        sums = part_sums([volume, np.sqrt(dot(faces, faces))], part_of_vertex, block, parts) if measure else 0.0
-        return block, faces, sums
+            twice = cross(b, c)
+        if faces is not None:
+            length = twice[3] if agreement else np.sqrt(dot(twice, twice))
+            faces[1][start:stop] = length
+            faces[0][:, start:stop] = twice[:3] / np.where(length > 0.0, length, 1.0)
+        sums = part_sums([volume, np.sqrt(dot(twice, twice))], part_of_vertex, block, parts) if measure else 0.0
+        return block, twice, sums
 
     measures = np.zeros((2, parts))
     for blocks in in_rounds(measured, len(triangles), block):
-        for corners, faces, sums in blocks:
-            _add_at_corners(normals, corners, faces)
+        for corners, twice, sums in blocks:
+            _add_at_corners(normals, corners, twice)
             measures += sums
         yield
     for start in range(0, normals.shape[1], VECTOR_BLOCK):

@@ -27,6 +27,7 @@ neighbours; its corners take back part of the smoother's slide, as much as unfol
 """
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import scipy.sparse as sp
@@ -104,19 +105,14 @@ def _keep_in_place(start, result, triangles, outline):
     """``keep_in_place_steps``' work: the projection a block of vertices at a time (no (n, 3) temporaries)."""
     triangles = np.asarray(triangles)
     corners_of = [np.ascontiguousarray(triangles[:, k], dtype=index_dtype(len(start))) for k in range(3)]
-    rows = yield from vertex_normal_steps(result, triangles, agreement=True)  # the unit normals, their agreement
+    # The unit normals and their agreement; the result's unit face normals and twice-areas from the same
+    # products, for the crease rule and the fold check.
+    facing, area = np.empty((3, len(triangles)), dtype=np.float32), np.empty(len(triangles), dtype=np.float32)
+    rows = yield from vertex_normal_steps(result, triangles, agreement=True, faces=(facing, area))
     kept = np.empty(np.shape(result))
     still, bare = np.empty(len(kept), dtype=bool), np.empty(len(kept), dtype=bool)
-    for low in range(0, len(kept), VECTOR_BLOCK):
-        block = slice(low, low + VECTOR_BLOCK)
-        begin = np.asarray(start[block], dtype=np.float64)
-        move = result[block] - begin
-        normal = rows[:3, block].T
-        np.add(begin, normal * np.einsum("ij,ij->i", move, normal)[:, None], out=kept[block])  # along the normal
-        still[block] = ~move.any(axis=1)
-        bare[block] = ~normal.any(axis=1)  # in no triangle: no surface to keep to
+    parallel.run_chunks(partial(_projected, start, result, rows, kept, still, bare), len(kept), VECTOR_BLOCK)
     yield
-    facing, area = _unit_faces(_planar(result, _origin(start)), corners_of)  # the crease rule's, the fold check's
     _keep_across_creases(kept, start, result, rows[3], facing, area, corners_of)
     yield
     kept[bare] = result[bare]
@@ -129,6 +125,17 @@ def _keep_in_place(start, result, triangles, outline):
     out = kept.astype(result.dtype)
     out[still] = result[still]
     return out
+
+
+def _projected(start, result, normals, kept, still, bare, low, high):
+    """Vertices low:high: ``kept`` the start plus the move along the (3, n) unit ``normals``, ``still``
+    where the vertex did not move, ``bare`` where it has no normal (in no triangle: no surface to keep to)."""
+    begin = np.asarray(start[low:high], dtype=np.float64)
+    move = result[low:high] - begin
+    normal = normals[:3, low:high].T
+    np.add(begin, normal * np.einsum("ij,ij->i", move, normal)[:, None], out=kept[low:high])
+    still[low:high] = ~move.any(axis=1)
+    bare[low:high] = ~normal.any(axis=1)
 
 
 @dataclass(frozen=True)
@@ -345,7 +352,12 @@ def _origin(points):
 def _planar(points, origin):
     """(3, n) single-precision coordinate rows of (n, 3) ``points`` less ``origin``."""
     out = np.empty((3, len(points)), dtype=np.float32)
-    np.subtract(np.asarray(points).T, np.asarray(origin, dtype=np.float64)[:, None], out=out, casting="same_kind")
+    points, origin = np.asarray(points), np.asarray(origin, dtype=np.float64)[:, None]
+
+    def block(low, high):
+        np.subtract(points[low:high].T, origin, out=out[:, low:high], casting="same_kind")
+
+    parallel.run_chunks(block, len(points), VECTOR_BLOCK)
     return out
 
 

@@ -270,3 +270,24 @@ def test_bad_keep_in_place_is_refused(sphere):
         core.smooth_mesh(noisy, part.edges, faces=triangles, keep_in_place="yes")
     faceless = core.smooth_mesh(noisy, part.edges, return_report=True)[1]
     assert not faceless.kept_in_place  # no faces, no normals: the paper's moves
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_vertex_normal_pass_writes_the_face_normals_and_areas(dtype):
+    """Keep in Place reads the result's unit face normals and twice-areas from the vertex normals' own pass
+    (``faces``): they are core.face_normals' and the cross products' lengths, (0, 0, 0) without area, and
+    the vertex normals are those of the pass without them."""
+    from core.geometry import vertex_normal_steps
+    from core.slices import to_end
+
+    part = ico_sphere(2)
+    rng = np.random.default_rng(3)
+    points = (part.positions + rng.normal(scale=0.05, size=part.positions.shape)).astype(dtype)
+    triangles = np.r_[part.triangles(), [[0, 0, 1]]]  # and one without area
+    facing, area = np.empty((3, len(triangles)), np.float32), np.empty(len(triangles), np.float32)
+    rows = to_end(vertex_normal_steps(points, triangles, agreement=True, faces=(facing, area)))
+    assert np.array_equal(rows, to_end(vertex_normal_steps(points, triangles, agreement=True)))
+    np.testing.assert_allclose(facing.T, core.face_normals(points.astype(np.float64), triangles), atol=1e-6)
+    a, b, c = (points[triangles[:, k]].astype(np.float64) for k in range(3))
+    np.testing.assert_allclose(area, np.linalg.norm(np.cross(b - a, c - a), axis=1), rtol=1e-6)
+    assert not facing[:, -1].any() and area[-1] == 0.0
