@@ -286,15 +286,25 @@ def vertex_normal_steps(positions, triangles, agreement=False, faces=None):
 
 
 def normals_and_measures(
-    after, triangles, part_of_vertex, parts, centre, block=TRIANGLE_BLOCK, measure=True, agreement=False, faces=None
+    after,
+    triangles,
+    part_of_vertex,
+    parts,
+    centre,
+    block=TRIANGLE_BLOCK,
+    measure=True,
+    agreement=False,
+    faces=None,
+    with_normals=True,
 ):
     """(normals, measures) in slices, of (3, n) planar positions: the unit vertex normals (area-weighted,
     float64 (3, n)) and per part, (2, parts), its volume less the ``centre`` (None: the origin) (times 6)
-    and its area (times 2); ``measure`` False: the normals alone (measures zero); ``agreement``: the
-    normals get a fourth row, how far each vertex's faces agree (``vertex_normals``); ``faces``: as
-    ``vertex_normal_steps``'. Each ``block`` of triangles is measured on the threads, then its normals
-    added at their corners block by block: the same numbers whatever the thread count."""
-    normals = np.zeros((4 if agreement else 3, after.shape[1]))
+    and its area (times 2); ``measure`` False: the normals alone (measures zero); ``with_normals`` False:
+    the measures alone (normals None); ``agreement``: the normals get a fourth row, how far each vertex's faces
+    agree (``vertex_normals``); ``faces``: as ``vertex_normal_steps``'. Each ``block`` of triangles is
+    measured on the threads, then its normals added at their corners block by block: the same numbers
+    whatever the thread count."""
+    normals = np.zeros((4 if agreement else 3, after.shape[1])) if with_normals else None
 
     def measured(start, stop):
         block = np.ascontiguousarray(triangles[start:stop].T, dtype=index_dtype(after.shape[1]))
@@ -318,9 +328,12 @@ def normals_and_measures(
     measures = np.zeros((2, parts))
     for blocks in in_rounds(measured, len(triangles), block):
         for corners, twice, sums in blocks:
-            _add_at_corners(normals, corners, twice)
+            if with_normals:
+                _add_at_corners(normals, corners, twice)
             measures += sums
         yield
+    if not with_normals:
+        return None, measures
     for start in range(0, normals.shape[1], VECTOR_BLOCK):
         rows = normals[:3, start : start + VECTOR_BLOCK]
         length = np.sqrt(dot(rows, rows))

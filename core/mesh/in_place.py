@@ -92,13 +92,16 @@ def keep_in_place(start: np.ndarray, result: np.ndarray, triangles: np.ndarray, 
     return to_end(keep_in_place_steps(start, result, triangles, outline))
 
 
-def keep_in_place_steps(start, result, triangles, outline=None):
+def keep_in_place_steps(start, result, triangles, outline=None, with_normals=False):
     """``keep_in_place`` in slices, for callers that show progress and let the user cancel: a generator
     that yields (None) between its passes (a round of blocks of triangles of the vertex normals, the
-    projection, the crease rule, the fold check and each of its rounds) and returns the kept positions.
+    projection, the crease rule, the fold check and each of its rounds) and returns the kept positions;
+    ``with_normals``: (the kept positions, the (3, n) float64 unit vertex normals of ``result`` they were
+    kept along), for a caller that offsets the kept surface along them (core.mesh.volume's restore).
     NumPy's huge-page request stays off (core.memory) until it ends or is closed, suspended or not."""
     with small_pages():  # its arrays are made once and read in order (core.memory)
-        return (yield from _keep_in_place(start, result, triangles, outline))
+        kept, normals = yield from _keep_in_place(start, result, triangles, outline)
+    return (kept, normals) if with_normals else kept
 
 
 def _keep_in_place(start, result, triangles, outline):
@@ -120,11 +123,12 @@ def _keep_in_place(start, result, triangles, outline):
         normals = rows[:3, outline.vertices].T
         result = outline.across(start, result, normals)  # what an outline vertex takes back: no pull-in
         facing = None  # its faces turned with it: the fold check reads them again
+    normals = rows[:3]
     del rows, area
     yield from unfold_steps(kept, start, result, corners_of, facing)
     out = kept.astype(result.dtype)
     out[still] = result[still]
-    return out
+    return out, normals
 
 
 def _projected(start, result, normals, kept, still, bare, low, high):

@@ -386,17 +386,21 @@ class MeshSmoother:
         between the restore's slices and the rules. With Keep in Place the parts are judged on the run's own
         moves, before they are kept across the surface (and before the volume restore); ``run``: the
         (alpha, beta, iterations) that ran, which smooth the open borders as curves for Keep in Place."""
-        offset, parts, ran = 0.0, None, run[2]
+        offset, parts, ran, normals = 0.0, None, run[2], None
         if self.in_place and ran > 0:
             if noise is not None and self.hold_parts:
                 parts = yield from self._held_parts(result, noise, residual, progress)
             outline = self._outline(result, run, fixed, limit) if self.border == "free" else None
-            result = yield from as_fraction(keep_in_place_steps(self.positions, result, self.faces, outline), progress)
+            keeping = keep_in_place_steps(
+                self.positions, result, self.faces, outline, with_normals=measuring is not None
+            )
+            kept = yield from as_fraction(keeping, progress)
+            result, normals = kept if measuring is not None else (kept, None)  # the volume's offsets go along them
             if outline is not None and np.any(limit):  # across the surface and the curve at once: both limited
                 project_rows_within(result, self.positions, limit)
         if measuring is not None and ran > 0:
             limited = volume.NOISE_OFFSETS * amount.sigma
-            result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), progress)
+            result, offset = yield from self._keep_volume(result, fixed, limited, measuring.result(), progress, normals)
             if np.any(limit):  # the offset keeps to the limit too
                 project_rows_within(result, self.positions, limit)
         if parts is None and noise is not None and ran > 0 and self.hold_parts:
@@ -527,14 +531,15 @@ class MeshSmoother:
         )
         yield 1.0
 
-    def _keep_volume(self, result, fixed, limit, measured, progress):
+    def _keep_volume(self, result, fixed, limit, measured, progress, normals=None):
         """Each closed part's volume given back by a bounded uniform offset of its moving vertices along
-        their normals (core.mesh.volume), in slices (yielding ``progress``); returns (positions, largest offset).
-        Fixed vertices and those of influence 0 stay bit for bit."""
+        their normals (core.mesh.volume; ``normals``: (3, n) the directions Keep in Place kept the moves
+        along, else ``result``'s vertex normals), in slices (yielding ``progress``); returns (positions,
+        largest offset). Fixed vertices and those of influence 0 stay bit for bit."""
         movable = ~fixed if self.influence is None else ~fixed & (self.influence > 0.0)
         restored, offsets = yield from as_fraction(
             volume.restore_steps(
-                self.positions, result, self.faces, movable, limit, result.dtype, self.surface, measured
+                self.positions, result, self.faces, movable, limit, result.dtype, self.surface, measured, normals
             ),
             progress,
         )

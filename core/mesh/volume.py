@@ -147,13 +147,17 @@ def restore_volume(before, after, triangles, movable=None, limit=None):
     return to_end(restore_steps(before, after, triangles, movable, limit))
 
 
-def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.float64, surface=None, measured=None):
+def restore_steps(
+    before, after, triangles, movable=None, limit=None, dtype=np.float64, surface=None, measured=None, normals=None
+):
     """``restore_volume`` in slices, for callers that let the user cancel: a generator that yields (None)
     between its passes and returns (positions in ``dtype``, offsets); the same numbers (float64 math,
     cast to ``dtype`` at the end). ``surface``: the triangles' core.mesh.topology.surface, and ``measured``:
-    ``measure_before(before, triangles, surface)``, if the caller has them. Beside its result it holds
-    the float64 normals, a planar copy of the positions after (in their dtype) and a few bytes a vertex;
-    the rest works in blocks of triangles."""
+    ``measure_before(before, triangles, surface)``, if the caller has them. ``normals``: (3, n) unit
+    directions to offset along instead of ``after``'s vertex normals (core.mesh.in_place keeps a surface
+    along those of the surface it kept: offsets along them keep every vertex on its line; scaled in place).
+    Beside its result it holds the float64 normals, a planar copy of the positions after (in their dtype)
+    and a few bytes a vertex; the rest works in blocks of triangles."""
     before, after, triangles = np.asarray(before), np.asarray(after), np.asarray(triangles)
     n = after.shape[0]
     if triangles.size == 0:
@@ -170,8 +174,12 @@ def restore_steps(before, after, triangles, movable=None, limit=None, dtype=np.f
     low_after, high_after = part_boxes(planar_after, part_of_vertex, used, parts)
     extent, centre, target = measured.high - measured.low, measured.centre, measured.volumes
     yield
-    measuring = normals_and_measures(planar_after, triangles, part_of_vertex, parts, centre, BLOCK)
+    given = normals
+    measuring = normals_and_measures(
+        planar_after, triangles, part_of_vertex, parts, centre, BLOCK, with_normals=given is None
+    )
     normals, (c0, area) = yield from measuring
+    normals = given if normals is None else normals
     normals *= movable
     outward, inward = offset_bounds(extent, high_after - low_after, limit)
     has_movable = np.bincount(part_of_vertex[movable & used], minlength=parts) > 0

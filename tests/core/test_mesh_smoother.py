@@ -8,6 +8,7 @@ from test_mesh_amount import bumpy_sphere, edges_of, with_normal_noise
 
 import core
 from core.mesh import amount as mesh_amount
+from core.slices import to_end
 
 
 @pytest.fixture(scope="module")
@@ -25,14 +26,14 @@ def paper_hc(positions, edges, **numbers):
 
 def test_automatic_amount_is_choose_smooth_restore(noisy_sphere):
     """The default run is choose_amount, that HC run (alpha 0), its moves kept across the surface
-    (core.mesh.in_place) and the volume given back, bit for bit."""
+    (core.mesh.in_place) and the volume given back along the normals they were kept along, bit for bit."""
     noisy, edges, faces = noisy_sphere
     result, report = core.smooth_mesh(noisy, edges, faces=faces, return_report=True)
     amount = core.choose_amount(noisy, edges, beta=core.DEFAULT_BETA)
     assert report.amount == amount and report.alpha == 0.0 and report.iterations == amount.iterations > 1
     smoothed = paper_hc(noisy, edges, alpha=0.0, beta=amount.beta, iterations=amount.iterations)
-    smoothed = core.mesh.in_place.keep_in_place(noisy, smoothed, faces)
-    restored, offsets = core.mesh.volume.restore_volume(noisy, smoothed, faces)
+    smoothed, normals = to_end(core.mesh.in_place.keep_in_place_steps(noisy, smoothed, faces, with_normals=True))
+    restored, offsets = to_end(core.mesh.volume.restore_steps(noisy, smoothed, faces, normals=normals))
     assert np.array_equal(result, restored) and report.kept_in_place
     assert report.volume_offset == pytest.approx(np.abs(offsets).max()) and report.volume_offset > 0.0
     volumes = core.mesh.metrics.enclosed_volumes(faces, noisy, result)
