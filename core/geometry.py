@@ -334,13 +334,16 @@ def normals_and_measures(
         yield
     if not with_normals:
         return None, measures
-    for start in range(0, normals.shape[1], VECTOR_BLOCK):
-        rows = normals[:3, start : start + VECTOR_BLOCK]
+
+    def unit(start, stop):
+        rows = normals[:3, start:stop]
         length = np.sqrt(dot(rows, rows))
         if agreement:
-            area = normals[3, start : start + VECTOR_BLOCK]
+            area = normals[3, start:stop]
             area[:] = np.divide(length, area, out=np.zeros_like(length), where=area > 0.0)
         rows /= np.where(length > 0.0, length, 1.0)
+
+    parallel.run_chunks(unit, normals.shape[1], VECTOR_BLOCK)
     return normals, measures
 
 
