@@ -56,7 +56,7 @@ import math
 import numpy as np
 
 from .. import parallel
-from ..geometry import vertex_normals
+from ..geometry import centroid, vertex_normals
 from .amount import PATCH_FROM
 from .noise import _MAD, _group_medians
 
@@ -92,7 +92,7 @@ def _radii(points, part_of_vertex, counts):
     (a ratio of radii is all it is for); one part, the usual scan, without the per-part gathers."""
     points = np.asarray(points)
     if counts.size == 1:
-        away = points - points.mean(axis=0, dtype=np.float64).astype(points.dtype)
+        away = points - centroid(points).astype(points.dtype)
         return np.sqrt(np.array([np.einsum("ij,ij->", away, away, dtype=np.float64)]) / counts)
     centroids = np.stack([np.bincount(part_of_vertex, points[:, k], counts.size) for k in range(3)], axis=1)
     away = points - (centroids / counts[:, None])[part_of_vertex].astype(points.dtype)

@@ -25,7 +25,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import corner_rows, cross, dot, in_rounds, index_dtype, normals_and_measures, part_sums
+from ..geometry import (
+    centroid,
+    corner_rows,
+    cross,
+    dot,
+    in_rounds,
+    index_dtype,
+    normals_and_measures,
+    part_sums,
+)
 from ..parallel import TRIANGLE_BLOCK, VECTOR_BLOCK
 from ..slices import to_end
 from . import topology
@@ -67,7 +76,7 @@ def _before_steps(before, triangles, surface):
     """measure_before in slices (yields between blocks of triangles)."""
     planar = as_planar(before)
     low, high = part_boxes(planar, surface.part_of_vertex, surface.used, surface.parts)
-    centre = _centre(before)
+    centre = centroid(before)
     volumes = yield from volume_steps(planar, triangles, surface.part_of_vertex, surface.parts, centre)
     return Before(centre, volumes, low, high)
 
@@ -89,13 +98,14 @@ def as_planar(points):
     return np.ascontiguousarray(points.T)
 
 
-def cubic_steps(after, normals, triangles, part_of_vertex, parts, centre):
+def cubic_steps(after, normals, triangles, part_of_vertex, parts, centre, measures=False):
     """(c1, c2, c3) in slices, of (3, n) planar positions and normals: per part, (3, parts), the
     coefficients beyond c0 (the volume, from normals_and_measures) of its volume after an offset d along
     ``normals``: V(d) = c0 + c1 d + c2 d^2 + c3 d^3 (times 6). Each triangle's signed tetrahedron volume
     det(a, b, c) / 6 is a cubic in d: with b x c, n_b x c + b x n_c and n_b x n_c, its coefficients
     are a . (b x c), n_a . (b x c) + a . (n_b x c + b x n_c), n_a . (n_b x c + b x n_c) + a . (n_b x n_c)
-    and n_a . (n_b x n_c)."""
+    and n_a . (n_b x n_c). ``measures``: (c0, area, c1, c2, c3), (5, parts), with normals_and_measures'
+    measures from the same pass (the same numbers: the same blocks, terms and sums)."""
 
     def block_sums(start, stop):
         block = np.ascontiguousarray(triangles[start:stop].T, dtype=index_dtype(after.shape[1]))
@@ -104,9 +114,12 @@ def cubic_steps(after, normals, triangles, part_of_vertex, parts, centre):
         first, second, third = cross(b, c), cross(nb, c), cross(nb, nc)
         second += cross(b, nc)
         terms = [dot(na, first) + dot(a, second), dot(na, second) + dot(a, third), dot(na, third)]
+        if measures:
+            twice = cross(b - a, c - a)
+            terms = [dot(a, first), np.sqrt(dot(twice, twice))] + terms
         return part_sums(terms, part_of_vertex, block, parts)
 
-    total = np.zeros((3, parts))
+    total = np.zeros((5 if measures else 3, parts))
     for sums in in_rounds(block_sums, len(triangles), BLOCK):
         for block in sums:
             total += block
@@ -174,19 +187,24 @@ def restore_steps(
     low_after, high_after = part_boxes(planar_after, part_of_vertex, used, parts)
     extent, centre, target = measured.high - measured.low, measured.centre, measured.volumes
     yield
-    given = normals
-    measuring = normals_and_measures(
-        planar_after, triangles, part_of_vertex, parts, centre, BLOCK, with_normals=given is None
-    )
-    normals, (c0, area) = yield from measuring
-    normals = given if normals is None else normals
-    normals *= movable
+    cubic = None
+    if normals is None:
+        measuring = normals_and_measures(planar_after, triangles, part_of_vertex, parts, centre, BLOCK)
+        normals, (c0, area) = yield from measuring
+        normals *= movable
+    else:  # the directions are given: the measures and the cubic in one pass
+        normals *= movable
+        c0, area, *cubic = yield from cubic_steps(
+            planar_after, normals, triangles, part_of_vertex, parts, centre, measures=True
+        )
     outward, inward = offset_bounds(extent, high_after - low_after, limit)
     has_movable = np.bincount(part_of_vertex[movable & used], minlength=parts) > 0
     eligible = eligible_parts(closed & has_movable, sizes, target, extent, c0, area, limit)
     if not eligible.any():
         return np.array(after, dtype=dtype), np.zeros(parts)
-    c1, c2, c3 = yield from cubic_steps(planar_after, normals, triangles, part_of_vertex, parts, centre)
+    if cubic is None:
+        cubic = yield from cubic_steps(planar_after, normals, triangles, part_of_vertex, parts, centre)
+    c1, c2, c3 = cubic
     del planar_after
     offsets = solve_offsets(target, (c0, c1, c2, c3), eligible, inward, outward)
     result = np.empty((n, 3), dtype=dtype)
@@ -248,19 +266,6 @@ def solve_offsets(target, cubic, eligible, inward, outward):
 def moved_along(after, normals, offsets):
     """(m, 3) float64: (m, 3) positions ``after`` moved by ``offsets`` (m,) along their (3, m) ``normals``."""
     return np.asarray(after, dtype=np.float64) + normals.T * offsets[:, None]
-
-
-def _centre(points):
-    """The mean of (n, 3) points, in float64 (the origin for none)."""
-    if points.shape[0] == 0:
-        return np.zeros(3)
-    if points.shape[0] <= _VERTEX_BLOCK:
-        return np.asarray(points, dtype=np.float64).mean(axis=0)
-    total = sum(
-        np.asarray(points[start : start + _VERTEX_BLOCK], dtype=np.float64).sum(axis=0)
-        for start in range(0, points.shape[0], _VERTEX_BLOCK)
-    )
-    return total / points.shape[0]
 
 
 def part_boxes(planar, part_of_vertex, used, parts):

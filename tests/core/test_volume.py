@@ -116,3 +116,29 @@ def test_only_closed_parts_with_a_volume_and_more_than_four_vertices():
     for part, sign in ((slice(0, n), 1), (slice(2 * n + 7, 3 * n + 7), -1)):
         local = faces if sign > 0 else faces[:, ::-1]
         assert volume(restored[part], local) == pytest.approx(volume(before[part], local), rel=1e-9)
+
+
+def test_given_directions_make_the_measures_and_the_cubic_in_one_pass():
+    """Offset directions given (Keep in Place's normals): the measures and the cubic come from one pass over
+    the triangles, the same numbers as the two passes that make the normals first: given the normals those
+    passes make, the restore is bit for bit the one without them (two parts, fixed vertices)."""
+    from core.geometry import normals_and_measures
+    from core.mesh import topology
+    from core.mesh import volume as restore
+    from core.slices import to_end
+
+    vertices, triangles = icosphere(3)
+    before = np.r_[vertices, vertices * 0.5 + 3.0]
+    faces = np.r_[triangles, triangles + len(vertices)]
+    rng = np.random.default_rng(2)
+    after = 0.97 * before + rng.normal(scale=0.01, size=before.shape)
+    movable = rng.random(len(before)) > 0.1
+    surface = topology.surface(faces, len(before))
+    measured = restore.measure_before(before, faces, surface)
+    planar = restore.as_planar(after)
+    normals = to_end(
+        normals_and_measures(planar, faces, surface.part_of_vertex, surface.parts, measured.centre, restore.BLOCK)
+    )[0]
+    two = to_end(restore.restore_steps(before, after, faces, movable, None, np.float64, surface, measured))
+    one = to_end(restore.restore_steps(before, after, faces, movable, None, np.float64, surface, measured, normals))
+    assert np.array_equal(one[0], two[0]) and np.array_equal(one[1], two[1]) and np.all(one[1] > 0.0)
