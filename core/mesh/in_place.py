@@ -112,13 +112,12 @@ def _keep_in_place(start, result, triangles, outline):
     # products, for the crease rule and the fold check.
     facing, area = np.empty((3, len(triangles)), dtype=np.float32), np.empty(len(triangles), dtype=np.float32)
     rows = yield from vertex_normal_steps(result, triangles, agreement=True, faces=(facing, area))
-    kept = np.empty(np.shape(result))
-    still, bare = np.empty(len(kept), dtype=bool), np.empty(len(kept), dtype=bool)
-    parallel.run_chunks(partial(_projected, start, result, rows, kept, still, bare), len(kept), VECTOR_BLOCK)
+    kept = np.empty(np.shape(result), dtype=result.dtype)  # worked in float64, kept as the result will be
+    still = np.empty(len(kept), dtype=bool)
+    parallel.run_chunks(partial(_projected, start, result, rows, kept, still), len(kept), VECTOR_BLOCK)
     yield
     _keep_across_creases(kept, start, result, rows[3], facing, area, corners_of)
     yield
-    kept[bare] = result[bare]
     if outline is not None and outline.vertices.size:
         normals = rows[:3, outline.vertices].T
         result = outline.across(start, result, normals)  # what an outline vertex takes back: no pull-in
@@ -126,20 +125,21 @@ def _keep_in_place(start, result, triangles, outline):
     normals = rows[:3]
     del rows, area
     yield from unfold_steps(kept, start, result, corners_of, facing)
-    out = kept.astype(result.dtype)
-    out[still] = result[still]
-    return out, normals
+    kept[still] = result[still]
+    return kept, normals
 
 
-def _projected(start, result, normals, kept, still, bare, low, high):
-    """Vertices low:high: ``kept`` the start plus the move along the (3, n) unit ``normals``, ``still``
-    where the vertex did not move, ``bare`` where it has no normal (in no triangle: no surface to keep to)."""
+def _projected(start, result, normals, kept, still, low, high):
+    """Vertices low:high: ``kept`` the start plus the move along the (3, n) unit ``normals``, or the result
+    where there is no normal (in no triangle: no surface to keep to); ``still`` where the vertex did not
+    move."""
     begin = np.asarray(start[low:high], dtype=np.float64)
     move = result[low:high] - begin
     normal = normals[:3, low:high].T
-    np.add(begin, normal * np.einsum("ij,ij->i", move, normal)[:, None], out=kept[low:high])
+    np.add(begin, normal * np.einsum("ij,ij->i", move, normal)[:, None], out=kept[low:high], casting="same_kind")
     still[low:high] = ~move.any(axis=1)
-    bare[low:high] = ~normal.any(axis=1)
+    bare = ~normal.any(axis=1)
+    kept[low:high][bare] = result[low:high][bare]
 
 
 @dataclass(frozen=True)
