@@ -147,9 +147,14 @@ def run_beside(tasks, nonzeros):
     """Run independent tasks whose work is sparse products over a pattern of ``nonzeros`` entries: side by
     side where RowBlocks gives each one thread (the patches the Automatic Amount runs on), else one after
     another, each on the threads. Their results, in order."""
-    if thread_count() > 1 and (nonzeros < MIN_WORK or _csr_matvec is None):
+    if thread_count() > 1 and _one_block(nonzeros):
         return run_all(tasks)
     return [task() for task in tasks]
+
+
+def _one_block(nonzeros):
+    """Whether RowBlocks keeps a pattern of ``nonzeros`` entries in one block (one thread)."""
+    return nonzeros < MIN_WORK or _csr_matvec is None
 
 
 class RowBlocks:
@@ -168,7 +173,7 @@ class RowBlocks:
 
     def __init__(self, indptr, indices, n_columns, workers=None):
         workers = thread_count() if workers is None else workers
-        if indptr[-1] < MIN_WORK or _csr_matvec is None:
+        if _one_block(indptr[-1]):
             workers = 1
         self.n_rows, self.n_columns = indptr.size - 1, n_columns
         bounds = _row_blocks(indptr, workers) if self.n_rows else np.array([0, 0])

@@ -118,9 +118,8 @@ def _keep_in_place(start, result, triangles, outline):
     yield
     _keep_across_creases(kept, start, result, rows[3], facing, area, corners_of)
     yield
-    if outline is not None and outline.vertices.size:
-        normals = rows[:3, outline.vertices].T
-        result = outline.across(start, result, normals)  # what an outline vertex takes back: no pull-in
+    if outline is not None and outline.vertices.size:  # what an outline vertex takes back: no pull-in
+        result = outline.across(start, result, rows[:3, outline.vertices].T)
         facing = None  # its faces turned with it: the fold check reads them again
     normals = rows[:3]
     del rows, area

@@ -250,15 +250,15 @@ def _residuals(positions, rows, operator, halves=0):
     place = [_places(operator.n_vertices, vertices) for vertices in around]
     points, at_points = np.asarray(positions[around[-1]], dtype=np.float64), place[-1]
     for step in range(halves):
-        targets = PLANE_STEPS + halves - step
-        kept = points[at_points[around[targets]]]
-        averaged = _averaged(points, at_points, around[targets], adjacent[targets][1], operator)
-        points, at_points = 0.5 * (kept + averaged), place[targets]
+        level = PLANE_STEPS + halves - step  # the average reaches around[level]
+        kept = points[at_points[around[level]]]
+        averaged = _averaged(points, at_points, around[level], adjacent[level][1], operator)
+        points, at_points = 0.5 * (kept + averaged), place[level]
     plane, at_plane = points, at_points
     for step in range(PLANE_STEPS):
-        targets = PLANE_STEPS - step
-        plane = _averaged(plane, at_plane, around[targets], adjacent[targets][1], operator)
-        at_plane = place[targets]
+        level = PLANE_STEPS - step
+        plane = _averaged(plane, at_plane, around[level], adjacent[level][1], operator)
+        at_plane = place[level]
 
     def point_at(vertices):
         return points[at_points[vertices]]

@@ -391,11 +391,8 @@ class MeshSmoother:
             if noise is not None and self.hold_parts:
                 parts = yield from self._held_parts(result, noise, residual, progress)
             outline = self._outline(result, run, fixed, limit) if self.border == "free" else None
-            keeping = keep_in_place_steps(
-                self.positions, result, self.faces, outline, with_normals=measuring is not None
-            )
-            kept = yield from as_fraction(keeping, progress)
-            result, normals = kept if measuring is not None else (kept, None)  # the volume's offsets go along them
+            keeping = keep_in_place_steps(self.positions, result, self.faces, outline, with_normals=True)
+            result, normals = yield from as_fraction(keeping, progress)  # the volume's offsets go along them
             if outline is not None and np.any(limit):  # across the surface and the curve at once: both limited
                 project_rows_within(result, self.positions, limit)
         if measuring is not None and ran > 0:

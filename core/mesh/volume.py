@@ -187,13 +187,12 @@ def restore_steps(
     low_after, high_after = part_boxes(planar_after, part_of_vertex, used, parts)
     extent, centre, target = measured.high - measured.low, measured.centre, measured.volumes
     yield
-    cubic = None
-    if normals is None:
+    cubic, given = None, normals is not None
+    if not given:
         measuring = normals_and_measures(planar_after, triangles, part_of_vertex, parts, centre, BLOCK)
         normals, (c0, area) = yield from measuring
-        normals *= movable
-    else:  # the directions are given: the measures and the cubic in one pass
-        normals *= movable
+    normals *= movable
+    if given:  # the directions are known first: the measures and the cubic in one pass
         c0, area, *cubic = yield from cubic_steps(
             planar_after, normals, triangles, part_of_vertex, parts, centre, measures=True
         )
