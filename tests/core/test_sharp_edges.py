@@ -441,27 +441,34 @@ def test_guidance_of_a_thin_plates_rim_comes_from_vertex_rings():
     assert np.allclose(guidance[rim & off_corners], normals[rim & off_corners], atol=1e-12)
 
 
-def test_guided_filter_with_fixed_weights_equals_the_loop_on_the_guidance(monkeypatch):
+@pytest.mark.parametrize("share, degrees", [(0.02, 40.0), (0.2, 10.0)])
+def test_guided_filter_with_fixed_weights_equals_the_loop_on_the_guidance(share, degrees, monkeypatch):
     """With guidance, the weights are the guidance's cosines, the same for every pass: one guided pass is the
-    paper's pass with the cosines of the guidance (in double precision, to rounding)."""
+    paper's pass with the cosines of the guidance (in double precision, to rounding); a face no other face's
+    guidance is within the angle of takes its ring's mean, as in the plain filter (heavy noise, a narrow
+    angle: many such faces)."""
     monkeypatch.setattr(sharp_edges, "FILTER_DTYPE", np.float64)
-    _, noisy, faces = noisy_box(0.02, "iso", cells=3)
+    _, noisy, faces = noisy_box(share, "iso", cells=3)
     rings = FaceRings(faces, len(noisy))
     normals = face_normals(noisy, faces)
     guidance = sharp_edges.guidance_normals(normals, rings)
-    threshold = math.cos(math.radians(40.0))
+    threshold = math.cos(math.radians(degrees))
     once = filter_normals(normals, rings, threshold, iterations=1, guidance=guidance)
     around = {}
     for f, face in enumerate(faces):
         for v in face:
             around.setdefault(int(v), set()).add(f)
+    lonely = 0
     for i, face in enumerate(faces):
         ring = set().union(*(around[int(v)] for v in face))
         weights = {j: max(float(guidance[i] @ guidance[j]) - threshold, 0.0) ** 2 for j in ring}
-        if sum(w for j, w in weights.items() if j != i) == 0.0:
-            continue  # a lonely face: the ring's mean, as in the plain filter
         total = sum(w * normals[j] for j, w in weights.items())
+        if sum(w for j, w in weights.items() if j != i) == 0.0:  # lonely
+            lonely += 1
+            mean = sum(normals[j] for j in ring) / len(ring)
+            total = mean if mean @ mean >= 0.01 else normals[i]
         assert np.allclose(once[i], total / np.linalg.norm(total), atol=1e-12)
+    assert (lonely > 0) == (share > 0.1)
 
 
 def wedge(cells=24, degrees=45.0):
