@@ -296,13 +296,16 @@ def _edge_neighbours(triangles, n_vertices):
     end first, sorted by key: a pair met twice is an edge between two triangles, a pair met once an open
     border (its umbrella leans inwards)."""
     t = triangles.shape[0]
-    start, end = triangles.ravel(), triangles[:, [1, 2, 0]].ravel()
+    start = triangles.ravel()
+    end = np.empty_like(triangles)  # each corner's next: columns 1, 2, 0
+    end[:, :2], end[:, 2] = triangles[:, 1:], triangles[:, 0]
+    end = end.ravel()
     keys = pair_keys(start, end, n_vertices)
     order = np.argsort(keys, kind="stable")
-    ordered = keys[order]
+    ordered = keys.take(order)
     same = ordered[1:] == ordered[:-1]
     first, second = order[:-1][same], order[1:][same]
-    across = np.repeat(np.arange(t), 3)  # on a border: itself
+    across = np.arange(3 * t) // 3  # on a border: itself
     across[first], across[second] = second // 3, first // 3
     alone = order[~(np.r_[same, False] | np.r_[False, same])]
     border = np.zeros(n_vertices, dtype=bool)
@@ -666,15 +669,18 @@ def fit_steps(points, normals, rings, step_share, iterations=FIT_ITERATIONS):
     planar = np.ascontiguousarray(normals.T, dtype=np.float64)
     tensor = np.empty((len(SYMMETRIC_ENTRIES), n))  # M_i's entries, in that order
 
-    def moments(k, a, b):
-        def combine(rows, sums):
-            tensor[k, rows] = sums
+    def moments(first, end):  # entries first:end of M_i in one product: the pattern read once for them
+        products = np.empty((end - first, t))
+        for row, (a, b) in zip(products, SYMMETRIC_ENTRIES[first:end]):
+            np.multiply(planar[a], planar[b], out=row)
 
-        products = planar[a] * planar[b]
+        def combine(rows, sums):
+            tensor[first:end, rows] = sums
+
         rings.vertex_blocks.run(lambda block: block.neighbour_sums(products, combine))
 
-    for k, (a, b) in enumerate(SYMMETRIC_ENTRIES):
-        moments(k, a, b)
+    moments(0, 3)  # in two halves: three rows of t at a time
+    moments(3, 6)
     x = np.array(points.T, dtype=np.float64, order="C")  # coordinate rows: 1-D gathers
     moved, pulled = np.empty_like(x), np.empty((3, t))
     yield  # making the M_i takes as long as a few passes
