@@ -34,6 +34,7 @@ from .. import parallel
 from ..adjacency import Umbrella, umbrella_operator
 from ..convergence import ConvergenceWarning
 from ..geometry import fan_triangles, median_edge_length, project_rows_within
+from ..memory import reusing
 from ..slices import as_fraction, to_end
 from ..smoothing import DEFAULT_ALPHA, DEFAULT_BETA, METHODS, MODES, Cancelled, Smoothing
 from ..validation import (
@@ -296,7 +297,11 @@ class MeshSmoother:
 
     def steps(self, chunk: int | None = None) -> Iterator[float]:
         """Run in slices of ``chunk`` iterations (all at once if None), yielding the fraction done; the
-        Automatic Amount's choice and volume restore yield between their passes too."""
+        Automatic Amount's choice and volume restore yield between their passes too. What a slice frees,
+        the next reuses (core.memory.reusing)."""
+        return reusing(self._steps(chunk))
+
+    def _steps(self, chunk):
         start = time.perf_counter()
         if not self.prepared:
             yield from self._prepare()

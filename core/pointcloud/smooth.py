@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..adjacency import umbrella_operator
+from ..memory import reusing
 from ..smoothing import Cancelled, Smoothing
 from ..validation import check_fixed, check_positions, check_unit_interval, power_of_two_scale
 from .local_amount import local_influence, sampled_curvature, thinning
@@ -321,6 +322,11 @@ class PointCloudSmoother:
         self._clock = now
 
     def steps(self):
+        """The run in slices (yielding the fraction done); what a slice frees, the next reuses
+        (core.memory.reusing)."""
+        return reusing(self._steps())
+
+    def _steps(self):
         self.seconds, self._clock, self.fraction = {}, time.perf_counter(), 0.0
         index = yield from self._stage("neighbours", self._neighbours())
         tree, _ = yield from self._stage("emst", emst_steps(index))

@@ -1,12 +1,16 @@
-"""core.memory: NumPy's request for huge pages is off within small_pages and comes back after it."""
+"""core.memory: NumPy's request for huge pages is off within small_pages and comes back after it; memory
+freed within reused_memory is reused, and a run's slices hand it back at its end."""
 
+import resource
 import threading
 
+import numpy as np
 import pytest
 
+import core
 from core import memory
 
-pytestmark = pytest.mark.skipif(memory._set_madvise_hugepage is None, reason="this NumPy has no such switch")
+switch = pytest.mark.skipif(memory._set_madvise_hugepage is None, reason="this NumPy has no such switch")
 
 
 def _asked():
@@ -16,6 +20,7 @@ def _asked():
     return now
 
 
+@switch
 def test_the_request_is_off_inside_and_back_after_nested_and_on_error():
     before = _asked()
     with memory.small_pages():
@@ -29,6 +34,7 @@ def test_the_request_is_off_inside_and_back_after_nested_and_on_error():
     assert _asked() == before
 
 
+@switch
 def test_threads_overlapping_leave_it_as_it_was():
     before, inside, go = _asked(), threading.Event(), threading.Event()
 
@@ -46,3 +52,93 @@ def test_threads_overlapping_leave_it_as_it_was():
     go.set()
     thread.join()
     assert _asked() == before
+
+
+glibc = pytest.mark.skipif(memory._LIBC is None, reason="glibc's malloc only")
+_BYTES = 128 << 20  # a block glibc would map on its own, and hand back when freed
+
+
+def _faults(action):
+    """The minor page faults ``action()`` took (first touches of fresh pages)."""
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    action()
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+
+
+def _touch():
+    values = np.empty(_BYTES // 8)
+    values.fill(1.0)
+    del values
+
+
+@glibc
+def test_memory_freed_within_is_touched_again_without_faults_nested_or_not():
+    with memory.reused_memory():
+        first = _faults(_touch)
+        with memory.reused_memory():
+            pass
+        again = _faults(_touch)  # the outer one still runs
+    assert first >= 32  # 128 MiB are 32 huge pages at the least
+    assert again <= first // 8
+    assert memory._kept_depth == 0
+
+
+@glibc
+def test_a_run_in_slices_reuses_between_them_and_hands_memory_back_at_its_end():
+    seen = []
+
+    def run():
+        for _ in range(3):
+            seen.append(_faults(_touch))
+            yield memory._kept_depth
+        return "done"
+
+    def caller():
+        return (yield from memory.reusing(run()))
+
+    slices = caller()
+    depths = []
+    with pytest.raises(StopIteration) as ended:
+        while True:
+            depths.append(next(slices))
+    assert ended.value.value == "done"
+    assert depths == [1, 1, 1]  # each slice ran within reused_memory
+    assert memory._kept_depth == 0  # and between slices and after, glibc maps and trims again
+    assert seen[1] <= seen[0] // 8 and seen[2] <= seen[0] // 8
+    assert _faults(_touch) >= seen[0] // 2  # handed back: fresh pages again
+
+
+def test_a_run_closed_early_or_failing_leaves_the_defaults():
+    def run():
+        yield 0.5
+        raise RuntimeError("a failed slice")
+
+    slices = memory.reusing(run())
+    next(slices)
+    slices.close()
+    assert memory._kept_depth == 0
+    slices = memory.reusing(run())
+    next(slices)
+    with pytest.raises(RuntimeError):
+        next(slices)
+    assert memory._kept_depth == 0
+
+
+def test_smoothing_runs_leave_the_defaults_and_the_same_result():
+    rng = np.random.default_rng(0)
+    u, v = np.meshgrid(np.linspace(0, 1, 30), np.linspace(0, 1, 30))
+    grid = np.arange(900).reshape(30, 30)
+    faces = np.r_[
+        np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:]], -1).reshape(-1, 3),
+        np.stack([grid[:-1, :-1], grid[1:, 1:], grid[1:, :-1]], -1).reshape(-1, 3),
+    ]
+    edges = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    noisy = np.c_[u.ravel(), v.ravel(), 0.01 * rng.normal(size=900)]
+    first = core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=True)
+    assert memory._kept_depth == 0
+    with pytest.raises(core.Cancelled):
+        core.smooth_mesh(noisy, edges, faces=faces, progress=lambda fraction: False)
+    assert memory._kept_depth == 0
+    assert np.array_equal(core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=True), first)
+    core.smooth_point_cloud(noisy)
+    assert memory._kept_depth == 0
