@@ -34,12 +34,33 @@ except ImportError:  # NumPy 1.x
     except ImportError:  # a NumPy without the switch: nothing to turn off
         _set_madvise_hugepage = None
 
-_lock = threading.Lock()
-_depth = 0
-_before = None
+
+class _Switch:
+    """A process-wide setting turned on by the first of nested or threaded uses and back by the last:
+    ``on()`` returns what ``off(state)`` sets back."""
+
+    def __init__(self, on, off):
+        self.on, self.off = on, off
+        self.lock, self.depth, self.state = threading.Lock(), 0, None
+
+    @contextlib.contextmanager
+    def held(self):
+        with self.lock:
+            if self.depth == 0:
+                self.state = self.on()
+            self.depth += 1
+        try:
+            yield
+        finally:
+            with self.lock:
+                self.depth -= 1
+                if self.depth == 0:
+                    self.off(self.state)
 
 
-@contextlib.contextmanager
+_small = _Switch(lambda: _set_madvise_hugepage(False), lambda before: _set_madvise_hugepage(before))
+
+
 def small_pages():
     """Within it NumPy does not ask for huge pages for new arrays (nested and threaded uses are counted:
     the setting comes back when the last one ends).
@@ -53,21 +74,7 @@ def small_pages():
     >>> float(values.sum())
     0.0
     """
-    global _depth, _before
-    if _set_madvise_hugepage is None:
-        yield
-        return
-    with _lock:
-        if _depth == 0:
-            _before = _set_madvise_hugepage(False)
-        _depth += 1
-    try:
-        yield
-    finally:
-        with _lock:
-            _depth -= 1
-            if _depth == 0:
-                _set_madvise_hugepage(_before)
+    return contextlib.nullcontext() if _set_madvise_hugepage is None else _small.held()
 
 
 # mallopt's parameters (glibc's malloc.h); after reused_memory: glibc's default count of mappings, and the
@@ -90,10 +97,22 @@ def _glibc():
 
 
 _LIBC = _glibc()
-_kept_depth = 0
 
 
-@contextlib.contextmanager
+def _keep_freed():
+    _LIBC.mallopt(_M_MMAP_MAX, 0)
+    _LIBC.mallopt(_M_TRIM_THRESHOLD, _KEPT_TRIM_THRESHOLD)
+
+
+def _map_and_trim(_):
+    _LIBC.mallopt(_M_MMAP_MAX, _MMAP_MAX)
+    _LIBC.mallopt(_M_MMAP_THRESHOLD, _MMAP_THRESHOLD)
+    _LIBC.mallopt(_M_TRIM_THRESHOLD, 2 * _MMAP_THRESHOLD)
+
+
+_reused = _Switch(_keep_freed, _map_and_trim)
+
+
 def reused_memory():
     """Within it memory freed stays in the heap for the next arrays (glibc; nested and threaded uses are
     counted: glibc maps and trims again when the last one ends).
@@ -107,30 +126,13 @@ def reused_memory():
     >>> float(values.sum())
     1048576.0
     """
-    global _kept_depth
-    if _LIBC is None:
-        yield
-        return
-    with _lock:
-        if _kept_depth == 0:
-            _LIBC.mallopt(_M_MMAP_MAX, 0)
-            _LIBC.mallopt(_M_TRIM_THRESHOLD, _KEPT_TRIM_THRESHOLD)
-        _kept_depth += 1
-    try:
-        yield
-    finally:
-        with _lock:
-            _kept_depth -= 1
-            if _kept_depth == 0:
-                _LIBC.mallopt(_M_MMAP_MAX, _MMAP_MAX)
-                _LIBC.mallopt(_M_MMAP_THRESHOLD, _MMAP_THRESHOLD)
-                _LIBC.mallopt(_M_TRIM_THRESHOLD, 2 * _MMAP_THRESHOLD)
+    return contextlib.nullcontext() if _LIBC is None else _reused.held()
 
 
 def hand_back():
     """Free memory in the heap back to the kernel (glibc's malloc_trim), unless a ``reused_memory`` is open."""
-    with _lock:
-        if _LIBC is not None and _kept_depth == 0:
+    with _reused.lock:
+        if _LIBC is not None and _reused.depth == 0:
             _LIBC.malloc_trim(0)
 
 

@@ -80,7 +80,7 @@ def test_memory_freed_within_is_touched_again_without_faults_nested_or_not():
         again = _faults(_touch)  # the outer one still runs
     assert first >= 32  # 128 MiB are 32 huge pages at the least
     assert again <= first // 8
-    assert memory._kept_depth == 0
+    assert memory._reused.depth == 0
 
 
 @glibc
@@ -90,7 +90,7 @@ def test_a_run_in_slices_reuses_between_them_and_hands_memory_back_at_its_end():
     def run():
         for _ in range(3):
             seen.append(_faults(_touch))
-            yield memory._kept_depth
+            yield memory._reused.depth
         return "done"
 
     def caller():
@@ -103,7 +103,7 @@ def test_a_run_in_slices_reuses_between_them_and_hands_memory_back_at_its_end():
             depths.append(next(slices))
     assert ended.value.value == "done"
     assert depths == [1, 1, 1]  # each slice ran within reused_memory
-    assert memory._kept_depth == 0  # and between slices and after, glibc maps and trims again
+    assert memory._reused.depth == 0  # and between slices and after, glibc maps and trims again
     assert seen[1] <= seen[0] // 8 and seen[2] <= seen[0] // 8
     assert _faults(_touch) >= seen[0] // 2  # handed back: fresh pages again
 
@@ -116,12 +116,12 @@ def test_a_run_closed_early_or_failing_leaves_the_defaults():
     slices = memory.reusing(run())
     next(slices)
     slices.close()
-    assert memory._kept_depth == 0
+    assert memory._reused.depth == 0
     slices = memory.reusing(run())
     next(slices)
     with pytest.raises(RuntimeError):
         next(slices)
-    assert memory._kept_depth == 0
+    assert memory._reused.depth == 0
 
 
 def test_smoothing_runs_leave_the_defaults_and_the_same_result():
@@ -135,10 +135,10 @@ def test_smoothing_runs_leave_the_defaults_and_the_same_result():
     edges = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
     noisy = np.c_[u.ravel(), v.ravel(), 0.01 * rng.normal(size=900)]
     first = core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=True)
-    assert memory._kept_depth == 0
+    assert memory._reused.depth == 0
     with pytest.raises(core.Cancelled):
         core.smooth_mesh(noisy, edges, faces=faces, progress=lambda fraction: False)
-    assert memory._kept_depth == 0
+    assert memory._reused.depth == 0
     assert np.array_equal(core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=True), first)
     core.smooth_point_cloud(noisy)
-    assert memory._kept_depth == 0
+    assert memory._reused.depth == 0
