@@ -388,6 +388,7 @@ def guidance_steps(normals, rings):
     rings.each_chunk(patches)
     yield
     consistency = spread * steepest / (1e-9 + rings.ring_sums(summed))
+    spread = steepest = None  # the peak of a run is here: what is no longer read goes
     chosen, best = np.empty(t, dtype=np.intp), np.empty(t)
 
     def most_consistent(first, end):
@@ -398,12 +399,16 @@ def guidance_steps(normals, rings):
     rings.each_chunk(most_consistent)
     guidance = np.stack([row.take(chosen) for row in means])
     yield
+    consistency = chosen = means = None
     vertex_means, vertex_consistency = _vertex_ring_consistency(normals, planar, rings, steep, summed)
-    at_corners = [VERTEX_RING_WEIGHT * vertex_consistency.take(corner) for corner in rings.corners]
-    lowest = np.minimum(np.minimum(at_corners[0], at_corners[1]), at_corners[2])
+    weighted = VERTEX_RING_WEIGHT * vertex_consistency
+    lowest = weighted.take(rings.corners[0])  # the corners' smallest, a corner at a time (no three arrays)
+    for corner in rings.corners[1:]:
+        np.minimum(lowest, weighted.take(corner), out=lowest)
     smaller = np.flatnonzero(lowest < best)
     lowest = lowest[smaller]
-    corner = np.where(at_corners[0][smaller] == lowest, 0, np.where(at_corners[1][smaller] == lowest, 1, 2))
+    at = [weighted.take(corner[smaller]) for corner in rings.corners[:2]]
+    corner = np.where(at[0] == lowest, 0, np.where(at[1] == lowest, 1, 2))
     guidance[:, smaller] = vertex_means[:, rings.corners[corner, smaller]]  # the first corner on a tie
     return guidance.T
 
