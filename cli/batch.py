@@ -73,30 +73,12 @@ def task_of(plan):
     }
 
 
-# glibc's malloc thresholds for a worker (bytes): the largest its dynamic rule reaches on 64-bit systems.
-MMAP_THRESHOLD = 32 << 20
-TRIM_THRESHOLD = 64 << 20
-_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3  # mallopt's parameter numbers (malloc.h)
-
-
 def heap_for_large_arrays():
-    """Let this process's heap keep large freed arrays for the next ones (glibc only; elsewhere nothing).
+    """A worker's heap keeps large freed arrays for the next ones (core.memory.roomy_heap: Dask's nanny
+    pins glibc's thresholds); returns whether they were set."""
+    from ..core.memory import roomy_heap
 
-    Dask's nanny starts every worker with MALLOC_TRIM_THRESHOLD_ set (distributed.nanny.pre-spawn-environ),
-    which also fixes glibc's mmap threshold at 128 KiB: each array the smoothing loop allocates is then
-    mapped, faulted in page by page and unmapped, and a file takes about 1.6 times as long (most of it
-    system time; bench/README.md, "batch"). Returns whether the thresholds were set."""
-    import ctypes
-    import ctypes.util
-
-    name = ctypes.util.find_library("c")
-    try:
-        mallopt = ctypes.CDLL(name).mallopt if name else None
-    except (OSError, AttributeError):
-        mallopt = None
-    if mallopt is None:
-        return False
-    return bool(mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)) and bool(mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD))
+    return roomy_heap()
 
 
 def smooth_task(task, source, target):

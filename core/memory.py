@@ -77,11 +77,12 @@ def small_pages():
     return contextlib.nullcontext() if _set_madvise_hugepage is None else _small.held()
 
 
-# mallopt's parameters (glibc's malloc.h); after reused_memory: glibc's default count of mappings, and the
-# thresholds where its own adjustment takes them in a process that frees big arrays (its largest mapping
-# threshold, 32 MiB on 64 bits, and twice that for trimming).
+# mallopt's parameters (glibc's malloc.h); glibc's default count of mappings; the thresholds where its own
+# adjustment takes them in a process that frees big arrays (its largest mapping threshold, 32 MiB on 64
+# bits, and twice that for trimming): ``roomy_heap``'s.
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD, _M_MMAP_MAX = -1, -3, -4
-_MMAP_MAX, _MMAP_THRESHOLD = 65536, 32 << 20
+_MMAP_MAX = 65536
+MMAP_THRESHOLD, TRIM_THRESHOLD = 32 << 20, 64 << 20
 _KEPT_TRIM_THRESHOLD = 1 << 30  # no trimming within reused_memory (mallopt takes a C int)
 
 
@@ -106,8 +107,21 @@ def _keep_freed():
 
 def _map_and_trim(_):
     _LIBC.mallopt(_M_MMAP_MAX, _MMAP_MAX)
-    _LIBC.mallopt(_M_MMAP_THRESHOLD, _MMAP_THRESHOLD)
-    _LIBC.mallopt(_M_TRIM_THRESHOLD, 2 * _MMAP_THRESHOLD)
+    roomy_heap()
+
+
+def roomy_heap():
+    """glibc maps (and hands back when freed) only blocks of ``MMAP_THRESHOLD`` or more, and trims its heap
+    once ``TRIM_THRESHOLD`` is free at its top: a process's heap keeps large freed arrays for the next
+    ones. Where the environment fixed the thresholds at glibc's defaults (Dask's nanny starts its workers
+    with ``MALLOC_TRIM_THRESHOLD_``, which pins mapping at 128 KiB) every such array is mapped and faulted
+    in anew (a batch took 1.6 times as long, most of it system time: bench/README.md, "batch"). Returns
+    whether they were set (glibc only; elsewhere nothing changes)."""
+    if _LIBC is None:
+        return False
+    return bool(_LIBC.mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)) and bool(
+        _LIBC.mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD)
+    )
 
 
 _reused = _Switch(_keep_freed, _map_and_trim)
