@@ -144,10 +144,11 @@ def reused_memory():
 
 
 def hand_back():
-    """Free memory in the heap back to the kernel (glibc's malloc_trim), unless a ``reused_memory`` is open."""
-    with _reused.lock:
-        if _LIBC is not None and _reused.depth == 0:
-            _LIBC.malloc_trim(0)
+    """The heap's free memory back to the kernel (glibc's malloc_trim), at the end of a run. (Not between a
+    point cloud's stages: their arrays differ, yet its EMST, graph and mesh reuse each other's memory: 2-3 s
+    of system time at a million points, for a peak 5-8 % higher.)"""
+    if _LIBC is not None:
+        _LIBC.malloc_trim(0)
 
 
 def reusing(steps):
