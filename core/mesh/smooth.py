@@ -297,9 +297,10 @@ class MeshSmoother:
 
     def steps(self, chunk: int | None = None) -> Iterator[float]:
         """Run in slices of ``chunk`` iterations (all at once if None), yielding the fraction done; the
-        Automatic Amount's choice and volume restore yield between their passes too. What a slice frees,
-        the next reuses (core.memory.reusing)."""
-        return reusing(self._steps(chunk))
+        Automatic Amount's choice and volume restore yield between their passes too. With Keep Sharp Edges,
+        what a slice frees the next reuses (core.memory.reusing: its passes make fresh arrays of the mesh's
+        size; HC's iterations keep theirs, and gain nothing from it but a larger heap)."""
+        return reusing(self._steps(chunk)) if self.keep_sharp_edges else self._steps(chunk)
 
     def _steps(self, chunk):
         start = time.perf_counter()

@@ -142,3 +142,31 @@ def test_smoothing_runs_leave_the_defaults_and_the_same_result():
     assert np.array_equal(core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=True), first)
     core.smooth_point_cloud(noisy)
     assert memory._reused.depth == 0
+
+
+def test_keep_sharp_edges_and_clouds_reuse_memory_hcs_iterations_do_not(monkeypatch):
+    """Keep Sharp Edges' passes and a cloud's stages make fresh arrays of the mesh's size: their slices run
+    within reused_memory. HC's iterations keep their arrays: its runs leave glibc as it is."""
+    entered = []
+    real = memory.reused_memory
+
+    def counted():
+        entered.append(True)
+        return real()
+
+    monkeypatch.setattr(memory, "reused_memory", counted)
+    u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 12))
+    grid = np.arange(144).reshape(12, 12)
+    faces = np.r_[
+        np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:]], -1).reshape(-1, 3),
+        np.stack([grid[:-1, :-1], grid[1:, 1:], grid[1:, :-1]], -1).reshape(-1, 3),
+    ]
+    edges = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    noisy = np.c_[u.ravel(), v.ravel(), 0.01 * np.random.default_rng(1).normal(size=144)]
+    core.smooth_mesh(noisy, edges, faces=faces)
+    assert not entered
+    core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=True)
+    assert entered
+    entered.clear()
+    core.smooth_point_cloud(noisy)
+    assert entered
