@@ -9,16 +9,17 @@ step): Keep in Place on a million vertices spent 0.5-0.7 s of system time there 
 more than its own work. ``small_pages`` turns NumPy's request off for the arrays made within it.
 
 The other cost is the same first touch of arrays that were there a moment before. glibc's malloc gives
-each block of 128 KiB or more its own mapping and hands it back when it is freed (and trims its heap as
-soon as the top is free): a run that makes and frees arrays of the mesh's size pass after pass gets fresh
-pages from the kernel for each, and the kernel zeroes (and, on huge pages, compacts) them on every first
-touch. Keep Sharp Edges on a million vertices spent 3.3-3.6 s of system time there, a point cloud of a
-million points 9-10 s. ``reused_memory`` keeps what is freed within it in the heap for the next arrays
-(no block gets its own mapping, the heap is not trimmed); when it ends, glibc maps and trims again, from
-the thresholds its own adjustment reaches in a process that frees big arrays (setting them ends that
-adjustment: from the defaults, every array over 128 KiB would be mapped afresh). ``reusing`` runs each
-slice of a run's generator within it and hands the free memory back to the kernel (``malloc_trim``) when
-the run ends. Elsewhere (another C library, or a malloc that replaces glibc's) they do nothing.
+each big block its own mapping (from 128 KiB, a threshold it raises up to 32 MiB as such blocks are freed)
+and hands it back when it is freed (and trims its heap as soon as enough of its top is free): a run that
+makes and frees arrays of the mesh's size pass after pass gets fresh pages from the kernel for each, and
+the kernel zeroes (and, on huge pages, compacts) them on every first touch. Keep Sharp Edges on a million
+vertices spent 3.3-3.6 s of system time there, a point cloud of a million points 9-10 s. ``reused_memory``
+keeps what is freed within it in the heap for the next arrays (no block gets its own mapping, the heap is
+not trimmed); when it ends, glibc maps and trims again, from the thresholds its own adjustment reaches in
+a process that frees big arrays (setting them ends that adjustment: from the defaults, every array over
+128 KiB would be mapped afresh). ``reusing`` runs each slice of a run's generator within it and hands the
+free memory back to the kernel (``malloc_trim``) when the run ends. Elsewhere (another C library, or a
+malloc that replaces glibc's) they do nothing.
 """
 
 import contextlib
@@ -116,7 +117,14 @@ def roomy_heap():
     ones. Where the environment fixed the thresholds at glibc's defaults (Dask's nanny starts its workers
     with ``MALLOC_TRIM_THRESHOLD_``, which pins mapping at 128 KiB) every such array is mapped and faulted
     in anew (a batch took 1.6 times as long, most of it system time: bench/README.md, "batch"). Returns
-    whether they were set (glibc only; elsewhere nothing changes)."""
+    whether they were set (glibc only; elsewhere nothing changes).
+
+    Examples
+    --------
+    >>> from core.memory import roomy_heap
+    >>> roomy_heap() in (True, False)
+    True
+    """
     if _LIBC is None:
         return False
     return bool(_LIBC.mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)) and bool(
@@ -146,7 +154,13 @@ def reused_memory():
 def hand_back():
     """The heap's free memory back to the kernel (glibc's malloc_trim), at the end of a run. (Not between a
     point cloud's stages: their arrays differ, yet its EMST, graph and mesh reuse each other's memory: 2-3 s
-    of system time at a million points, for a peak 5-8 % higher.)"""
+    of system time at a million points, for a peak 5-8 % higher.)
+
+    Examples
+    --------
+    >>> from core.memory import hand_back
+    >>> hand_back()
+    """
     if _LIBC is not None:
         _LIBC.malloc_trim(0)
 
