@@ -6,6 +6,7 @@ import threading
 
 import numpy as np
 import pytest
+import small_meshes
 
 import core
 from core import memory
@@ -124,20 +125,19 @@ def test_a_run_closed_early_or_failing_leaves_the_defaults():
     assert memory._reused.depth == 0
 
 
+def _noisy_grid(cells, seed):
+    """(positions, edges, faces) of a flat triangulated grid with noise along z."""
+    positions, faces = small_meshes.grid(cells, cells)
+    positions[:, 2] = 0.05 * np.random.default_rng(seed).normal(size=len(positions))
+    return positions, small_meshes.edges_of(faces), faces
+
+
 def test_smoothing_runs_leave_the_defaults_and_the_same_result():
-    rng = np.random.default_rng(0)
-    u, v = np.meshgrid(np.linspace(0, 1, 30), np.linspace(0, 1, 30))
-    grid = np.arange(900).reshape(30, 30)
-    faces = np.r_[
-        np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:]], -1).reshape(-1, 3),
-        np.stack([grid[:-1, :-1], grid[1:, 1:], grid[1:, :-1]], -1).reshape(-1, 3),
-    ]
-    edges = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
-    noisy = np.c_[u.ravel(), v.ravel(), 0.01 * rng.normal(size=900)]
+    noisy, edges, faces = _noisy_grid(30, 0)
     first = core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=True)
     assert memory._reused.depth == 0
     with pytest.raises(core.Cancelled):
-        core.smooth_mesh(noisy, edges, faces=faces, progress=lambda fraction: False)
+        core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=True, progress=lambda fraction: False)
     assert memory._reused.depth == 0
     assert np.array_equal(core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=True), first)
     core.smooth_point_cloud(noisy)
@@ -155,14 +155,7 @@ def test_keep_sharp_edges_and_clouds_reuse_memory_hcs_iterations_do_not(monkeypa
         return real()
 
     monkeypatch.setattr(memory, "reused_memory", counted)
-    u, v = np.meshgrid(np.linspace(0, 1, 12), np.linspace(0, 1, 12))
-    grid = np.arange(144).reshape(12, 12)
-    faces = np.r_[
-        np.stack([grid[:-1, :-1], grid[:-1, 1:], grid[1:, 1:]], -1).reshape(-1, 3),
-        np.stack([grid[:-1, :-1], grid[1:, 1:], grid[1:, :-1]], -1).reshape(-1, 3),
-    ]
-    edges = np.unique(np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
-    noisy = np.c_[u.ravel(), v.ravel(), 0.01 * np.random.default_rng(1).normal(size=144)]
+    noisy, edges, faces = _noisy_grid(12, 1)
     core.smooth_mesh(noisy, edges, faces=faces)
     assert not entered
     core.smooth_mesh(noisy, edges, faces=faces, keep_sharp_edges=True)
