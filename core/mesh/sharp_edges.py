@@ -880,7 +880,7 @@ class SharpSmoothing:
             moved = start + self.share[:, None] * (moved - start)
         moved[self.still] = start[self.still]
         around = _unit(self.rings.ring_sums(np.ascontiguousarray(normals.T)).T)
-        unfolding = _unfold(moved, start, before, self.triangles, normals, around)
+        unfolding = _unfold(moved, start, before, self.triangles, normals, around, corners=self.rings.corners)
         yield from _counted(unfolding, slices)
         if np.any(self.max_deviation):
             project_rows_within(moved, self.original, self.max_deviation)
@@ -923,15 +923,15 @@ def _counted(generator, slices):
         yield next(slices)
 
 
-def _unfold(points, start, before, triangles, normals, around, rounds=FOLD_ROUNDS):
+def _unfold(points, start, before, triangles, normals, around, rounds=FOLD_ROUNDS, corners=None):
     """Halve, in place, the step's move of the corners of every triangle it turned over (its normal now more
     than 90° from its filtered normal, or from the mean ``around`` of its ring's, and its normal ``before``
     the step not), ``rounds`` times at most: the fitting moves along the faces' normals, and on curved parts
     those moves add up along the surface. A triangle already turned over before the step (noise folded it)
     keeps its corners' moves: the step is what unfolds it. A generator: yields after each round that leaves
-    rounds to go."""
+    rounds to go. ``corners``: the triangles a corner at a time (FaceRings.corners), if the caller has them."""
     folded = _turned(before, normals, around)
-    columns = np.ascontiguousarray(triangles.T)  # a corner at a time: 1-D gathers
+    columns = np.ascontiguousarray(triangles.T) if corners is None else corners  # 1-D gathers
     faces = None  # the triangles whose corners moved: all at first, then those of the halved corners
     turned = np.zeros(triangles.shape[0], dtype=bool)
     halved = np.zeros(points.shape[0], dtype=bool)
