@@ -14,6 +14,10 @@ Meshes: a noisy torus (``--mesh torus``, isotropic noise of ``--noise`` times th
 diagonal), or the pymeshlab wheel's bunny scan (closed, 28k vertices) subdivided at its edges'
 midpoints ``--subdivisions`` times (3: 1.8M vertices; the surface is the scan's) with the same noise.
 
+``--shuffled``: also the fixed run and the default on the same mesh numbered at random, as some scanners,
+decimators and converters number theirs (the pipeline then runs renumbered for cache locality,
+core.locality; the bunny's midpoints, numbered after its vertices, are scattered as they come).
+
 ``--error``: the RMS distance of every result to the clean surface in % of the diagonal (the torus's
 own; the bunny's along the clean vertex normals), with the Automatic Amount as it runs and with its
 work budget lifted (``work_budget=math.inf``), which is what the budget costs. ``--choice``: the
@@ -21,7 +25,7 @@ iterations GCV chooses on patches (big meshes) and on the whole mesh (``patch_fr
 without the work budget, and the time each choice takes.
 
     python bench/run.py default_cost                 # 5M vertices, 3 runs each
-    python bench/run.py default_cost --vertices 1M --repeats 5
+    python bench/run.py default_cost --vertices 1M --repeats 5 --shuffled
     python bench/run.py default_cost --vertices 5M --repeats 1 --error --choice
     python bench/run.py default_cost --mesh bunny --subdivisions 3 --repeats 1 --error --choice   # pymeshlab
 """
@@ -37,6 +41,7 @@ import numpy as np
 import core
 from bench import meshes
 from bench.common import Parameter, count, repeats
+from core import locality
 from core.mesh import amount as mesh_amount
 
 CHUNK_WORK = 5_000_000  # vertex-iterations a slice, as operators/mesh_smooth.py's MODAL_WORK
@@ -124,8 +129,18 @@ PARAMETERS = (
     repeats(3),
     Parameter("error", False, "also the error, with and without the budget"),
     Parameter("choice", False, "also GCV's choice on patches and on the whole mesh"),
+    Parameter("shuffled", False, "also the fixed run and the default on the mesh numbered at random"),
 )
-QUICK = {"vertices": "20k", "repeats": 1, "error": True, "choice": True}
+QUICK = {"vertices": "20k", "repeats": 1, "error": True, "choice": True, "shuffled": True}
+SHUFFLED = ", numbered at random"
+
+
+def shuffled(noisy, edges, faces):
+    """The mesh with its vertices numbered at random, and the order that puts a result back."""
+    order = np.random.default_rng(0).permutation(len(noisy))
+    number = np.empty_like(order)
+    number[order] = np.arange(order.size)
+    return (noisy[order], number[edges], number[faces]), number
 
 
 def run(args, out):
@@ -152,19 +167,25 @@ def run(args, out):
         "add-on default: weld, border curve": dict(ADDON),
         "default, sliding: Keep in Place off": {"keep_in_place": False},
     }
+    mesh, back = {label: (noisy, edges, faces) for label in runs}, {}
+    if args.shuffled:
+        scattered, number = shuffled(noisy, edges, faces)
+        for label in ("fixed: alpha 0.1, beta 0.6, 10 iterations", "default: Automatic Amount"):
+            runs[label + SHUFFLED], mesh[label + SHUFFLED], back[label + SHUFFLED] = runs[label], scattered, number
     figures = {label: [] for label in runs}
     for _ in range(args.repeats):
         for label, options in runs.items():  # alternating, so all see the same machine
-            figures[label].append(smoothed(noisy, edges, faces, options))
+            figures[label].append(smoothed(*mesh[label], options))
     peaks = {
-        label: peak_of(lambda options=options: smoothed(noisy, edges, faces, options))[0]
+        label: peak_of(lambda label=label, options=options: smoothed(*mesh[label], options))[0]
         for label, options in runs.items()
     }
     errors = {}
     if args.error:
         errors["noisy input"] = (None, noisy)
         for label, rows in figures.items():
-            errors[label] = (rows[-1][2], rows[-1][1])
+            result = rows[-1][1]
+            errors[label] = (rows[-1][2], result if label not in back else result[back[label]])
         _, result, report, _ = smoothed(noisy, edges, faces, ADDON, budget=math.inf)
         errors["add-on default, no work budget"] = (report, result)
     choices = {}
@@ -194,6 +215,14 @@ def run(args, out):
     sliding = statistics.median(row[0] for row in figures["default, sliding: Keep in Place off"])
     out()
     out(f"Keep in Place costs {kept - sliding:+.2f} s, {(kept - sliding) / kept:+.1%} of the default's run.")
+    own = "scattered" if locality.is_scattered(core.umbrella_operator(edges, len(noisy))) else "not scattered"
+    if args.shuffled:
+        label = "default: Automatic Amount" + SHUFFLED
+        random = statistics.median(row[0] for row in figures[label])
+        out(
+            f"Numbered at random, the default takes {random:.2f} s, {random / kept:.2f}x its time in the mesh's own "
+            f"numbering ({own}: core.locality)."
+        )
     if errors:
         out()
         out("RMS distance to the clean surface, % of the diagonal:")

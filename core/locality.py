@@ -8,7 +8,9 @@ bench/results/2026-11-23-core-speed.md, "Random vertex order").
 For those meshes the simultaneous smoothers work in reverse Cuthill-McKee order (SciPy's csgraph),
 which puts neighbours close together, and hand the result back in the caller's order. The
 simultaneous update gives the same positions in any order (up to the rounding of each neighbour
-sum); the sequential smoothers are defined by the vertex order and are never renumbered.
+sum); the sequential smoothers are defined by the vertex order and are never renumbered. The mesh
+pipeline (core.mesh.smooth) renumbers the whole mesh the same way before its first pass, so that the
+noise test, the choice, Keep in Place and the volume restore read neighbours close together too.
 """
 
 from dataclasses import dataclass
@@ -24,8 +26,40 @@ SAMPLES = 4_096
 
 @dataclass(frozen=True)
 class Renumbering:
-    order: np.ndarray  # vertex k of the renumbered mesh is vertex order[k] of the caller's
-    operator: object  # the umbrella operator in the new numbering
+    """Vertex k of the renumbered mesh is vertex ``order[k]`` of the caller's; ``operator`` is the umbrella
+    operator in the new numbering.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from core.locality import Renumbering
+    >>> renumbering = Renumbering(np.array([2, 0, 1]), None)
+    >>> renumbering.rows(np.array([10, 11, 12])).tolist()  # per-vertex values in the new numbering
+    [12, 10, 11]
+    >>> renumbering.triangles(np.array([[0, 1, 2]])).tolist()  # corners named by the new numbers
+    [[1, 2, 0]]
+    >>> renumbering.scatter(np.array([12, 10, 11])).tolist()  # back in the caller's numbering
+    [10, 11, 12]
+    """
+
+    order: np.ndarray
+    operator: object
+
+    def rows(self, values):
+        """Per-vertex ``values`` (rows; None stays None) in the new numbering."""
+        return None if values is None else values[self.order]
+
+    def triangles(self, triangles):
+        """(t, k) corner indices of the caller's numbering in the new one."""
+        number = np.empty(self.order.size, dtype=triangles.dtype)
+        number[self.order] = np.arange(self.order.size, dtype=triangles.dtype)
+        return number[triangles]
+
+    def scatter(self, values):
+        """Per-vertex ``values`` of the new numbering back in the caller's."""
+        back = np.empty_like(values)
+        back[self.order] = values
+        return back
 
 
 def median_gap(operator):

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .. import parallel
+from .. import locality, parallel
 from ..adjacency import Umbrella, umbrella_operator
 from ..convergence import ConvergenceWarning
 from ..geometry import fan_triangles, median_edge_length, project_rows_within
@@ -226,7 +226,7 @@ class MeshSmoother:
         self.iterations = check_iterations(self.iterations)
         self.tolerance = check_tolerance(tolerance)
         check_max_deviation(0.0 if self.max_deviation == AUTO else self.max_deviation, n)
-        self.welding = self.surface = None
+        self.welding = self.surface = self.renumbering = None
         self.kept = 0.0  # the chosen HC run's t = tr(S) / n (core.mesh.amount), where the Automatic Amount ran
         self.prepared = False  # the welding, the faces' surface and the border rule: the first slices of steps()
         self.result = None
@@ -244,9 +244,10 @@ class MeshSmoother:
         return bool(keep_in_place)
 
     def _prepare(self):
-        """Weld coincident vertices (core.mesh.welding: the result is scattered back), find what the faces
-        make (parts, closed ones, border edges: for the border rule and the volume restore) and apply the
-        border rule, yielding 0.0 between these passes."""
+        """Weld coincident vertices (core.mesh.welding: the result is scattered back), renumber a scattered
+        mesh (core.locality: the result is put back in the caller's order), find what the faces make (parts,
+        closed ones, border edges: for the border rule and the volume restore) and apply the border rule,
+        yielding 0.0 between these passes."""
         operator = self.operator
         surfaced = self.faces is not None and (self.border != "free" or self.automatic)
         if self.weld or surfaced:
@@ -259,6 +260,16 @@ class MeshSmoother:
                 if self.faces is not None:
                     self.faces = self.welding.triangles(self.faces)
             yield 0.0
+        if self.mode == "simultaneous" and (self.automatic or self.iterations > 0):
+            # A scattered numbering: every pass reads neighbours close by (core.locality).
+            self.renumbering = locality.renumbering(operator)
+            if self.renumbering is not None:
+                renumbering = self.renumbering
+                self.positions, operator = renumbering.rows(self.positions), renumbering.operator
+                self.fixed, self.influence = renumbering.rows(self.fixed), renumbering.rows(self.influence)
+                if self.faces is not None:
+                    self.faces = renumbering.triangles(self.faces)
+                yield 0.0
         if surfaced:
             self.surface = yield from as_fraction(topology.surface_steps(self.faces, operator.n_vertices), 0.0)
             yield 0.0
@@ -275,6 +286,8 @@ class MeshSmoother:
         if not self.prepared:
             to_end(self._prepare())
         still = self.fixed | self.operator.isolated
+        if self.renumbering is not None:
+            still = self.renumbering.scatter(still)
         return still if self.welding is None else still[self.welding.label]
 
     def _smoothing(self, alpha, beta, iterations, max_deviation, fixed=None):
@@ -412,6 +425,8 @@ class MeshSmoother:
         if held:
             back = parts[noise.part_of_vertex]
             result[back] = self.positions[back]
+        if self.renumbering is not None:
+            result = self.renumbering.scatter(result)
         self.result = result if self.welding is None else self.welding.scatter(result)
         return offset, held
 

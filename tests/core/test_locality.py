@@ -5,6 +5,7 @@ import pytest
 
 import core
 from core import locality
+from core.slices import to_end
 
 
 def grid_mesh(side):
@@ -110,3 +111,82 @@ def test_sequential_mode_is_never_renumbered(small_scattered):
     operator = core.umbrella_operator(edges, len(positions))
     core.smooth(positions, None, operator=operator, method="hc", alpha=0.1, beta=0.6, iterations=3, mode="sequential")
     assert operator._renumbering is None
+
+
+def grid_triangles(side):
+    """The triangles of ``grid_mesh(side)`` (its diagonals run from (x, y) to (x + 1, y + 1))."""
+    index = np.arange(side * side).reshape(side, side)
+    low, right, up, across = index[:-1, :-1], index[:-1, 1:], index[1:, :-1], index[1:, 1:]
+    return np.concatenate([np.stack([low, right, across], -1), np.stack([low, across, up], -1)]).reshape(-1, 3)
+
+
+@pytest.fixture
+def scattered_surface(monkeypatch):
+    """A shuffled 40 x 40 grid with its triangles, scattered by thresholds its renumbering is not."""
+    monkeypatch.setattr(locality, "MIN_VERTICES", 0)
+    monkeypatch.setattr(locality, "SCATTERED_GAP", 100)  # shuffled: ~460; renumbered: ~40
+    positions, edges = grid_mesh(40)
+    shuffled, shuffled_edges, order = shuffle(positions, edges, seed=5)
+    number = np.empty_like(order)
+    number[order] = np.arange(order.size)
+    return shuffled, shuffled_edges, number[grid_triangles(40)], order
+
+
+def test_the_mesh_pipeline_runs_a_scattered_mesh_renumbered(scattered_surface):
+    """Every pass of the pipeline (noise test, choice, Keep in Place, volume, held parts) runs on the mesh
+    renumbered once, and the result, and what it held still, come back in the caller's numbering."""
+    positions, edges, faces, _ = scattered_surface
+    fixed = np.zeros(len(positions), dtype=bool)
+    fixed[::11] = True
+    influence = np.linspace(0.2, 1.0, len(positions))
+    run = core.MeshSmoother(positions, edges, faces=faces, fixed=fixed, influence=influence)
+    to_end(run.steps())
+    renumbering = run.renumbering
+    assert renumbering is not None and not locality.is_scattered(renumbering.operator)
+    order = renumbering.order
+    alike = core.smooth_mesh(
+        positions[order],
+        renumbering.triangles(edges),
+        faces=renumbering.triangles(faces),
+        fixed=fixed[order],
+        influence=influence[order],
+    )
+    assert run.report.iterations > 0 and np.array_equal(run.result, renumbering.scatter(alike))
+    assert np.array_equal(run.still(), fixed)
+    assert np.array_equal(run.result[fixed], positions[fixed])
+
+
+def test_given_numbers_on_a_scattered_mesh_are_the_paper_s_run_bit_for_bit(scattered_surface):
+    positions, edges, faces, _ = scattered_surface
+    numbers = dict(alpha=0.1, beta=0.6, iterations=8)
+    got = core.smooth_mesh(positions, edges, faces=faces, **numbers)
+    assert np.array_equal(got, core.hc_smooth(positions, edges, **numbers))
+
+
+def test_a_welded_scattered_mesh_comes_back_whole(scattered_surface):
+    """Welding, then renumbering: a seam's copies move alike, and every vertex lands where the same run on
+    the grid's own numbering (neither renumbered) puts it, to the rounding of the neighbour sums."""
+    positions, edges, faces, order = scattered_surface
+    seam = np.flatnonzero(positions[:, 0] == 20.0)  # a column of the grid, split in two
+    copies = np.arange(len(positions), len(positions) + seam.size)
+    right = np.isin(faces, seam) & (positions[faces][..., 0] > 20.0).any(axis=1, keepdims=True)
+    split = faces.copy()
+    split[right] = copies[np.searchsorted(seam, faces[right])]
+    points = np.concatenate([positions, positions[seam]])
+    numbers = dict(alpha=0.1, beta=0.6, iterations=8, weld=True)
+
+    def run(points, triangles):
+        pairs = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+        smoother = core.MeshSmoother(points, pairs, faces=triangles, **numbers)
+        to_end(smoother.steps())
+        return smoother
+
+    scattered = run(points, split)
+    assert scattered.welding is not None and scattered.renumbering is not None
+    assert np.array_equal(scattered.result[seam], scattered.result[copies])
+    place = np.concatenate([order, copies])  # the grid's number of each vertex
+    in_grid = np.empty_like(points)
+    in_grid[place] = points
+    ordered = run(in_grid, place[split])
+    assert ordered.welding is not None and ordered.renumbering is None
+    np.testing.assert_allclose(scattered.result, ordered.result[place], rtol=0, atol=1e-12)
