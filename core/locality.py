@@ -22,6 +22,7 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 MIN_VERTICES = 200_000  # below this the positions stay in cache whatever the order
 SCATTERED_GAP = 32_768  # index distance (rows) beyond which a neighbour is typically a cache miss
 SAMPLES = 4_096
+_BUCKETS = 2**16  # the triangles' order: their first corners to this many ranks (uint16, NumPy's radix sort)
 
 
 @dataclass(frozen=True)
@@ -36,8 +37,8 @@ class Renumbering:
     >>> renumbering = Renumbering(np.array([2, 0, 1]), None)
     >>> renumbering.rows(np.array([10, 11, 12])).tolist()  # per-vertex values in the new numbering
     [12, 10, 11]
-    >>> renumbering.triangles(np.array([[0, 1, 2]])).tolist()  # corners named by the new numbers
-    [[1, 2, 0]]
+    >>> renumbering.triangles(np.array([[0, 1, 2], [2, 1, 0]])).tolist()  # new numbers, rows by first corner
+    [[0, 2, 1], [1, 2, 0]]
     >>> renumbering.scatter(np.array([12, 10, 11])).tolist()  # back in the caller's numbering
     [10, 11, 12]
     """
@@ -50,10 +51,17 @@ class Renumbering:
         return None if values is None else values[self.order]
 
     def triangles(self, triangles):
-        """(t, k) corner indices of the caller's numbering in the new one."""
-        number = np.empty(self.order.size, dtype=triangles.dtype)
-        number[self.order] = np.arange(self.order.size, dtype=triangles.dtype)
-        return number[triangles]
+        """(t, k) corner indices of the caller's numbering in the new one, the rows in the order of their
+        first corners (to a _BUCKETS-th of the vertices): a block of rows then reads and sums at vertices
+        close together, where rows in the caller's order (a subdivision's, say) reach all over the mesh."""
+        n = self.order.size
+        number = np.empty(n, dtype=triangles.dtype)
+        number[self.order] = np.arange(n, dtype=triangles.dtype)
+        renumbered = number[triangles]
+        if renumbered.size == 0:
+            return renumbered
+        bucket = (renumbered[:, 0].astype(np.int64) * _BUCKETS // n).astype(np.uint16)
+        return np.take(renumbered, np.argsort(bucket, kind="stable"), axis=0)  # a radix sort: one pass
 
     def scatter(self, values):
         """Per-vertex ``values`` of the new numbering back in the caller's."""
