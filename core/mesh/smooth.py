@@ -199,6 +199,10 @@ class MeshSmoother:
             self.beta = DEFAULT_BETA if beta == AUTO else beta
             self.iterations = DEFAULT_ITERATIONS if iterations == AUTO else iterations
         self.max_deviation = _auto_or(max_deviation, "max_deviation")
+        if isinstance(self.max_deviation, np.ndarray):
+            raise ValueError(
+                "max_deviation must be one distance >= 0 (0 for no limit) or 'auto' (core.smooth takes one per vertex)"
+            )
         self.mode = mode
         self.tolerance = tolerance
         if operator is None:
@@ -267,8 +271,9 @@ class MeshSmoother:
                 renumbering = self.renumbering
                 self.positions, operator = renumbering.rows(self.positions), renumbering.operator
                 self.fixed, self.influence = renumbering.rows(self.fixed), renumbering.rows(self.influence)
-                if self.faces is not None:
-                    self.faces = renumbering.triangles(self.faces)
+                if self.faces is not None:  # a plain run with numbers given reads no faces
+                    reads = self.automatic or self.in_place or self.keep_sharp_edges or self.border != "free"
+                    self.faces = renumbering.triangles(self.faces) if reads else None
                 yield 0.0
         if surfaced:
             self.surface = yield from as_fraction(topology.surface_steps(self.faces, operator.n_vertices), 0.0)

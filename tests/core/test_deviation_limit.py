@@ -76,6 +76,13 @@ def test_bad_limits_are_refused(bad):
         core.Smoothing(POSITIONS, EDGES, alpha=0.1, beta=0.6, iterations=1, max_deviation=bad)
 
 
+@pytest.mark.parametrize("bad", [-1.0, "far", True, np.full(len(POSITIONS), 0.1), [0.1]])
+def test_the_mesh_pipeline_refuses_bad_limits_with_a_clear_message(bad):
+    """One distance or "auto": a limit per vertex (core.Smoothing's) is refused in words, not by NumPy."""
+    with pytest.raises(ValueError, match="^max_deviation must be"):
+        core.smooth_mesh(POSITIONS, EDGES, iterations=2, max_deviation=bad)
+
+
 def test_the_automatic_amount_limits_to_a_multiple_of_its_noise_and_explicit_numbers_do_not():
     noisy = sm.noisy(SPHERE[0], sigma=0.15, seed=5)  # noise found: above core.mesh.noise's threshold
     result, report = core.smooth_mesh(noisy, EDGES, return_report=True)
