@@ -41,7 +41,9 @@ noise of 0.1 % of its size, which one iteration rounds 1.1-1.3 times farther fro
 bound elsewhere. The sigma these rules read is core.mesh.noise's floor estimate: a box of a few cuts,
 whose creases reach most of its vertices, inflates the median's estimate to a quarter of an edge (20 times
 the noise), the floor's to a few times the noise; a box of nine cuts, whose creases reach a fifth of them,
-both to 1.3-1.7 times it, the floor's clipped estimate to 1.0-1.3 times.
+both to 1.3-1.7 times it, the floor's clipped estimate to 1.0-1.3 times. The estimate reads a sample of a
+big part's vertices; before a part goes back on it, the caller reads it again on all of them
+(core.mesh.noise.read_on_every_vertex): a sample's low reading holds no noisy part.
 
 Keep Sharp Edges, which fits planes, takes the noise away whole: what it moved a vertex along its normal is
 that vertex's noise, and the robust scale of those moves (median |r_i| / 0.6745) reads the noise where the

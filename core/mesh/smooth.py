@@ -51,7 +51,7 @@ from . import collapse, sharp_amount, sharp_edges, topology, volume, welding
 from .amount import PATCH_FROM, AmountChooser, MeshAmount
 from .borders import BORDERS, apply_border, border_edges
 from .in_place import Outline, curve_labels, inward_directions, keep_in_place_steps, outline_curves
-from .noise import noise_steps
+from .noise import noise_steps, read_on_every_vertex
 from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
 
 AUTO = "auto"
@@ -484,9 +484,20 @@ class MeshSmoother:
                 # the trace's bound on light-noise and quiet parts (core.mesh.collapse), where the estimate holds
                 kept = np.where(noise.light | ~noise.noisy, self.kept, 0.0)
             sigma = noise.sigma if noise.floor is None else noise.floor
-            parts |= collapse.moved_beyond_noise(
-                self.positions, result, self.faces, noise.part_of_vertex, sigma, asked, kept, residual == "move"
-            )
+
+            def moved(sigma, asked):
+                return collapse.moved_beyond_noise(
+                    self.positions, result, self.faces, noise.part_of_vertex, sigma, asked, kept, residual == "move"
+                )
+
+            beyond = moved(sigma, asked)
+            again = beyond & noise.sampled  # an estimate read on a share of the part: all of it asked first
+            if again.any():
+                yield progress
+                beyond &= ~again | moved(
+                    read_on_every_vertex(noise, self.positions, self.surface_operator, again), again
+                )
+            parts |= beyond
         return parts
 
     def _sharp_steps(self, chunk, start):
