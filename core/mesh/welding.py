@@ -12,10 +12,12 @@ order of their first copies), with which the mesh's operator, faces, fixed mask 
 mapped onto the welded vertices, and the smoothed welded positions scattered back. The caller's mesh
 keeps its vertices: every copy gets its welded vertex's move.
 
-Finding them costs one sort of integer cell keys: points are put into cells of CELL_EDGES x the median
-edge length; copies in a cell where every point is equal are welded at once, and only the few points
-that share a cell with a different point, or lie within the tolerance of a cell's side, go through a
-k-d tree (scipy.spatial.cKDTree.query_pairs) and a union of the pairs (connected components).
+Finding them costs a pass of a hash table and one sort: points are put into cells of CELL_EDGES x the
+median edge length, and only those whose cell key shares a slot of the table with another's (or that lie
+within the tolerance of a cell's side) are sorted by key; copies in a cell where every point is equal
+are welded at once, and only the few points that share a cell with a different point, or lie within the
+tolerance of a cell's side, go through a k-d tree (scipy.spatial.cKDTree.query_pairs) and a union of the
+pairs (connected components).
 
 Examples
 --------
@@ -47,6 +49,8 @@ TOLERANCE = 1e-6  # vertices closer than this times the median edge length are o
 CELL_EDGES = 1 / 8  # cell side in median edge lengths: distinct vertices rarely share a cell
 _FINEST_CELL = 2.0**-40  # cell side at least this times the bounding-box diagonal (keys fit in int64)
 _PACKED_BITS = 21  # cell coordinates below 2**21 per axis are packed into a key exactly
+_SLOT_BITS = 23  # the hash table that screens the keys: 8M slots at most (64 MB of counts)
+_MIX = 0x9E3779B97F4A7C15  # Fibonacci hashing: the key times 2**64 / golden ratio, its top bits the slot
 _ROWS = BLOCK  # vertices per block of the cell keys (float64 and int64 temporaries: a few MB a thread)
 
 
@@ -161,6 +165,30 @@ def _coincident(points, edge, tolerance):
 
     parallel.run_chunks(keys, n, _ROWS)
     yield
+    # Only vertices that share a slot of a hash table of the cell keys with another vertex, or lie within
+    # the radius of their cell's side, may coincide: the sort takes those alone (on most meshes a few
+    # slots are shared by chance, and nothing coincides).
+    subset = _shared_slots(key)
+    if radius > 0.0:
+        subset |= near
+    subset = np.flatnonzero(subset)
+    if subset.size < 2:
+        return None
+    group = _groups(key[subset], points[subset], near[subset] if radius > 0.0 else None, radius)
+    if group is None:
+        return None
+    labels = np.empty(n, dtype=np.int64)
+    labels[subset] = group
+    alone = np.ones(n, dtype=bool)
+    alone[subset] = False
+    labels[alone] = int(group.max()) + 1 + np.arange(n - subset.size)
+    return labels
+
+
+def _groups(key, points, near, radius):
+    """Per point (``key``: its cell's, ``near``: whether it lies within ``radius`` of its cell's side, or
+    None) a label shared by the coincident ones, or None when every point stands alone."""
+    n = points.shape[0]
     order = np.argsort(key, kind="stable")
     sorted_key = key[order]
     key = None
@@ -177,9 +205,8 @@ def _coincident(points, edge, tolerance):
     mixed_run[run[1:][same_cell & ~equal]] = True
     candidate = mixed_run[run]
     del run, same_cell
-    if radius > 0.0:
+    if near is not None:
         candidate |= near[order]
-    near = None
     candidate = np.flatnonzero(candidate)
     pairs = np.empty((0, 2), dtype=np.int64)
     if candidate.size > 1:
@@ -197,6 +224,16 @@ def _coincident(points, edge, tolerance):
     labels = np.empty(n, dtype=np.int64)
     labels[order] = group
     return labels
+
+
+def _shared_slots(key):
+    """(n,) bool: the keys whose slot of a hash table (about four slots a key, 2**_SLOT_BITS at most) holds
+    another key too: every key that occurs twice, and a few that meet by chance."""
+    bits = min(_SLOT_BITS, max(1, int(np.ceil(np.log2(4 * key.size)))))
+    with np.errstate(over="ignore"):
+        slot = (key.view(np.uint64) * np.uint64(_MIX)) >> np.uint64(64 - bits)
+    slot = slot.astype(np.intp)
+    return np.bincount(slot, minlength=1 << bits)[slot] > 1
 
 
 def _cell_keys(cells, packed):

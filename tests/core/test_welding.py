@@ -181,11 +181,14 @@ def same_partition(a, b):
     return len(pairs) == len(set(a.tolist())) == len(set(b.tolist()))
 
 
+@pytest.mark.parametrize("slot_bits", [welding._SLOT_BITS, 1], ids=["screened", "every point sorted"])
 @pytest.mark.parametrize("spread", [1.0, 1e9], ids=["packed keys", "hashed keys"])
 @pytest.mark.parametrize("seed", range(4))
-def test_coincident_vertices_are_those_within_the_radius(spread, seed):
+def test_coincident_vertices_are_those_within_the_radius(monkeypatch, spread, seed, slot_bits):
     """Planted copies at 0, 0.5 and 0.99 of the radius (joined) and 1.5 and 3 radii (not), many of them
-    across the sides of the cells the search sorts into; a brute-force union of all close pairs agrees."""
+    across the sides of the cells the search sorts into; a brute-force union of all close pairs agrees,
+    whether the hash table screens most points out of the sort or (two slots) sorts them all."""
+    monkeypatch.setattr(welding, "_SLOT_BITS", slot_bits)
     rng = np.random.default_rng(seed)
     edge, tolerance = 0.01, 1e-3
     radius = edge * tolerance
