@@ -132,27 +132,36 @@ def scattered_surface(monkeypatch):
     return shuffled, shuffled_edges, number[grid_triangles(40)], order
 
 
-def test_the_mesh_pipeline_runs_a_scattered_mesh_renumbered(scattered_surface):
-    """Every pass of the pipeline (noise test, choice, Keep in Place, volume, held parts) runs on the mesh
-    renumbered once, and the result, and what it held still, come back in the caller's numbering."""
+@pytest.mark.parametrize(
+    "options",
+    [{}, {"border": "curve"}, {"border": "fixed"}, {"keep_sharp_edges": True}],
+    ids=["default", "border curve", "border fixed", "keep sharp edges"],
+)
+def test_the_mesh_pipeline_runs_a_scattered_mesh_renumbered(scattered_surface, options):
+    """Every pass of the pipeline (noise test, choice, border rule, Keep in Place or Keep Sharp Edges, volume,
+    held parts) runs on the mesh renumbered once, and the result, and what it held still, come back in the
+    caller's numbering: the run on the renumbered inputs, scattered back, bit for bit."""
     positions, edges, faces, _ = scattered_surface
     fixed = np.zeros(len(positions), dtype=bool)
     fixed[::11] = True
     influence = np.linspace(0.2, 1.0, len(positions))
-    run = core.MeshSmoother(positions, edges, faces=faces, fixed=fixed, influence=influence)
+    run = core.MeshSmoother(positions, edges, faces=faces, fixed=fixed, influence=influence, **options)
     to_end(run.steps())
     renumbering = run.renumbering
     assert renumbering is not None and not locality.is_scattered(renumbering.operator)
     order = renumbering.order
-    alike = core.smooth_mesh(
+    alike = core.MeshSmoother(
         positions[order],
         renumbering.triangles(edges),
         faces=renumbering.triangles(faces),
         fixed=fixed[order],
         influence=influence[order],
+        **options,
     )
-    assert run.report.iterations > 0 and np.array_equal(run.result, renumbering.scatter(alike))
-    assert np.array_equal(run.still(), fixed)
+    to_end(alike.steps())
+    assert alike.renumbering is None and run.report.iterations > 0
+    assert np.array_equal(run.result, renumbering.scatter(alike.result))
+    assert np.array_equal(run.still(), renumbering.scatter(alike.still())) and run.still()[fixed].all()
     assert np.array_equal(run.result[fixed], positions[fixed])
 
 
