@@ -8,8 +8,9 @@ one broadcast number (no array), so the labels are all it allocates. Where every
 parts. A directed pattern (core.mesh.borders' curves) has strong components within its parts; the edges
 between them are collected block by block and the parts found on those few (the condensation).
 
-A pattern one depth-first walk from vertex 0 covers is one part, the usual scan: that walk reads each
-entry once, where the strong components take about four times as long.
+A pattern one depth-first walk from vertex 0 covers is one part, the usual scan: that walk costs less
+than the strong components (a 1M-vertex torus: 5 ms against 24 ms in its own numbering, 0.27 s against
+0.39 s numbered at random).
 
 Parts are numbered in the order of their lowest vertex, as ``connected_components(directed=False)``
 numbers them.
@@ -41,7 +42,7 @@ def parts(indptr, indices, n, cyclic=True):
     if n == 0:
         return 0, np.zeros(0, dtype=np.int32)
     graph = _graph(indptr, indices, n)
-    # One part, the usual scan, is seen in one walk from vertex 0: a fraction of the strong components' cost.
+    # One part, the usual scan, is seen in one walk from vertex 0 (see above).
     if csgraph.depth_first_order(graph, 0, directed=True, return_predecessors=False).size == n:
         return 1, np.zeros(n, dtype=np.int32)
     count, labels = csgraph.connected_components(graph, directed=True, connection="strong")

@@ -168,10 +168,11 @@ def _coincident(points, edge, tolerance):
     # Only vertices that share a slot of a hash table of the cell keys with another vertex, or lie within
     # the radius of their cell's side, may coincide: the sort takes those alone (on most meshes a few
     # slots are shared by chance, and nothing coincides).
-    subset = _shared_slots(key)
+    shared = _shared_slots(key)
     if radius > 0.0:
-        subset |= near
-    subset = np.flatnonzero(subset)
+        shared |= near
+    subset = np.flatnonzero(shared)
+    del shared
     if subset.size < 2:
         return None
     group = _groups(key[subset], points[subset], near[subset] if radius > 0.0 else None, radius)
