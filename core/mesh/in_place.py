@@ -17,8 +17,9 @@ An open border's vertex has its surface on one side only: its slide is the pull 
 shrinks outlines and holes. Kept in place it does not slide; where keeping folds the layout (noise along
 the surface larger than the edges) and its corners take their slide back, an outline vertex (on exactly
 two border edges) takes back only the move across its border curve that smoothing the border as a curve
-makes (the same smoother on the border edges alone, core.mesh.borders' ``"curve"`` rows): the outline loses
-its jaggies there and keeps its place and size. Where nothing folds, an outline keeps its jaggies across
+makes (the same smoother on the border edges alone, core.mesh.borders' ``"curve"`` rows), never longer than
+the smoother's whole move of that vertex: the outline loses its jaggies there and keeps its place, size and
+shape. Where nothing folds, an outline keeps its jaggies across
 the curve: a scan's outline is ragged in its own right, and smoothing it as a curve would take that away.
 
 Where the input's own layout on the surface is folded (noise along the surface larger than the edges),
@@ -163,10 +164,13 @@ class Outline:
     def across(self, start, result, normals):
         """``result`` (as float64) with each outline vertex at its start plus its move in ``result`` along
         its normal (``normals``: (k, 3), one per outline vertex) plus its curve move across the curve within
-        the surface (along n x t, t the curve's direction there), less that move's median over its curve:
-        the slide an outline vertex takes back where keeping folds the layout. Smoothing a curve shrinks it
-        (a hole most); noise moves it across by nothing in the middle, so a curve keeps its place and its
-        size (the median: the few corners a smoothing rounds off do not move the rest)."""
+        the surface (along n x t, t the curve's direction there), less that move's median over its curve,
+        and at most as long as the vertex's whole move in ``result``: the slide an outline vertex takes back
+        where keeping folds the layout. Smoothing a curve shrinks it (a hole most); noise moves it across by
+        nothing in the middle, so a curve keeps its place and its size (the median: the few corners a
+        smoothing rounds off do not move the rest). On a ragged outline (a range scan's cut, a coarse scan's
+        rim) the curve smoothing rounds the jags off by more than an edge where the smoother moved the
+        vertex by the noise: the bound keeps that shape."""
         v, n = self.vertices, normals
         side = np.cross(n, self.curve_at(self.after) - self.curve_at(self.before))
         side *= np.where(np.einsum("ij,ij->i", side, self.inward) < 0, -1.0, 1.0)[:, None]  # into the surface
@@ -175,8 +179,11 @@ class Outline:
         origin = start[v].astype(np.float64)
         inwards = np.einsum("ij,ij->i", self.curve_at(v) - origin, side)
         inwards -= _group_medians(inwards, self.loop)[self.loop]
+        move = result[v] - origin
+        reach = np.sqrt(np.einsum("ij,ij->i", move, move))
+        np.clip(inwards, -reach, reach, out=inwards)
         target = result.astype(np.float64)
-        target[v] = origin + _along(result[v] - origin, n) + inwards[:, None] * side
+        target[v] = origin + _along(move, n) + inwards[:, None] * side
         return target
 
 

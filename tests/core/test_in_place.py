@@ -11,7 +11,14 @@ from bench.primitives import grid, ico_sphere
 from core import parallel
 from core.geometry import vertex_normals
 from core.mesh.borders import border_edges
-from core.mesh.in_place import keep_in_place, keep_in_place_steps, outline_curves
+from core.mesh.in_place import (
+    Outline,
+    curve_labels,
+    inward_directions,
+    keep_in_place,
+    keep_in_place_steps,
+    outline_curves,
+)
 
 
 def _noisy_along_normals(part, sigma, seed=0):
@@ -210,6 +217,45 @@ def test_outline_is_smoothed_as_a_curve_where_noise_folds_the_layout():
     sliding = core.smooth_mesh(noisy, part.edges, faces=triangles, weld=True, keep_in_place=False)
     assert abs(inward(kept).mean()) < 0.1 * sigma < sigma < inward(sliding).mean()
     assert np.sqrt(np.mean(inward(kept) ** 2)) < 0.5 * np.sqrt(np.mean(inward(noisy) ** 2))
+
+
+def test_an_outline_vertex_takes_back_no_more_across_its_curve_than_the_smoother_moved_it():
+    """A ragged outline (a jag of the grid's rim pulled out by two edges): smoothing the rim as a curve
+    rounds the jag off by about that much, where the smoother moved the vertex by the noise alone. What the
+    jag's vertex takes back across its curve (where keeping folds) is at most its whole move; the other
+    outline vertices, whose curve moves are within their moves, keep theirs."""
+    part = grid(6)
+    positions = part.positions.copy()
+    triangles = part.triangles()
+    n = len(positions)
+    edges = border_edges(triangles, n)
+    vertices, before, after = outline_curves(edges, n)
+    jag = vertices[np.argmin(np.abs(positions[vertices, 0] - 1.0) + np.abs(positions[vertices, 1]))]  # mid right side
+    positions[jag, 0] += 2.0 * (2.0 / 6)  # two edges out
+    border = np.unique(edges)
+    curve = positions[border].copy()
+    curve[np.searchsorted(border, jag), 0] -= 2.0 * (2.0 / 6)  # the curve smoothing rounds the jag off
+    operator = core.umbrella_operator(part.edges, n)
+    outline = Outline(
+        vertices,
+        before,
+        after,
+        inward_directions(positions, operator, vertices),
+        curve_labels(edges, vertices),
+        border,
+        curve,
+    )
+    move = np.tile([0.01, 0.02, 0.05], (n, 1))  # the smoother's move: noise along z, a little slide
+    result = positions + move
+    normals = np.tile([0.0, 0.0, 1.0], (vertices.size, 1))
+    target = outline.across(positions, result, normals)
+    across = np.linalg.norm((target - positions)[vertices, :2], axis=1)  # the in-plane part: across the curve
+    reach = np.linalg.norm(move[vertices], axis=1)
+    assert np.all(across <= reach + 1e-12)
+    assert across[vertices == jag][0] == pytest.approx(reach[0])  # rounded back by all it may
+    others = vertices != jag
+    assert np.allclose(across[others], 0.0)  # the rest of the rim's curve stayed: nothing to take back
+    assert np.allclose((target - positions)[vertices, 2], 0.05)  # the move along the normal stays whole
 
 
 def test_outline_curves_lists_each_border_vertex_between_its_two_neighbours():
