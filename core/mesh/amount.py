@@ -363,9 +363,10 @@ class AmountChooser:
         most = most_iterations(self.operator.n_vertices, self.work_budget)
         use_normals, probe_count = ground.use_normals, ground.probe_count
         owner, neighbour = neighbours(rows, operator) if use_normals else (None, None)  # the normals' 1-rings
+        degree = operator.degree[rows]
         done = 0
         steps, traces, residuals = [], [], []
-        best_whole, normals = math.inf, None
+        best_whole, ring, normals = math.inf, None, None
         for k in _checkpoints(MAX_ITERATIONS):
             advances = [lambda run=run, count=k - done: run.advance(count) for run in (data, *runs)]
             try:  # side by side where each runs on one thread (the patches)
@@ -381,18 +382,22 @@ class AmountChooser:
             traces.append(t)
             residuals.append(residual)
             whole = float(np.einsum("ij,ij->", residual, residual)) / (rows.size * (1.0 - t) ** 2)
-            if use_normals and whole < best_whole:
-                best_whole = whole
-                normals = _ring_normals(data.at(neighbour), owner, operator.degree[rows])
-            score = _scores(residuals, traces, normals)
-            chosen = _chosen(steps, score)
-            if chosen == k and ground.whole:
-                self._kept = data.snapshot()
-            if k >= 12 and k >= 1.5 * chosen and k >= 1.25 * steps[int(np.argmin(_scores(residuals, traces, None)))]:
-                break  # well past the amount chosen
-            if k >= 12 and chosen > most:
-                break  # GCV wants more than the work budget allows: the amount is the budget's
+            if use_normals and whole < best_whole:  # the normals' state: kept, its normals made when read
+                best_whole, ring, normals = whole, data.at(neighbour), None
+            if ground.whole or k >= 12:  # the choice so far is read: for the state it keeps, or to stop
+                if normals is None and ring is not None:
+                    normals = _ring_normals(ring, owner, degree)
+                chosen = _chosen(steps, _scores(residuals, traces, normals))
+                if chosen == k and ground.whole:
+                    self._kept = data.snapshot()
+                least = steps[int(np.argmin(_scores(residuals, traces, None)))]
+                if k >= 12 and k >= 1.5 * chosen and k >= 1.25 * least:
+                    break  # well past the amount chosen
+                if k >= 12 and chosen > most:
+                    break  # GCV wants more than the work budget allows: the amount is the budget's
             yield k / MAX_ITERATIONS
+        if normals is None and ring is not None:
+            normals = _ring_normals(ring, owner, degree)
         if ground.whole:
             self.data = data
         self.amount = self._amount(steps, traces, residuals, normals, done, most)
