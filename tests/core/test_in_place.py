@@ -258,6 +258,28 @@ def test_an_outline_vertex_takes_back_no_more_across_its_curve_than_the_smoother
     assert np.allclose((target - positions)[vertices, 2], 0.05)  # the move along the normal stays whole
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_no_vertex_of_a_ragged_open_grid_moves_much_farther_than_the_smoother_moved_it(seed):
+    """A 30 x 30 grid whose rim juts out by 0.8 edges at random, noise of 0.3 edges along every axis (the layout
+    folds): kept in place, a vertex moves at most its smoother's move along its normal, and an outline vertex
+    that takes its slide back at most its whole move across its curve besides: never more than sqrt(2) times
+    what the sliding default moved it (the rim's jags were rounded off by up to three times that)."""
+    part = grid(30)
+    positions = part.positions.copy()
+    edge = 2.0 / 30
+    rng = np.random.default_rng(seed)
+    on_side = (np.abs(positions[:, :2]) == 1.0).any(axis=1) & ~(np.abs(positions[:, :2]) == 1.0).all(axis=1)
+    side = np.flatnonzero(on_side)
+    axis = np.abs(positions[side, :2]).argmax(axis=1)
+    positions[side, axis] += np.sign(positions[side, axis]) * rng.choice([0.0, 0.8 * edge], side.size)
+    noisy = positions + rng.normal(0.0, 0.3 * edge, positions.shape)
+    triangles = part.triangles()
+    kept = core.smooth_mesh(noisy, part.edges, faces=triangles, weld=True)
+    sliding = core.smooth_mesh(noisy, part.edges, faces=triangles, weld=True, keep_in_place=False)
+    moved, slid = np.linalg.norm(kept - noisy, axis=1), np.linalg.norm(sliding - noisy, axis=1)
+    assert np.all(moved <= np.sqrt(2.0) * slid * (1 + 1e-9) + 1e-15)
+
+
 def test_outline_curves_lists_each_border_vertex_between_its_two_neighbours():
     """A strip of two quads: six border vertices in one loop; an extra triangle on a corner makes a vertex
     where four border edges meet, which ends the curves there."""
