@@ -390,8 +390,8 @@ class AmountChooser:
                 chosen = _chosen(steps, _scores(residuals, traces, normals))
                 if chosen == k and ground.whole:
                     self._kept = data.snapshot()
-                least = steps[int(np.argmin(_scores(residuals, traces, None)))]
-                if k >= 12 and k >= 1.5 * chosen and k >= 1.25 * least:
+                past = k >= 12 and k >= 1.5 * chosen
+                if past and k >= 1.25 * steps[int(np.argmin(_scores(residuals, traces, None)))]:
                     break  # well past the amount chosen
                 if k >= 12 and chosen > most:
                     break  # GCV wants more than the work budget allows: the amount is the budget's

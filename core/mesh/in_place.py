@@ -19,8 +19,8 @@ the surface larger than the edges) and its corners take their slide back, an out
 two border edges) takes back only the move across its border curve that smoothing the border as a curve
 makes (the same smoother on the border edges alone, core.mesh.borders' ``"curve"`` rows), never longer than
 the smoother's whole move of that vertex: the outline loses its jaggies there and keeps its place, size and
-shape. Where nothing folds, an outline keeps its jaggies across
-the curve: a scan's outline is ragged in its own right, and smoothing it as a curve would take that away.
+shape. Where nothing folds, an outline keeps its jaggies across the curve: a scan's outline is ragged in its
+own right, and smoothing it as a curve would take that away.
 
 Where the input's own layout on the surface is folded (noise along the surface larger than the edges),
 or large moves along turning normals would fold it, a triangle kept in place would overlap its
