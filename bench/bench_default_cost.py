@@ -215,8 +215,8 @@ def run(args, out):
     sliding = statistics.median(row[0] for row in figures["default, sliding: Keep in Place off"])
     out()
     out(f"Keep in Place costs {kept - sliding:+.2f} s, {(kept - sliding) / kept:+.1%} of the default's run.")
-    own = "scattered" if locality.is_scattered(core.umbrella_operator(edges, len(noisy))) else "not scattered"
     if args.shuffled:
+        own = "scattered" if locality.is_scattered(core.umbrella_operator(edges, len(noisy))) else "not scattered"
         label = "default: Automatic Amount" + SHUFFLED
         random = statistics.median(row[0] for row in figures[label])
         out(
