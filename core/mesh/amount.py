@@ -384,14 +384,16 @@ class AmountChooser:
             whole = float(np.einsum("ij,ij->", residual, residual)) / (rows.size * (1.0 - t) ** 2)
             if use_normals and whole < best_whole:  # the normals' state: kept, its normals made when read
                 best_whole, ring, normals = whole, data.at(neighbour), None
-            if ground.whole or k >= 12:  # the choice so far is read: for the state it keeps, or to stop
+            # The choice so far is read for the state it keeps (a whole mesh), or where a stop rule can
+            # hold: past 1.25 times the least whole GCV's step, or past the budget (the choice is at most k).
+            least = steps[int(np.argmin(_scores(residuals, traces, None)))] if k >= 12 else None
+            if ground.whole or (k >= 12 and (k >= 1.25 * least or k > most)):
                 if normals is None and ring is not None:
                     normals = _ring_normals(ring, owner, degree)
                 chosen = _chosen(steps, _scores(residuals, traces, normals))
                 if chosen == k and ground.whole:
                     self._kept = data.snapshot()
-                past = k >= 12 and k >= 1.5 * chosen
-                if past and k >= 1.25 * steps[int(np.argmin(_scores(residuals, traces, None)))]:
+                if k >= 12 and k >= 1.5 * chosen and k >= 1.25 * least:
                     break  # well past the amount chosen
                 if k >= 12 and chosen > most:
                     break  # GCV wants more than the work budget allows: the amount is the budget's

@@ -140,3 +140,26 @@ def test_every_layout_reads_the_same_noise():
         )
         reads[name] = find_noise(noisy, core.umbrella_operator(edges, len(noisy))).sigma[0] / sigma
     assert max(reads.values()) < 1.05 * min(reads.values()), reads
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+@pytest.mark.parametrize("halves", [0, 1])
+def test_residuals_read_in_pieces_are_the_whole_readings(monkeypatch, threads, halves):
+    """The residuals are read in pieces of consecutive sample vertices, on threads: every row's reading,
+    the few rings it reads and the parts it lies in (a noisy sphere, a clean cube, a noisy grid) are the
+    whole reading's, bit for bit, whatever the thread count."""
+    from core import parallel
+    from core.mesh import noise
+
+    sphere, _ = with_noise(PRIMITIVES["uv_sphere"](), 0.4, "isotropic")
+    grid, _ = with_noise(moved(PRIMITIVES["grid"](), 1.0, (3, 0, 0)), 0.3, "normal")
+    part = joined(sphere, moved(PRIMITIVES["cube"](), 0.2, (0, 3, 0)), grid)
+    operator = core.umbrella_operator(part.edges, len(part.positions))
+    rows = np.flatnonzero(operator.degree > 0)
+    whole = noise._residuals(part.positions, rows, operator, halves)
+    monkeypatch.setattr(parallel, "thread_count", lambda: threads)
+    monkeypatch.setattr(noise, "PIECE_FROM", 8)
+    pieces = noise._residuals_in_pieces(part.positions, rows, operator, halves)
+    for read, expected in zip(pieces, whole):
+        assert np.array_equal(read, expected, equal_nan=True)
+    assert np.isfinite(whole[0]).sum() > 0.9 * rows.size
