@@ -77,11 +77,13 @@ CLEAN = 0.01  # a quiet part whose estimate is at most this many edge lengths is
 QUIET_SHARE = 0.001  # a quiet part's vertices move at most this share of its bounding-box diagonal
 SAMPLES = 4096  # sample vertices over the whole mesh ...
 PART_SAMPLES = 64  # ... and at least this many (or all) in every part
-# The residuals are read in this many pieces of consecutive sample vertices a thread, from PIECE_FROM
-# samples: a piece's few rings and their lookups stay in cache (a 1M-vertex torus's 4,096 samples: 72 ms
-# whole, 42 ms in two pieces on each of two threads, 64 ms in four on one).
+# The residuals are read in pieces of consecutive sample vertices, from PIECE_FROM samples: at least this
+# many a thread, at most PIECE_ROWS rows each: a piece's few rings and their lookups stay in cache (a
+# 1M-vertex torus's 4,096 samples: 72 ms whole, 42 ms in two pieces on each of two threads, 64 ms in four
+# on one), and reading every vertex of a big part takes memory for a piece, not for the part.
 PIECES_PER_THREAD = 2
 PIECE_FROM = 1024
+PIECE_ROWS = 1 << 15
 _MAD = 0.6745  # median |N(0, 1)|
 # The planes are fitted to the rings after this many umbrella averages of the positions: noise along the
 # normals as large as the edges would otherwise tilt them towards itself (a symmetric mesh stays symmetric).
@@ -292,17 +294,17 @@ def _sample(part_of_vertex, sizes, operator):
 
 
 def _residuals_in_pieces(positions, rows, operator, halves=0):
-    """``_residuals`` of the sorted ``rows`` in PIECES_PER_THREAD consecutive pieces on each thread: a row's
-    residual reads its own few rings only, so the pieces give the same numbers as the whole, and each
-    piece's rings stay small enough to work on in cache."""
-    count = parallel.thread_count() * PIECES_PER_THREAD if rows.size >= PIECE_FROM else 1
+    """``_residuals`` of the sorted ``rows`` in pieces of consecutive rows, PIECES_PER_THREAD a thread at
+    the least and PIECE_ROWS rows at most, each thread taking a run of them: a row's residual reads its own
+    few rings only, so the pieces give the same numbers as the whole, and each piece's rings stay small
+    (in cache, and a bounded memory when every vertex of a big part is read)."""
+    threads = parallel.thread_count()
+    count = max(threads * PIECES_PER_THREAD, -(-rows.size // PIECE_ROWS)) if rows.size >= PIECE_FROM else 1
     cuts = np.linspace(0, rows.size, count + 1).round().astype(np.int64)
-    pieces = list(zip(cuts[:-1], cuts[1:]))
+    runs = np.array_split(np.arange(count), min(threads, count))
     tasks = [
-        lambda share=pieces[first : first + PIECES_PER_THREAD]: [
-            _residuals(positions, rows[low:high], operator, halves) for low, high in share
-        ]
-        for first in range(0, count, PIECES_PER_THREAD)
+        lambda run=run: [_residuals(positions, rows[cuts[k] : cuts[k + 1]], operator, halves) for k in run]
+        for run in runs
     ]
     done = [result for results in parallel.run_all(tasks) for result in results]
     return tuple(np.concatenate(values) for values in zip(*done))

@@ -142,12 +142,13 @@ def test_every_layout_reads_the_same_noise():
     assert max(reads.values()) < 1.05 * min(reads.values()), reads
 
 
+@pytest.mark.parametrize("piece_rows", [1 << 15, 50])
 @pytest.mark.parametrize("threads", [1, 3])
 @pytest.mark.parametrize("halves", [0, 1])
-def test_residuals_read_in_pieces_are_the_whole_readings(monkeypatch, threads, halves):
+def test_residuals_read_in_pieces_are_the_whole_readings(monkeypatch, threads, halves, piece_rows):
     """The residuals are read in pieces of consecutive sample vertices, on threads: every row's reading,
     the few rings it reads and the parts it lies in (a noisy sphere, a clean cube, a noisy grid) are the
-    whole reading's, bit for bit, whatever the thread count."""
+    whole reading's, bit for bit, whatever the thread count and however many pieces."""
     from core import parallel
     from core.mesh import noise
 
@@ -159,7 +160,33 @@ def test_residuals_read_in_pieces_are_the_whole_readings(monkeypatch, threads, h
     whole = noise._residuals(part.positions, rows, operator, halves)
     monkeypatch.setattr(parallel, "thread_count", lambda: threads)
     monkeypatch.setattr(noise, "PIECE_FROM", 8)
+    monkeypatch.setattr(noise, "PIECE_ROWS", piece_rows)
     pieces = noise._residuals_in_pieces(part.positions, rows, operator, halves)
     for read, expected in zip(pieces, whole):
         assert np.array_equal(read, expected, equal_nan=True)
     assert np.isfinite(whole[0]).sum() > 0.9 * rows.size
+
+
+def test_reading_every_vertex_takes_memory_for_a_piece_not_the_part(monkeypatch):
+    """The rule that reads a part's noise on every vertex (core.mesh.collapse) on a 90,000-vertex grid: in
+    pieces of 4,096 rows its peak memory is under a third of its peak in two halves of the part (the
+    fewest pieces on one thread: 20 MB against 167 MB), and it reads the same estimate."""
+    import tracemalloc
+
+    from core import parallel
+    from core.mesh import noise
+
+    name, positions, edges = flat_layouts(side=300)[1]
+    noisy = positions + np.c_[np.zeros((len(positions), 2)), np.random.default_rng(2).normal(0, 0.05, len(positions))]
+    operator = core.umbrella_operator(edges, len(noisy))
+    found = find_noise(noisy, operator)
+    monkeypatch.setattr(parallel, "thread_count", lambda: 1)
+    peaks, reads = [], []
+    for piece_rows in (len(noisy), 4096):
+        monkeypatch.setattr(noise, "PIECE_ROWS", piece_rows)
+        tracemalloc.start()
+        reads.append(noise.read_on_every_vertex(found, noisy, operator, np.ones(1, dtype=bool)))
+        peaks.append(tracemalloc.get_traced_memory()[1])
+        tracemalloc.stop()
+    assert np.array_equal(reads[0], reads[1])
+    assert peaks[1] < peaks[0] / 3, peaks
