@@ -207,7 +207,7 @@ def noise_steps(positions, operator):
     sizes = np.bincount(part_of_vertex, minlength=parts)
     rows = _sample(part_of_vertex, sizes, operator)
     yield
-    sigma, edge_length, floor, counted = _estimates(positions, rows, operator, part_of_vertex, sizes)
+    sigma, edge_length, floor, counted = yield from _estimate_steps(positions, rows, operator, part_of_vertex, sizes)
     above = (sizes > DEGENERATE) & (sigma > NOISE_THRESHOLD * edge_length)
     # The half-step test, on the parts it can find light noise in only (none on most noisy scans).
     light = ~above & (counted >= WHITE_SAMPLES) & (sigma > LIGHT_FLOOR * edge_length)
@@ -215,17 +215,18 @@ def noise_steps(positions, operator):
         yield
         owner = part_of_vertex[rows]
         asked = light[owner]
-        after = _residuals_in_pieces(positions, rows[asked], operator, halves=1)[0]
+        after = (yield from _residual_rounds(positions, rows[asked], operator, halves=1))[0]
         keep = np.isfinite(after)
         light &= _group_medians(owner[asked][keep], after[keep], parts) / (_MAD * GAIN) < WHITE * sigma
     return Noise(part_of_vertex, sigma, edge_length, above | light, light, floor, counted)
 
 
-def _estimates(positions, rows, operator, part_of_vertex, sizes):
+def _estimate_steps(positions, rows, operator, part_of_vertex, sizes):
     """(sigma, edge_length, floor, samples) per part (``sizes``: each part's vertex count), read at the
-    vertices ``rows``: the estimates of ``Noise``, and how many of its rows each part's were read on."""
+    vertices ``rows``: the estimates of ``Noise``, and how many of its rows each part's were read on. A
+    generator: yields (None) after each round of ``_residual_rounds``."""
     parts = sizes.size
-    residual, edge = _residuals_in_pieces(positions, rows, operator)
+    residual, edge = yield from _residual_rounds(positions, rows, operator)
     owner = part_of_vertex[rows]
     sigma, edge_length = np.zeros(parts), np.zeros(parts)
     for values, out in ((residual, sigma), (edge, edge_length)):
@@ -243,6 +244,11 @@ def _estimates(positions, rows, operator, part_of_vertex, sizes):
 
 
 def read_on_every_vertex(noise, positions, operator, asked):
+    """``read_on_every_vertex_steps`` run to its end."""
+    return to_end(read_on_every_vertex_steps(noise, positions, operator, asked))
+
+
+def read_on_every_vertex_steps(noise, positions, operator, asked):
     """(parts,) the estimate the rules that judge a finished run read (``Noise.floor``, else ``sigma``), of
     the parts ``asked`` ((parts,) bool) read again on every vertex of them, of the others as ``noise`` has
     it. A part's estimate reads a sample of its vertices (PART_SAMPLES at the least); a rule about to give
@@ -267,13 +273,16 @@ def read_on_every_vertex(noise, positions, operator, asked):
     >>> every = noise.read_on_every_vertex(found, flat, operator, found.sampled)
     >>> found.floor.round(4).tolist(), every.round(4).tolist()
     ([0.0853], [0.0874])
+
+    A generator: yields (None) after each round of pieces of rows (``_residual_rounds``; a 1M-vertex part
+    takes some 3 s in 31 pieces), so that a caller shows progress and can cancel between them.
     """
     current = noise.sigma if noise.floor is None else noise.floor
     if not asked.any():
         return current
     sizes = np.bincount(noise.part_of_vertex, minlength=asked.size)
     rows = np.flatnonzero(asked[noise.part_of_vertex] & (operator.degree > 0))
-    _, _, floor, _ = _estimates(positions, rows, operator, noise.part_of_vertex, sizes)
+    _, _, floor, _ = yield from _estimate_steps(positions, rows, operator, noise.part_of_vertex, sizes)
     return np.where(asked, floor, current)
 
 
@@ -293,20 +302,21 @@ def _sample(part_of_vertex, sizes, operator):
     return np.sort(rows[operator.degree[rows] > 0])
 
 
-def _residuals_in_pieces(positions, rows, operator, halves=0):
-    """``_residuals`` of the sorted ``rows`` in pieces of consecutive rows, PIECES_PER_THREAD a thread at
-    the least and PIECE_ROWS rows at most, each thread taking a run of them: a row's residual reads its own
-    few rings only, so the pieces give the same numbers as the whole, and each piece's rings stay small
-    (in cache, and a bounded memory when every vertex of a big part is read)."""
+def _residual_rounds(positions, rows, operator, halves=0):
+    """``_residuals`` of the sorted ``rows`` in pieces of consecutive rows, PIECES_PER_THREAD a thread at the
+    least and PIECE_ROWS rows at most, one a thread at a time: a row's residual reads its own few rings only,
+    so the pieces give the same numbers as the whole, and each piece's rings stay small (in cache, and a
+    bounded memory when every vertex of a big part is read). A generator: yields (None) after each round."""
     threads = parallel.thread_count()
     count = max(threads * PIECES_PER_THREAD, -(-rows.size // PIECE_ROWS)) if rows.size >= PIECE_FROM else 1
     cuts = np.linspace(0, rows.size, count + 1).round().astype(np.int64)
-    runs = np.array_split(np.arange(count), min(threads, count))
-    tasks = [
-        lambda run=run: [_residuals(positions, rows[cuts[k] : cuts[k + 1]], operator, halves) for k in run]
-        for run in runs
-    ]
-    done = [result for results in parallel.run_all(tasks) for result in results]
+    done = []
+    for first in range(0, count, threads):
+        pieces = range(first, min(first + threads, count))
+        done += parallel.run_all(
+            [lambda k=k: _residuals(positions, rows[cuts[k] : cuts[k + 1]], operator, halves) for k in pieces]
+        )
+        yield
     return tuple(np.concatenate(values) for values in zip(*done))
 
 

@@ -51,7 +51,7 @@ from . import collapse, sharp_amount, sharp_edges, topology, volume, welding
 from .amount import PATCH_FROM, AmountChooser, MeshAmount
 from .borders import BORDERS, apply_border, border_edges
 from .in_place import Outline, curve_labels, inward_directions, keep_in_place_steps, outline_curves
-from .noise import noise_steps, read_on_every_vertex
+from .noise import noise_steps, read_on_every_vertex_steps
 from .sharp_edges import DEFAULT_SHARPNESS_ANGLE, SharpSmoothing, check_sharpness_angle, check_triangles
 
 AUTO = "auto"
@@ -495,9 +495,8 @@ class MeshSmoother:
             again = beyond & noise.sampled  # an estimate read on a share of the part: all of it asked first
             if again.any():
                 yield progress
-                beyond &= ~again | moved(
-                    read_on_every_vertex(noise, self.positions, self.surface_operator, again), again
-                )
+                reading = read_on_every_vertex_steps(noise, self.positions, self.surface_operator, again)
+                beyond &= ~again | moved((yield from as_fraction(reading, progress)), again)
             parts |= beyond
         return parts
 

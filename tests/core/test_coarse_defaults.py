@@ -219,11 +219,16 @@ def test_a_quad_box_with_light_noise_never_ends_farther_from_the_cube(cuts, kind
 def test_a_part_is_not_held_on_a_low_reading_of_a_sample_of_its_vertices(monkeypatch):
     """The move rule reads each part's noise on a sample of its vertices; before a part gets its input back
     on that reading, every vertex of it is read. A noisy grid whose noise a sample of 24 vertices reads low
-    is held on the sample's reading alone, and smoothed on all of them (its noise along z is no shape)."""
+    is held on the sample's reading alone, and smoothed on all of them (its noise along z is no shape). The
+    reading of every vertex reports progress (and can be cancelled) after each of its rounds of pieces."""
+    from core import parallel
     from core.mesh import noise, smooth
 
     monkeypatch.setattr(noise, "SAMPLES", 24)
     monkeypatch.setattr(noise, "PART_SAMPLES", 24)
+    monkeypatch.setattr(noise, "PIECE_ROWS", 100)  # 49 pieces of the 4,900 vertices
+    monkeypatch.setattr(parallel, "thread_count", lambda: 1)
+    calls = []
     side = 70
     x, y = np.meshgrid(np.arange(float(side)), np.arange(float(side)))
     grid = np.arange(side * side).reshape(side, side)
@@ -231,8 +236,15 @@ def test_a_part_is_not_held_on_a_low_reading_of_a_sample_of_its_vertices(monkeyp
     triangles = np.r_[np.stack(corners[:3], -1).reshape(-1, 3), np.stack(corners[::2] + corners[3:], -1).reshape(-1, 3)]
     points = np.c_[x.ravel(), y.ravel(), np.random.default_rng(8).normal(0.0, 0.3, side * side)]
     edges = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    result, report = core.smooth_mesh(points, edges, faces=triangles, return_report=True)
+    result, report = core.smooth_mesh(points, edges, faces=triangles, return_report=True, progress=calls.append)
     assert report.held_parts == 0 and np.abs(result[:, 2]).std() < 0.5 * np.abs(points[:, 2]).std()
-    monkeypatch.setattr(smooth, "read_on_every_vertex", lambda found, *_: found.floor)  # the sample alone
-    _, sampled = core.smooth_mesh(points, edges, faces=triangles, return_report=True)
+
+    def the_sample_alone(found, *_):
+        yield
+        return found.floor
+
+    monkeypatch.setattr(smooth, "read_on_every_vertex_steps", the_sample_alone)
+    sampled_calls = []
+    _, sampled = core.smooth_mesh(points, edges, faces=triangles, return_report=True, progress=sampled_calls.append)
     assert sampled.held_parts == 1
+    assert len(calls) >= len(sampled_calls) + 48  # the 49 rounds of the reading against one

@@ -148,7 +148,8 @@ def test_every_layout_reads_the_same_noise():
 def test_residuals_read_in_pieces_are_the_whole_readings(monkeypatch, threads, halves, piece_rows):
     """The residuals are read in pieces of consecutive sample vertices, on threads: every row's reading,
     the few rings it reads and the parts it lies in (a noisy sphere, a clean cube, a noisy grid) are the
-    whole reading's, bit for bit, whatever the thread count and however many pieces."""
+    whole reading's, bit for bit, whatever the thread count and however many pieces; the reading yields (for
+    progress and a cancel) after each round of pieces, one a thread."""
     from core import parallel
     from core.mesh import noise
 
@@ -161,7 +162,16 @@ def test_residuals_read_in_pieces_are_the_whole_readings(monkeypatch, threads, h
     monkeypatch.setattr(parallel, "thread_count", lambda: threads)
     monkeypatch.setattr(noise, "PIECE_FROM", 8)
     monkeypatch.setattr(noise, "PIECE_ROWS", piece_rows)
-    pieces = noise._residuals_in_pieces(part.positions, rows, operator, halves)
+    rounds = noise._residual_rounds(part.positions, rows, operator, halves)
+    pieces, slices = None, 0
+    while pieces is None:
+        try:
+            next(rounds)
+            slices += 1
+        except StopIteration as done:
+            pieces = done.value
+    count = max(2 * threads, -(-rows.size // piece_rows))
+    assert slices == -(-count // threads)  # a slice a round of pieces, one a thread
     for read, expected in zip(pieces, whole):
         assert np.array_equal(read, expected, equal_nan=True)
     assert np.isfinite(whole[0]).sum() > 0.9 * rows.size
